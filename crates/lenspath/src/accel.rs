@@ -1,0 +1,583 @@
+//! The bounding volume hierarchy: binned SAH construction without recursion,
+//! a flattened depth-first node array, and closest-hit / any-hit traversal.
+//!
+//! Construction follows Wald, "On fast Construction of SAH-based Bounding
+//! Volume Hierarchies" (2007) and pbrt-v4 `BVHAggregate`: primitives are
+//! binned by centroid along all three axes and the split minimising
+//! `C_trav + C_isect · (SA(L)·N(L) + SA(R)·N(R)) / SA(P)` is taken.
+
+use std::time::Instant;
+
+use glam::{UVec3, Vec3, Vec3A};
+
+use crate::math::Bounds3;
+use crate::ray::Ray;
+use crate::shapes::{intersect_sphere, intersect_triangle, triangle_bounds, TriangleRay};
+
+/// Everything that tunes the BVH, in one place (as tinybvh's settings).
+#[derive(Clone, Copy, Debug)]
+pub struct BvhSettings {
+    /// SAH bins per axis (2..=256).
+    pub bins: usize,
+    /// Relative cost of visiting one interior node.
+    pub traversal_cost: f32,
+    /// Relative cost of one primitive intersection test (pbrt's 1:8 by default).
+    pub intersection_cost: f32,
+    /// Leaves never hold more primitives than this, whatever the SAH says.
+    pub max_leaf_size: usize,
+}
+
+impl Default for BvhSettings {
+    fn default() -> Self {
+        BvhSettings {
+            bins: 16,
+            traversal_cost: 1.0,
+            intersection_cost: 8.0,
+            max_leaf_size: 8,
+        }
+    }
+}
+
+/// What the build produced and how long it took.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct BuildStats {
+    /// Primitives in the tree.
+    pub primitives: usize,
+    /// All nodes, interior and leaf.
+    pub nodes: usize,
+    /// Leaf nodes.
+    pub leaves: usize,
+    /// Deepest leaf (the root is depth 0).
+    pub max_depth: usize,
+    /// SAH cost of the whole tree with the settings' costs, relative to the root's area.
+    pub sah_cost: f32,
+    /// Wall time of the build, in milliseconds.
+    pub build_ms: f64,
+}
+
+/// One primitive's geometry, stored inline in traversal order.
+#[derive(Clone, Copy, Debug)]
+pub enum PrimGeometry {
+    /// A triangle by its three corners.
+    Triangle([Vec3; 3]),
+    /// A sphere.
+    Sphere {
+        /// Centre.
+        center: Vec3,
+        /// Radius.
+        radius: f32,
+    },
+}
+
+impl PrimGeometry {
+    fn bounds(&self) -> Bounds3 {
+        match self {
+            PrimGeometry::Triangle(p) => triangle_bounds(p),
+            PrimGeometry::Sphere { center, radius } => Bounds3 {
+                min: Vec3A::from(*center) - Vec3A::splat(*radius),
+                max: Vec3A::from(*center) + Vec3A::splat(*radius),
+            },
+        }
+    }
+}
+
+/// A closest hit: the distance, the primitive (index in traversal order,
+/// see [`Bvh::primitive`]) and, for triangles, the barycentrics of corners 1 and 2.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Ray parameter of the hit.
+    pub t: f32,
+    /// Primitive index in traversal order.
+    pub prim: u32,
+    /// Barycentric coordinate of the second corner (triangles).
+    pub b1: f32,
+    /// Barycentric coordinate of the third corner (triangles).
+    pub b2: f32,
+}
+
+/// A flattened node: 32 bytes. Interior nodes have their first child right
+/// after them and store the second child's index in `offset`; leaves store
+/// their first primitive in `offset` and a non-zero `count`.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
+struct Node {
+    min: [f32; 3],
+    offset: u32,
+    max: [f32; 3],
+    count: u16,
+    axis: u16,
+}
+
+/// A BVH over triangles and spheres, with `T` the caller's per-primitive tag
+/// (for the scene: which shape a primitive came from).
+#[derive(Clone, Debug)]
+pub struct Bvh<T> {
+    nodes: Vec<Node>,
+    geometry: Vec<PrimGeometry>,
+    tags: Vec<T>,
+    stats: BuildStats,
+}
+
+/// A build task: a primitive range and the node it becomes.
+struct Task {
+    start: usize,
+    end: usize,
+    bounds: Bounds3,
+    centroid_bounds: Bounds3,
+    /// Node whose `offset` must point at this task's node (right children).
+    patch_parent: Option<usize>,
+    depth: usize,
+}
+
+#[derive(Clone, Copy)]
+struct Bin {
+    bounds: Bounds3,
+    count: u32,
+}
+
+const EMPTY_BIN: Bin = Bin {
+    bounds: Bounds3::EMPTY,
+    count: 0,
+};
+
+/// 1 + 2γ₃ (pbrt-v4): widens the far slab distance so rounding never
+/// culls a box the ray touches, e.g. the flat box of an axis-aligned quad.
+const SLAB_SAFETY: f32 = 1.0 + 2.0 * 3.0 * f32::EPSILON * 0.5 / (1.0 - 3.0 * f32::EPSILON * 0.5);
+
+/// Per-ray traversal constants.
+struct TraversalRay {
+    origin: Vec3A,
+    inv_dir: Vec3A,
+    dir_is_neg: [bool; 3],
+    tri: TriangleRay,
+}
+
+impl TraversalRay {
+    fn new(ray: &Ray) -> Self {
+        // A zero component becomes a tiny one so 0 · ∞ never makes a NaN.
+        let d = Vec3A::from(ray.direction);
+        let d = Vec3A::select(d.abs().cmplt(Vec3A::splat(1e-30)), Vec3A::splat(1e-30).copysign(d), d);
+        TraversalRay {
+            origin: Vec3A::from(ray.origin),
+            inv_dir: d.recip(),
+            dir_is_neg: [d.x < 0.0, d.y < 0.0, d.z < 0.0],
+            tri: TriangleRay::new(ray),
+        }
+    }
+
+    #[inline(always)]
+    fn hits_box(&self, node: &Node, t_max: f32) -> bool {
+        let t0 = (Vec3A::from_array(node.min) - self.origin) * self.inv_dir;
+        let t1 = (Vec3A::from_array(node.max) - self.origin) * self.inv_dir;
+        let t_near = t0.min(t1).max_element().max(0.0);
+        let t_far = t0.max(t1).min_element() * SLAB_SAFETY;
+        t_near <= t_far.min(t_max)
+    }
+}
+
+impl<T: Copy> Bvh<T> {
+    /// Builds the hierarchy over `prims` (geometry with its tag).
+    pub fn build(prims: Vec<(PrimGeometry, T)>, settings: &BvhSettings) -> Bvh<T> {
+        let started = Instant::now();
+        let bins = settings.bins.clamp(2, 256);
+        let n = prims.len();
+        let mut bounds: Vec<Bounds3> = prims.iter().map(|(g, _)| g.bounds()).collect();
+        let mut order: Vec<u32> = (0..n as u32).collect();
+        let mut nodes: Vec<Node> = Vec::with_capacity(2 * n / settings.max_leaf_size.max(1) + 1);
+        let mut stats = BuildStats {
+            primitives: n,
+            ..Default::default()
+        };
+
+        let root_bounds = bounds.iter().fold(Bounds3::EMPTY, |b, p| b.union(*p));
+        let root_centroids = bounds.iter().fold(Bounds3::EMPTY, |b, p| b.grow(p.centroid()));
+        let root_area = root_bounds.surface_area().max(f32::MIN_POSITIVE);
+        let mut bin_grid = vec![[EMPTY_BIN; 3]; bins];
+        let mut right_area = vec![[0f32; 3]; bins];
+        let mut right_count = vec![[0u32; 3]; bins];
+        let mut stack = Vec::with_capacity(128);
+        if n > 0 {
+            stack.push(Task {
+                start: 0,
+                end: n,
+                bounds: root_bounds,
+                centroid_bounds: root_centroids,
+                patch_parent: None,
+                depth: 0,
+            });
+        }
+
+        while let Some(task) = stack.pop() {
+            let index = nodes.len();
+            if let Some(parent) = task.patch_parent {
+                nodes[parent].offset = index as u32;
+            }
+            let count = task.end - task.start;
+            let area_fraction = task.bounds.surface_area() / root_area;
+            let leaf_cost = settings.intersection_cost * count as f32;
+            stats.max_depth = stats.max_depth.max(task.depth);
+            let push_leaf = |nodes: &mut Vec<Node>, stats: &mut BuildStats| {
+                nodes.push(make_node(&task.bounds, task.start as u32, count as u16, 0));
+                stats.leaves += 1;
+                stats.sah_cost += leaf_cost * area_fraction;
+            };
+
+            // Degenerate: one primitive, or all centroids in one point.
+            let extent = task.centroid_bounds.diagonal();
+            if count == 1 || (extent.max_element() <= 0.0 && count <= settings.max_leaf_size) {
+                push_leaf(&mut nodes, &mut stats);
+                continue;
+            }
+
+            // Bin the centroids along all three axes at once.
+            let mut split: Option<(usize, usize, f32)> = None;
+            if extent.max_element() > 0.0 {
+                let cmin = task.centroid_bounds.min;
+                let scale = Vec3A::select(
+                    extent.cmpgt(Vec3A::ZERO),
+                    Vec3A::splat(bins as f32 * (1.0 - 1e-6)) / extent,
+                    Vec3A::ZERO,
+                );
+                let last = UVec3::splat(bins as u32 - 1);
+                bin_grid.iter_mut().for_each(|b| *b = [EMPTY_BIN; 3]);
+                for b in &bounds[task.start..task.end] {
+                    let k = ((b.centroid() - cmin) * scale).as_uvec3().min(last);
+                    for axis in 0..3 {
+                        let bin = &mut bin_grid[k[axis] as usize][axis];
+                        bin.bounds = bin.bounds.union(*b);
+                        bin.count += 1;
+                    }
+                }
+                // Sweep from the right to know the right side of every plane...
+                let mut acc = [Bounds3::EMPTY; 3];
+                let mut acc_count = [0u32; 3];
+                for i in (1..bins).rev() {
+                    for axis in 0..3 {
+                        acc[axis] = acc[axis].union(bin_grid[i][axis].bounds);
+                        acc_count[axis] += bin_grid[i][axis].count;
+                        right_area[i][axis] = acc[axis].surface_area();
+                        right_count[i][axis] = acc_count[axis];
+                    }
+                }
+                // ...then from the left, evaluating the SAH at each plane.
+                let parent_area = task.bounds.surface_area().max(f32::MIN_POSITIVE);
+                let mut left = [Bounds3::EMPTY; 3];
+                let mut left_count = [0u32; 3];
+                for i in 1..bins {
+                    for axis in 0..3 {
+                        left[axis] = left[axis].union(bin_grid[i - 1][axis].bounds);
+                        left_count[axis] += bin_grid[i - 1][axis].count;
+                        if extent[axis] <= 0.0 || left_count[axis] == 0 || right_count[i][axis] == 0 {
+                            continue;
+                        }
+                        let cost = settings.traversal_cost
+                            + settings.intersection_cost
+                                * (left[axis].surface_area() * left_count[axis] as f32
+                                    + right_area[i][axis] * right_count[i][axis] as f32)
+                                / parent_area;
+                        if split.is_none_or(|(_, _, c)| cost < c) {
+                            split = Some((axis, i, cost));
+                        }
+                    }
+                }
+            }
+
+            let split_cost = split.map_or(f32::INFINITY, |s| s.2);
+            if count <= settings.max_leaf_size && leaf_cost <= split_cost {
+                push_leaf(&mut nodes, &mut stats);
+                continue;
+            }
+
+            // Partition the range; the children's centroid bounds come for free.
+            let (axis, mid, left_cb, right_cb) = match split {
+                Some((axis, plane, _)) => {
+                    let cmin = task.centroid_bounds.min[axis];
+                    let scale = bins as f32 * (1.0 - 1e-6) / extent[axis];
+                    let (mut i, mut j) = (task.start, task.end);
+                    let (mut lcb, mut rcb) = (Bounds3::EMPTY, Bounds3::EMPTY);
+                    while i < j {
+                        let c = bounds[i].centroid();
+                        let k = (((c[axis] - cmin) * scale) as usize).min(bins - 1);
+                        if k < plane {
+                            lcb = lcb.grow(c);
+                            i += 1;
+                        } else {
+                            rcb = rcb.grow(c);
+                            j -= 1;
+                            bounds.swap(i, j);
+                            order.swap(i, j);
+                        }
+                    }
+                    (axis, i, lcb, rcb)
+                }
+                None => {
+                    // All centroids coincide: split the range in the middle.
+                    let mid = task.start + count / 2;
+                    let c = task.centroid_bounds;
+                    (task.bounds.max_extent_axis(), mid, c, c)
+                }
+            };
+            let left_bounds = bounds[task.start..mid].iter().fold(Bounds3::EMPTY, |b, p| b.union(*p));
+            let right_bounds = bounds[mid..task.end].iter().fold(Bounds3::EMPTY, |b, p| b.union(*p));
+            nodes.push(make_node(&task.bounds, 0, 0, axis as u16));
+            stats.sah_cost += settings.traversal_cost * area_fraction;
+            stack.push(Task {
+                start: mid,
+                end: task.end,
+                bounds: right_bounds,
+                centroid_bounds: right_cb,
+                patch_parent: Some(index),
+                depth: task.depth + 1,
+            });
+            stack.push(Task {
+                start: task.start,
+                end: mid,
+                bounds: left_bounds,
+                centroid_bounds: left_cb,
+                patch_parent: None,
+                depth: task.depth + 1,
+            });
+        }
+
+        // Store geometry and tags in traversal order.
+        let (geometry, tags): (Vec<_>, Vec<_>) = order.iter().map(|&i| prims[i as usize]).unzip();
+        stats.nodes = nodes.len();
+        stats.build_ms = started.elapsed().as_secs_f64() * 1e3;
+        Bvh {
+            nodes,
+            geometry,
+            tags,
+            stats,
+        }
+    }
+
+    /// Build statistics.
+    pub fn stats(&self) -> &BuildStats {
+        &self.stats
+    }
+
+    /// Bounds of everything in the tree (empty for an empty tree).
+    pub fn bounds(&self) -> Bounds3 {
+        self.nodes.first().map_or(Bounds3::EMPTY, |n| Bounds3 {
+            min: Vec3A::from_array(n.min),
+            max: Vec3A::from_array(n.max),
+        })
+    }
+
+    /// The caller's tag of primitive `prim` (traversal order).
+    #[inline]
+    pub fn tag(&self, prim: u32) -> T {
+        self.tags[prim as usize]
+    }
+
+    /// The geometry of primitive `prim` (traversal order).
+    #[inline]
+    pub fn geometry(&self, prim: u32) -> &PrimGeometry {
+        &self.geometry[prim as usize]
+    }
+
+    /// Number of primitives.
+    pub fn len(&self) -> usize {
+        self.geometry.len()
+    }
+
+    /// True when the tree holds nothing.
+    pub fn is_empty(&self) -> bool {
+        self.geometry.is_empty()
+    }
+
+    /// The closest hit with `0 < t < t_max`, visiting the near child first.
+    pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        self.traverse::<false>(ray, t_max)
+    }
+
+    /// True when anything lies on the ray in `0 < t < t_max` (shadow rays):
+    /// stops at the first hit found.
+    pub fn intersect_any(&self, ray: &Ray, t_max: f32) -> bool {
+        self.traverse::<true>(ray, t_max).is_some()
+    }
+
+    #[inline(always)]
+    fn traverse<const ANY: bool>(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        if self.nodes.is_empty() {
+            return None;
+        }
+        let tr = TraversalRay::new(ray);
+        let mut closest: Option<Hit> = None;
+        let mut t_max = t_max;
+        let mut stack = [0u32; 64];
+        let mut sp = 0usize;
+        let mut current = 0usize;
+        loop {
+            let node = &self.nodes[current];
+            if tr.hits_box(node, t_max) {
+                if node.count > 0 {
+                    let first = node.offset as usize;
+                    for prim in first..first + node.count as usize {
+                        if let Some(hit) = self.intersect_prim(&tr, ray, prim, t_max) {
+                            if ANY {
+                                return Some(hit);
+                            }
+                            t_max = hit.t;
+                            closest = Some(hit);
+                        }
+                    }
+                } else {
+                    // Near child first: the one on the side the ray comes from.
+                    if tr.dir_is_neg[node.axis as usize] {
+                        stack[sp] = current as u32 + 1;
+                        current = node.offset as usize;
+                    } else {
+                        stack[sp] = node.offset;
+                        current += 1;
+                    }
+                    sp += 1;
+                    continue;
+                }
+            }
+            if sp == 0 {
+                return closest;
+            }
+            sp -= 1;
+            current = stack[sp] as usize;
+        }
+    }
+
+    #[inline(always)]
+    fn intersect_prim(&self, tr: &TraversalRay, ray: &Ray, prim: usize, t_max: f32) -> Option<Hit> {
+        match &self.geometry[prim] {
+            PrimGeometry::Triangle(p) => intersect_triangle(&tr.tri, p, t_max).map(|(t, b1, b2)| Hit {
+                t,
+                prim: prim as u32,
+                b1,
+                b2,
+            }),
+            PrimGeometry::Sphere { center, radius } => intersect_sphere(ray, *center, *radius, t_max).map(|t| Hit {
+                t,
+                prim: prim as u32,
+                b1: 0.0,
+                b2: 0.0,
+            }),
+        }
+    }
+}
+
+fn make_node(b: &Bounds3, offset: u32, count: u16, axis: u16) -> Node {
+    Node {
+        min: b.min.to_array(),
+        offset,
+        max: b.max.to_array(),
+        count,
+        axis,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::Rng;
+
+    fn random_triangles(n: usize, rng: &mut Rng) -> Vec<(PrimGeometry, u32)> {
+        (0..n)
+            .map(|i| {
+                let c = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 10.0;
+                let mut corner = || c + (Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) - 0.5) * 0.6;
+                (PrimGeometry::Triangle([corner(), corner(), corner()]), i as u32)
+            })
+            .collect()
+    }
+
+    fn brute_force(prims: &[(PrimGeometry, u32)], ray: &Ray) -> Option<(f32, u32)> {
+        let tr = TriangleRay::new(ray);
+        let mut best: Option<(f32, u32)> = None;
+        for (g, tag) in prims {
+            let t = match g {
+                PrimGeometry::Triangle(p) => intersect_triangle(&tr, p, f32::INFINITY).map(|h| h.0),
+                PrimGeometry::Sphere { center, radius } => intersect_sphere(ray, *center, *radius, f32::INFINITY),
+            };
+            if let Some(t) = t {
+                if best.is_none_or(|(bt, _)| t < bt) {
+                    best = Some((t, *tag));
+                }
+            }
+        }
+        best
+    }
+
+    /// 10^5 random rays: the BVH finds exactly the brute-force closest hit
+    /// and the same any-hit answer, for several bin counts and leaf sizes.
+    #[test]
+    fn bvh_matches_brute_force_on_random_rays() {
+        let mut rng = Rng::new(7);
+        let mut prims = random_triangles(3000, &mut rng);
+        for i in 0..40 {
+            let center = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 10.0;
+            prims.push((
+                PrimGeometry::Sphere {
+                    center,
+                    radius: 0.05 + 0.3 * rng.uniform(),
+                },
+                10_000 + i,
+            ));
+        }
+        let configs = [
+            BvhSettings::default(),
+            BvhSettings {
+                bins: 4,
+                max_leaf_size: 1,
+                ..Default::default()
+            },
+            BvhSettings {
+                bins: 64,
+                traversal_cost: 1.0,
+                intersection_cost: 1.0,
+                max_leaf_size: 16,
+            },
+        ];
+        let mut hits = 0;
+        for (c, settings) in configs.iter().enumerate() {
+            let bvh = Bvh::build(prims.clone(), settings);
+            let rays = if c == 0 { 100_000 } else { 20_000 };
+            for _ in 0..rays {
+                let o = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 14.0 - 2.0;
+                let d = crate::sampling::uniform_sphere(rng.uniform(), rng.uniform());
+                let ray = Ray::new(o, d);
+                let expected = brute_force(&prims, &ray);
+                let got = bvh.intersect(&ray, f32::INFINITY).map(|h| (h.t, bvh.tag(h.prim)));
+                assert_eq!(got, expected, "closest hit differs for {ray:?}");
+                assert_eq!(bvh.intersect_any(&ray, f32::INFINITY), expected.is_some());
+                if let Some((t, _)) = expected {
+                    hits += 1;
+                    // A shadow ray stopping short of the closest hit sees nothing.
+                    assert!(!bvh.intersect_any(&ray, t * 0.999));
+                }
+            }
+            assert!(bvh.stats().leaves > 0 && bvh.stats().nodes == 2 * bvh.stats().leaves - 1);
+        }
+        assert!(hits > 10_000, "too few rays hit anything ({hits}): the test would prove little");
+    }
+
+    #[test]
+    fn sah_tree_is_cheaper_than_a_single_leaf() {
+        let mut rng = Rng::new(3);
+        let prims = random_triangles(5000, &mut rng);
+        let bvh = Bvh::build(prims, &BvhSettings::default());
+        let s = bvh.stats();
+        assert_eq!(s.primitives, 5000);
+        // A flat list would cost 8 · 5000 = 40000.
+        assert!(s.sah_cost < 400.0, "SAH cost {}", s.sah_cost);
+        assert!(s.max_depth < 40);
+    }
+
+    #[test]
+    fn identical_primitives_still_build() {
+        let tri = PrimGeometry::Triangle([Vec3::ZERO, Vec3::X, Vec3::Y]);
+        let prims: Vec<_> = (0..100u32).map(|i| (tri, i)).collect();
+        let bvh = Bvh::build(prims, &BvhSettings::default());
+        let ray = Ray::new(Vec3::new(0.2, 0.2, 1.0), -Vec3::Z);
+        assert!(bvh.intersect(&ray, f32::INFINITY).is_some());
+        assert!(bvh.stats().nodes > 1);
+        let empty: Bvh<u32> = Bvh::build(Vec::new(), &BvhSettings::default());
+        assert!(empty.intersect(&ray, f32::INFINITY).is_none());
+    }
+}

@@ -1,0 +1,168 @@
+//! The unidirectional path tracer: next-event estimation with several
+//! shadow rays per light, multiple importance sampling with the power
+//! heuristic, and Russian roulette (after pbrt-v4 `PathIntegrator`).
+
+use glam::Vec3;
+
+use crate::materials::Material;
+use crate::math::{max_component, Frame, Rgb};
+use crate::ray::{offset_origin, Ray};
+use crate::sampling::{power_heuristic, Sampler};
+use crate::scene::{CompiledScene, SurfaceHit};
+
+/// How far and how carefully paths are traced.
+#[derive(Clone, Copy, Debug)]
+pub struct PathSettings {
+    /// Maximum number of scattering events; 0 shows only emitters,
+    /// 1 direct lighting (pbrt's `maxdepth`).
+    pub max_depth: u32,
+    /// Shadow rays per light at each non-specular hit (the CS184 `-l`).
+    pub light_samples: u32,
+}
+
+/// Shadow rays stop this fraction short of a sampled light point.
+const SHADOW_EPSILON: f32 = 1e-4;
+
+/// Radiance arriving along a camera ray. `rays` counts traced rays.
+pub fn radiance(scene: &CompiledScene, camera_ray: Ray, sampler: &mut Sampler, settings: &PathSettings, rays: &mut u64) -> Rgb {
+    let n_light = settings.light_samples as f32;
+    let mut l = Rgb::ZERO;
+    let mut beta = Rgb::ONE;
+    let mut eta_scale = 1.0f32;
+    // The camera ray and specular bounces see emitters directly, without MIS.
+    let mut specular_bounce = true;
+    let mut bsdf_pdf = 0.0f32;
+    let mut ray = camera_ray;
+    let mut depth = 0;
+    loop {
+        *rays += 1;
+        let Some(hit) = scene.intersect(&ray) else {
+            for light in scene.lights() {
+                if let Some((le, light_pdf)) = light.escaped() {
+                    let w = if specular_bounce { 1.0 } else { power_heuristic(1.0, bsdf_pdf, n_light, light_pdf) };
+                    l += beta * le * w;
+                }
+            }
+            break;
+        };
+
+        // Emission from the front face of an area light.
+        if let Some(index) = hit.area_light {
+            let cos_light = hit.geometric_normal.dot(-ray.direction);
+            if cos_light > 0.0 {
+                let light = &scene.area_lights()[index as usize];
+                let w = if specular_bounce {
+                    1.0
+                } else {
+                    power_heuristic(1.0, bsdf_pdf, n_light, light.pdf(hit.t, cos_light))
+                };
+                l += beta * light.radiance * w;
+            }
+        }
+        if depth == settings.max_depth {
+            break;
+        }
+        depth += 1;
+
+        let material = scene.material(hit.material);
+        let frame = Frame::from_normal(hit.shading_normal);
+        let wo = frame.to_local(-ray.direction);
+        if !material.is_specular() && settings.light_samples > 0 {
+            l += beta * direct_lighting(scene, &hit, material, &frame, wo, sampler, settings, rays);
+        }
+
+        // Continue the path by sampling the BSDF.
+        let uc = sampler.get_1d();
+        let u = sampler.get_2d();
+        let Some(bs) = material.sample(wo, uc, u) else {
+            break;
+        };
+        beta *= bs.f * (bs.wi.z.abs() / bs.pdf);
+        if beta == Rgb::ZERO || !beta.is_finite() {
+            break;
+        }
+        specular_bounce = bs.specular;
+        bsdf_pdf = bs.pdf;
+        eta_scale *= bs.eta * bs.eta;
+        let wi = frame.from_local(bs.wi);
+        ray = Ray::new(offset_origin(hit.p, hit.geometric_normal, wi), wi);
+
+        // Russian roulette on the throughput without the radiance scaling of refraction.
+        let rr_beta = max_component(beta * eta_scale);
+        if rr_beta < 1.0 && depth > 1 {
+            let q = (1.0 - rr_beta).max(0.0);
+            if sampler.get_1d() < q {
+                break;
+            }
+            beta /= 1.0 - q;
+        }
+    }
+    l
+}
+
+/// Light arriving directly from every light, `light_samples` shadow rays
+/// each, weighted against BSDF sampling with the power heuristic
+/// (Veach's multi-sample model: n_light light samples, one BSDF sample).
+#[allow(clippy::too_many_arguments)]
+fn direct_lighting(
+    scene: &CompiledScene,
+    hit: &SurfaceHit,
+    material: &Material,
+    frame: &Frame,
+    wo: Vec3,
+    sampler: &mut Sampler,
+    settings: &PathSettings,
+    rays: &mut u64,
+) -> Rgb {
+    let n_light = settings.light_samples as f32;
+    let mut sum = Rgb::ZERO;
+    let area = scene.area_lights().iter().map(|a| a as &dyn SampleLight);
+    let other = scene.lights().iter().map(|a| a as &dyn SampleLight);
+    for light in area.chain(other) {
+        for _ in 0..settings.light_samples {
+            let u = sampler.get_2d();
+            let Some(ls) = light.sample_at(hit.p, u) else {
+                continue;
+            };
+            if ls.pdf <= 0.0 || ls.radiance == Rgb::ZERO {
+                continue;
+            }
+            let wi = frame.to_local(ls.wi);
+            let f = material.eval(wo, wi) * wi.z.abs();
+            if f == Rgb::ZERO {
+                continue;
+            }
+            *rays += 1;
+            let origin = offset_origin(hit.p, hit.geometric_normal, ls.wi);
+            let blocked = if ls.distance.is_finite() {
+                let target = hit.p + ls.wi * ls.distance;
+                scene.occluded(&Ray::new(origin, target - origin), 1.0 - SHADOW_EPSILON)
+            } else {
+                scene.occluded(&Ray::new(origin, ls.wi), f32::INFINITY)
+            };
+            if blocked {
+                continue;
+            }
+            let w = if ls.delta { 1.0 } else { power_heuristic(n_light, ls.pdf, 1.0, material.pdf(wo, wi)) };
+            sum += f * ls.radiance * (w / (ls.pdf * n_light));
+        }
+    }
+    sum
+}
+
+/// The one operation direct lighting needs of any light.
+trait SampleLight {
+    fn sample_at(&self, p: Vec3, u: glam::Vec2) -> Option<crate::lights::LightSample>;
+}
+
+impl SampleLight for crate::lights::AreaLight {
+    fn sample_at(&self, p: Vec3, u: glam::Vec2) -> Option<crate::lights::LightSample> {
+        self.sample(p, u)
+    }
+}
+
+impl SampleLight for crate::lights::Light {
+    fn sample_at(&self, p: Vec3, u: glam::Vec2) -> Option<crate::lights::LightSample> {
+        self.sample(p, u)
+    }
+}

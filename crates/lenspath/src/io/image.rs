@@ -1,0 +1,174 @@
+//! Image output by file extension: PNG (8-bit sRGB with exposure) and
+//! OpenEXR (linear float RGB plus a `Z` depth channel). Files are written
+//! to a temporary name beside the target and renamed, so a reader never
+//! sees a half-written file and a failed write never destroys the old one.
+
+use std::path::{Path, PathBuf};
+
+use crate::error::{Error, Result};
+use crate::film::Image;
+
+/// Supported output formats.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageFormat {
+    /// 8-bit sRGB PNG.
+    Png,
+    /// 32-bit float OpenEXR with R, G, B and Z channels.
+    Exr,
+}
+
+impl ImageFormat {
+    /// The format for `path`'s extension, or an error naming the supported ones.
+    pub fn from_path(path: &Path) -> Result<ImageFormat> {
+        match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+            Some("png") => Ok(ImageFormat::Png),
+            Some("exr") => Ok(ImageFormat::Exr),
+            other => Err(Error::InvalidArgument(format!(
+                "{}: unknown image extension {}; use .png or .exr",
+                path.display(),
+                other.map_or("(none)".to_string(), |e| format!("'.{e}'"))
+            ))),
+        }
+    }
+}
+
+/// The sRGB transfer function (IEC 61966-2-1) from linear to encoded.
+pub fn linear_to_srgb(x: f32) -> f32 {
+    if x <= 0.003_130_8 {
+        12.92 * x.max(0.0)
+    } else {
+        1.055 * x.min(1.0).powf(1.0 / 2.4) - 0.055
+    }
+}
+
+fn temp_path(path: &Path) -> PathBuf {
+    let name = path.file_name().map_or_else(|| "image".into(), |n| n.to_string_lossy().into_owned());
+    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
+}
+
+fn io_error(path: &Path, source: std::io::Error) -> Error {
+    Error::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// Fails early (before a long render) when `path` has an unknown extension
+/// or its directory cannot be written.
+pub fn check_output_path(path: &Path) -> Result<ImageFormat> {
+    let format = ImageFormat::from_path(path)?;
+    if path.is_dir() {
+        return Err(Error::InvalidArgument(format!("{} is a directory", path.display())));
+    }
+    let probe = temp_path(path);
+    std::fs::File::create(&probe).map_err(|e| io_error(path, e))?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(format)
+}
+
+/// Writes `image` to `path` atomically, in the format its extension names.
+/// `exposure` (in stops) scales PNG output only; EXR stays linear.
+pub fn write_image(path: &Path, image: &Image, exposure: f32) -> Result<()> {
+    let format = ImageFormat::from_path(path)?;
+    let tmp = temp_path(path);
+    let written = match format {
+        ImageFormat::Png => write_png(&tmp, image, exposure),
+        ImageFormat::Exr => write_exr(&tmp, image),
+    };
+    if let Err(e) = written {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(e);
+    }
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        io_error(path, e)
+    })
+}
+
+/// 8-bit sRGB bytes of the image after an exposure of `exposure` stops.
+pub fn to_srgb8(image: &Image, exposure: f32) -> Vec<u8> {
+    let scale = exposure.exp2();
+    image
+        .rgb
+        .iter()
+        .map(|&v| (linear_to_srgb(v * scale) * 255.0 + 0.5).clamp(0.0, 255.0) as u8)
+        .collect()
+}
+
+fn write_png(tmp: &Path, image: &Image, exposure: f32) -> Result<()> {
+    let bytes = to_srgb8(image, exposure);
+    ::image::save_buffer_with_format(
+        tmp,
+        &bytes,
+        image.width,
+        image.height,
+        ::image::ExtendedColorType::Rgb8,
+        ::image::ImageFormat::Png,
+    )
+    .map_err(|e| match e {
+        ::image::ImageError::IoError(io) => io_error(tmp, io),
+        other => io_error(tmp, std::io::Error::other(other.to_string())),
+    })
+}
+
+fn write_exr(tmp: &Path, image: &Image) -> Result<()> {
+    use exr::prelude::{
+        AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Layer, LayerAttributes, SmallVec, Text,
+        WritableImage,
+    };
+    let n = image.width as usize * image.height as usize;
+    let channel = |c: usize| (0..n).map(|i| image.rgb[3 * i + c]).collect::<Vec<f32>>();
+    let mut list: SmallVec<[AnyChannel<FlatSamples>; 4]> = SmallVec::new();
+    list.push(AnyChannel::new("R", FlatSamples::F32(channel(0))));
+    list.push(AnyChannel::new("G", FlatSamples::F32(channel(1))));
+    list.push(AnyChannel::new("B", FlatSamples::F32(channel(2))));
+    list.push(AnyChannel::new("Z", FlatSamples::F32(image.depth.clone())));
+    let layer = Layer::new(
+        (image.width as usize, image.height as usize),
+        LayerAttributes::default(),
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(list),
+    );
+    let mut exr_image = exr::image::Image::from_layer(layer);
+    let other = &mut exr_image.attributes.other;
+    other.insert(Text::from("lenspathSpp"), AttributeValue::I32(image.spp_min as i32));
+    other.insert(Text::from("lenspathSppRequested"), AttributeValue::I32(image.spp_requested as i32));
+    exr_image
+        .write()
+        .to_file(tmp)
+        .map_err(|e| io_error(tmp, std::io::Error::other(e.to_string())))
+}
+
+/// Reads an EXR written by [`write_image`] back (RGB, Z and the spp attributes).
+pub fn read_exr(path: &Path) -> Result<Image> {
+    use exr::prelude::{read_first_flat_layer_from_file, AttributeValue, Text};
+    let fail = |m: String| Error::Parse {
+        path: path.to_path_buf(),
+        message: m,
+    };
+    let img = read_first_flat_layer_from_file(path).map_err(|e| fail(e.to_string()))?;
+    let size = img.layer_data.size;
+    let find = |name: &str| {
+        img.layer_data
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name == Text::from(name))
+            .map(|c| c.sample_data.values_as_f32().collect::<Vec<f32>>())
+            .ok_or_else(|| fail(format!("no '{name}' channel")))
+    };
+    let (r, g, b) = (find("R")?, find("G")?, find("B")?);
+    let depth = find("Z").unwrap_or_else(|_| vec![f32::INFINITY; r.len()]);
+    let attr = |name: &str| match img.attributes.other.get(&Text::from(name)) {
+        Some(AttributeValue::I32(v)) => *v as u32,
+        _ => 0,
+    };
+    Ok(Image {
+        width: size.0 as u32,
+        height: size.1 as u32,
+        rgb: (0..r.len()).flat_map(|i| [r[i], g[i], b[i]]).collect(),
+        depth,
+        spp_min: attr("lenspathSpp"),
+        spp_requested: attr("lenspathSppRequested"),
+    })
+}

@@ -1,0 +1,266 @@
+//! The render driver: splits the image into tiles, renders them in parallel
+//! in progressive passes, reports progress and stops early when asked.
+
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::time::Instant;
+
+use glam::{DVec3, Vec2};
+use rayon::prelude::*;
+
+use crate::camera::{Camera, CameraSample};
+use crate::error::{Error, Result};
+use crate::film::{Filter, Image};
+use crate::integrator::{radiance, PathSettings};
+use crate::math::Rgb;
+use crate::sampling::{Sampler, MAX_SAMPLES_PER_PIXEL};
+use crate::scene::CompiledScene;
+
+/// Everything that controls one render.
+#[derive(Clone, Copy, Debug)]
+pub struct RenderSettings {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Path depth and light sampling.
+    pub path: PathSettings,
+    /// Seed of the sample sequences: the same seed gives the same image.
+    pub seed: u32,
+    /// Pixel reconstruction filter.
+    pub filter: Filter,
+    /// Worker threads; `None` uses every core.
+    pub threads: Option<usize>,
+    /// Edge of the square tiles, in pixels.
+    pub tile_size: u32,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        RenderSettings {
+            width: 640,
+            height: 480,
+            spp: 64,
+            path: PathSettings {
+                max_depth: 16,
+                light_samples: 1,
+            },
+            seed: 0,
+            filter: Filter::Box,
+            threads: None,
+            tile_size: 16,
+        }
+    }
+}
+
+impl RenderSettings {
+    /// Rejects settings that cannot make an image.
+    pub fn validate(&self) -> Result<()> {
+        let fail = |m: String| Err(Error::InvalidArgument(m));
+        if self.width == 0 || self.height == 0 {
+            return fail(format!("image size must be positive, got {}x{}", self.width, self.height));
+        }
+        if self.width > 65_536 || self.height > 65_536 {
+            return fail(format!("image size {}x{} exceeds 65536 pixels on a side", self.width, self.height));
+        }
+        if self.spp == 0 || self.spp > MAX_SAMPLES_PER_PIXEL {
+            return fail(format!("samples per pixel must be in 1..={MAX_SAMPLES_PER_PIXEL}, got {}", self.spp));
+        }
+        if self.path.light_samples > 1024 {
+            return fail(format!("light samples must be at most 1024, got {}", self.path.light_samples));
+        }
+        if self.threads == Some(0) {
+            return fail("threads must be at least 1".into());
+        }
+        if self.tile_size == 0 {
+            return fail("tile size must be positive".into());
+        }
+        if let Filter::Gaussian { sigma, radius } = self.filter {
+            if !(sigma > 0.0 && radius > 0.0 && sigma.is_finite() && radius.is_finite()) {
+                return fail(format!("Gaussian filter needs positive sigma and radius, got {sigma} and {radius}"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Counters of a finished (or stopped) render.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RenderStats {
+    /// Wall time in seconds.
+    pub seconds: f64,
+    /// Camera samples taken.
+    pub samples: u64,
+    /// Rays traced: camera, bounce and shadow rays.
+    pub rays: u64,
+    /// Samples whose radiance was NaN or infinite (dropped as zero).
+    pub invalid_samples: u64,
+    /// True when the render was stopped before all samples were taken.
+    pub cancelled: bool,
+}
+
+/// What a render produced.
+#[derive(Clone, Debug)]
+pub struct RenderOutput {
+    /// The image.
+    pub image: Image,
+    /// How it went.
+    pub stats: RenderStats,
+}
+
+struct Tile {
+    x0: u32,
+    y0: u32,
+    width: u32,
+    height: u32,
+    sum: Vec<DVec3>,
+    count: Vec<u32>,
+    depth: Vec<f32>,
+}
+
+/// Renders `scene` through `camera`. `progress(done, total)` is called with
+/// sample counts as tiles finish; setting `cancel` stops the render within
+/// one tile per thread and returns what was accumulated, every pixel the
+/// mean of the samples it got.
+pub fn render(
+    scene: &CompiledScene,
+    camera: &dyn Camera,
+    settings: &RenderSettings,
+    progress: &(dyn Fn(u64, u64) + Sync),
+    cancel: &AtomicBool,
+) -> Result<RenderOutput> {
+    settings.validate()?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(settings.threads.unwrap_or(0))
+        .build()
+        .map_err(|e| Error::InvalidArgument(format!("cannot start worker threads: {e}")))?;
+    Ok(pool.install(|| render_in_pool(scene, camera, settings, progress, cancel)))
+}
+
+fn render_in_pool(
+    scene: &CompiledScene,
+    camera: &dyn Camera,
+    settings: &RenderSettings,
+    progress: &(dyn Fn(u64, u64) + Sync),
+    cancel: &AtomicBool,
+) -> RenderOutput {
+    let started = Instant::now();
+    let ts = settings.tile_size;
+    let mut tiles: Vec<Tile> = Vec::new();
+    for y0 in (0..settings.height).step_by(ts as usize) {
+        for x0 in (0..settings.width).step_by(ts as usize) {
+            let (width, height) = (ts.min(settings.width - x0), ts.min(settings.height - y0));
+            let n = (width * height) as usize;
+            tiles.push(Tile {
+                x0,
+                y0,
+                width,
+                height,
+                sum: vec![DVec3::ZERO; n],
+                count: vec![0; n],
+                depth: vec![f32::INFINITY; n],
+            });
+        }
+    }
+    let (axis_origin, axis_dir) = camera.view_axis();
+    let total = u64::from(settings.width) * u64::from(settings.height) * u64::from(settings.spp);
+    let done = AtomicU64::new(0);
+    let rays = AtomicU64::new(0);
+    let invalid = AtomicU64::new(0);
+
+    // Progressive passes of growing size, so a stopped render is still even.
+    let mut pass_start = 0u32;
+    let mut pass_size = 1u32;
+    while pass_start < settings.spp && !cancel.load(Ordering::Relaxed) {
+        let pass_end = (pass_start + pass_size).min(settings.spp);
+        tiles.par_iter_mut().for_each(|tile| {
+            if cancel.load(Ordering::Relaxed) {
+                return;
+            }
+            let mut tile_rays = 0u64;
+            let mut tile_invalid = 0u64;
+            for ty in 0..tile.height {
+                for tx in 0..tile.width {
+                    let (px, py) = (tile.x0 + tx, tile.y0 + ty);
+                    let i = (ty * tile.width + tx) as usize;
+                    let centre = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
+                    if pass_start == 0 {
+                        let sample = CameraSample {
+                            film: centre,
+                            lens: Vec2::splat(0.5),
+                        };
+                        if let Some(cr) = camera.generate_ray(sample) {
+                            tile_rays += 1;
+                            if let Some(hit) = scene.intersect(&cr.ray) {
+                                tile.depth[i] = (hit.p - axis_origin).dot(axis_dir);
+                            }
+                        }
+                    }
+                    let mut sum = tile.sum[i];
+                    for index in pass_start..pass_end {
+                        let mut sampler = Sampler::new(px, py, index, settings.seed);
+                        let film = centre + settings.filter.sample_offset(sampler.get_2d());
+                        let lens = sampler.get_2d();
+                        let mut l = Rgb::ZERO;
+                        if let Some(cr) = camera.generate_ray(CameraSample { film, lens }) {
+                            l = cr.weight * radiance(scene, cr.ray, &mut sampler, &settings.path, &mut tile_rays);
+                        }
+                        if l.is_finite() {
+                            sum += l.as_dvec3();
+                        } else {
+                            tile_invalid += 1;
+                        }
+                    }
+                    tile.sum[i] = sum;
+                    tile.count[i] = pass_end;
+                }
+            }
+            rays.fetch_add(tile_rays, Ordering::Relaxed);
+            invalid.fetch_add(tile_invalid, Ordering::Relaxed);
+            let n = u64::from(tile.width * tile.height) * u64::from(pass_end - pass_start);
+            progress(done.fetch_add(n, Ordering::Relaxed) + n, total);
+        });
+        pass_start = pass_end;
+        pass_size = (pass_size * 2).min(64);
+    }
+
+    // Resolve: each pixel is the mean of its samples.
+    let (w, h) = (settings.width as usize, settings.height as usize);
+    let mut rgb = vec![0f32; 3 * w * h];
+    let mut depth = vec![f32::INFINITY; w * h];
+    let mut spp_min = u32::MAX;
+    let mut samples = 0u64;
+    for tile in &tiles {
+        for ty in 0..tile.height {
+            for tx in 0..tile.width {
+                let i = (ty * tile.width + tx) as usize;
+                let o = (tile.y0 + ty) as usize * w + (tile.x0 + tx) as usize;
+                let n = tile.count[i];
+                spp_min = spp_min.min(n);
+                samples += u64::from(n);
+                let mean = if n > 0 { tile.sum[i] / f64::from(n) } else { DVec3::ZERO };
+                rgb[3 * o..3 * o + 3].copy_from_slice(&mean.as_vec3().to_array());
+                depth[o] = tile.depth[i];
+            }
+        }
+    }
+    let cancelled = samples < total;
+    RenderOutput {
+        image: Image {
+            width: settings.width,
+            height: settings.height,
+            rgb,
+            depth,
+            spp_min: if spp_min == u32::MAX { 0 } else { spp_min },
+            spp_requested: settings.spp,
+        },
+        stats: RenderStats {
+            seconds: started.elapsed().as_secs_f64(),
+            samples,
+            rays: rays.into_inner(),
+            invalid_samples: invalid.into_inner(),
+            cancelled,
+        },
+    }
+}

@@ -1,0 +1,333 @@
+//! Scenes: the description a user or loader fills in ([`Scene`]), and the
+//! compiled form the integrator traces ([`CompiledScene`]): a BVH over
+//! every primitive plus the area lights made from emissive shapes.
+
+use glam::{Vec2, Vec3};
+
+use crate::accel::{Bvh, BvhSettings, PrimGeometry};
+use crate::camera::CameraPose;
+use crate::error::{Error, Result};
+use crate::lights::{AreaLight, Light};
+use crate::materials::Material;
+use crate::math::{Bounds3, Rgb};
+use crate::ray::Ray;
+use crate::shapes::{MaterialId, Sphere, TriangleMesh};
+
+/// The camera placement and field of view a scene suggests.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SceneView {
+    /// Where the camera is and where it looks.
+    pub pose: CameraPose,
+    /// Vertical field of view in degrees.
+    pub fov_y_deg: f32,
+    /// Distance to the subject, a sensible default focus distance (scene units).
+    pub focus_distance: f32,
+}
+
+/// A scene description: shapes, materials, lights and a suggested view.
+#[derive(Clone, Debug, Default)]
+pub struct Scene {
+    /// Triangle meshes.
+    pub meshes: Vec<TriangleMesh>,
+    /// Analytic spheres.
+    pub spheres: Vec<Sphere>,
+    /// Materials, indexed by the shapes' `material`.
+    pub materials: Vec<Material>,
+    /// Point, directional and environment lights (area lights come from emissive shapes).
+    pub lights: Vec<Light>,
+    /// The view the scene was made for.
+    pub view: Option<SceneView>,
+}
+
+/// Which shape a BVH primitive belongs to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PrimRef {
+    /// Triangle `triangle` of mesh `mesh`.
+    Triangle {
+        /// Mesh index.
+        mesh: u32,
+        /// Triangle index in the mesh.
+        triangle: u32,
+    },
+    /// Sphere `sphere`.
+    Sphere {
+        /// Sphere index.
+        sphere: u32,
+    },
+}
+
+/// Everything the integrator needs about a ray's closest hit.
+#[derive(Clone, Copy, Debug)]
+pub struct SurfaceHit {
+    /// Distance along the ray (unit direction: scene units).
+    pub t: f32,
+    /// Hit point.
+    pub p: Vec3,
+    /// Unit geometric normal (front face: counter-clockwise winding, sphere outside).
+    pub geometric_normal: Vec3,
+    /// Unit shading normal, on the same side as the geometric normal.
+    pub shading_normal: Vec3,
+    /// Texture coordinates (zero when the shape has none).
+    pub uv: Vec2,
+    /// Material of the surface.
+    pub material: MaterialId,
+    /// Area light index when the surface emits.
+    pub area_light: Option<u32>,
+}
+
+/// A scene ready to be traced.
+pub struct CompiledScene {
+    scene: Scene,
+    bvh: Bvh<PrimRef>,
+    area_lights: Vec<AreaLight>,
+    mesh_light: Vec<Option<u32>>,
+    sphere_light: Vec<Option<u32>>,
+}
+
+fn check_rgb(what: &str, c: Rgb) -> Result<()> {
+    if !c.is_finite() || c.min_element() < 0.0 {
+        return Err(Error::InvalidScene(format!("{what} must be finite and non-negative, got {c}")));
+    }
+    Ok(())
+}
+
+impl Scene {
+    /// Total number of triangles in all meshes.
+    pub fn triangle_count(&self) -> usize {
+        self.meshes.iter().map(|m| m.indices.len()).sum()
+    }
+
+    /// Checks the description for errors a loader or user could make.
+    pub fn validate(&self) -> Result<()> {
+        let check_material = |what: String, id: MaterialId| {
+            if id as usize >= self.materials.len() {
+                return Err(Error::InvalidScene(format!(
+                    "{what} uses material {id}, but the scene has {} materials",
+                    self.materials.len()
+                )));
+            }
+            Ok(())
+        };
+        for (i, m) in self.meshes.iter().enumerate() {
+            check_material(format!("mesh {i}"), m.material)?;
+            if let Some(p) = m.positions.iter().position(|p| !p.is_finite()) {
+                return Err(Error::InvalidScene(format!("mesh {i}: vertex {p} is not finite")));
+            }
+            let n = m.positions.len() as u32;
+            if let Some(t) = m.indices.iter().position(|tri| tri.iter().any(|&v| v >= n)) {
+                return Err(Error::InvalidScene(format!(
+                    "mesh {i}: triangle {t} indexes a vertex beyond the {n} it has"
+                )));
+            }
+            if m.normals.as_ref().is_some_and(|ns| ns.len() != m.positions.len()) {
+                return Err(Error::InvalidScene(format!("mesh {i}: normal count differs from vertex count")));
+            }
+            if m.uvs.as_ref().is_some_and(|uv| uv.len() != m.positions.len()) {
+                return Err(Error::InvalidScene(format!("mesh {i}: uv count differs from vertex count")));
+            }
+            if let Some(e) = m.emission {
+                check_rgb(&format!("mesh {i} emission"), e)?;
+            }
+        }
+        for (i, s) in self.spheres.iter().enumerate() {
+            check_material(format!("sphere {i}"), s.material)?;
+            if !s.center.is_finite() || !(s.radius > 0.0 && s.radius.is_finite()) {
+                return Err(Error::InvalidScene(format!(
+                    "sphere {i}: centre must be finite and radius positive, got {} and {}",
+                    s.center, s.radius
+                )));
+            }
+            if let Some(e) = s.emission {
+                check_rgb(&format!("sphere {i} emission"), e)?;
+            }
+        }
+        for (i, m) in self.materials.iter().enumerate() {
+            match *m {
+                Material::Diffuse { reflectance } | Material::Mirror { reflectance } => {
+                    check_rgb(&format!("material {i} reflectance"), reflectance)?
+                }
+                Material::Dielectric { eta } => {
+                    if !(eta > 0.0 && eta.is_finite()) {
+                        return Err(Error::InvalidScene(format!("material {i}: eta must be positive, got {eta}")));
+                    }
+                }
+                Material::Conductor { eta, k, alpha } => {
+                    check_rgb(&format!("material {i} eta"), eta)?;
+                    check_rgb(&format!("material {i} k"), k)?;
+                    if !(alpha >= 0.0 && alpha.is_finite()) {
+                        return Err(Error::InvalidScene(format!("material {i}: alpha must be ≥ 0, got {alpha}")));
+                    }
+                }
+            }
+        }
+        for (i, l) in self.lights.iter().enumerate() {
+            let (what, value) = match *l {
+                Light::Point { intensity, position } => {
+                    if !position.is_finite() {
+                        return Err(Error::InvalidScene(format!("light {i}: position is not finite")));
+                    }
+                    ("intensity", intensity)
+                }
+                Light::Directional { irradiance, direction } => {
+                    if !direction.is_finite() || direction.length_squared() == 0.0 {
+                        return Err(Error::InvalidScene(format!("light {i}: direction must be non-zero")));
+                    }
+                    ("irradiance", irradiance)
+                }
+                Light::Environment { radiance } => ("radiance", radiance),
+            };
+            check_rgb(&format!("light {i} {what}"), value)?;
+        }
+        Ok(())
+    }
+
+    /// Validates the scene and builds its acceleration structure and lights.
+    pub fn compile(self, settings: &BvhSettings) -> Result<CompiledScene> {
+        self.validate()?;
+        let mut prims = Vec::with_capacity(self.triangle_count() + self.spheres.len());
+        for (mi, m) in self.meshes.iter().enumerate() {
+            for (ti, _) in m.indices.iter().enumerate() {
+                let tri = m.triangle(ti);
+                // Zero-area triangles can never be hit; leave them out.
+                if (tri[1] - tri[0]).cross(tri[2] - tri[0]).length_squared() > 0.0 {
+                    prims.push((
+                        PrimGeometry::Triangle(tri),
+                        PrimRef::Triangle {
+                            mesh: mi as u32,
+                            triangle: ti as u32,
+                        },
+                    ));
+                }
+            }
+        }
+        for (si, s) in self.spheres.iter().enumerate() {
+            prims.push((
+                PrimGeometry::Sphere {
+                    center: s.center,
+                    radius: s.radius,
+                },
+                PrimRef::Sphere { sphere: si as u32 },
+            ));
+        }
+        let bvh = Bvh::build(prims, settings);
+
+        let mut area_lights = Vec::new();
+        let mesh_light = self
+            .meshes
+            .iter()
+            .map(|m| {
+                let radiance = m.emission.filter(|e| e.max_element() > 0.0)?;
+                let tris = (0..m.indices.len()).map(|i| m.triangle(i)).collect();
+                let light = AreaLight::from_triangles(tris, radiance)?;
+                area_lights.push(light);
+                Some(area_lights.len() as u32 - 1)
+            })
+            .collect();
+        let sphere_light = self
+            .spheres
+            .iter()
+            .map(|s| {
+                let radiance = s.emission.filter(|e| e.max_element() > 0.0)?;
+                area_lights.push(AreaLight::from_sphere(s.center, s.radius, radiance));
+                Some(area_lights.len() as u32 - 1)
+            })
+            .collect();
+        Ok(CompiledScene {
+            scene: self,
+            bvh,
+            area_lights,
+            mesh_light,
+            sphere_light,
+        })
+    }
+}
+
+impl CompiledScene {
+    /// The description this was compiled from.
+    pub fn description(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// The acceleration structure.
+    pub fn bvh(&self) -> &Bvh<PrimRef> {
+        &self.bvh
+    }
+
+    /// Bounds of all geometry.
+    pub fn bounds(&self) -> Bounds3 {
+        self.bvh.bounds()
+    }
+
+    /// Area lights, indexed by [`SurfaceHit::area_light`].
+    pub fn area_lights(&self) -> &[AreaLight] {
+        &self.area_lights
+    }
+
+    /// Point, directional and environment lights.
+    pub fn lights(&self) -> &[Light] {
+        &self.scene.lights
+    }
+
+    /// Material `id`.
+    #[inline]
+    pub fn material(&self, id: MaterialId) -> &Material {
+        &self.scene.materials[id as usize]
+    }
+
+    /// True when something lies on `ray` within `0 < t < t_max`.
+    #[inline]
+    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        self.bvh.intersect_any(ray, t_max)
+    }
+
+    /// The closest surface hit along `ray` (unit direction).
+    pub fn intersect(&self, ray: &Ray) -> Option<SurfaceHit> {
+        let hit = self.bvh.intersect(ray, f32::INFINITY)?;
+        Some(match self.bvh.tag(hit.prim) {
+            PrimRef::Triangle { mesh, triangle } => {
+                let m = &self.scene.meshes[mesh as usize];
+                let [i0, i1, i2] = m.indices[triangle as usize].map(|i| i as usize);
+                let (p0, p1, p2) = (m.positions[i0], m.positions[i1], m.positions[i2]);
+                let b0 = 1.0 - hit.b1 - hit.b2;
+                // Barycentric interpolation is more accurate than origin + t·direction.
+                let p = b0 * p0 + hit.b1 * p1 + hit.b2 * p2;
+                let geometric_normal = (p1 - p0).cross(p2 - p0).normalize();
+                let shading_normal = m
+                    .normals
+                    .as_ref()
+                    .and_then(|ns| (b0 * ns[i0] + hit.b1 * ns[i1] + hit.b2 * ns[i2]).try_normalize())
+                    .map_or(geometric_normal, |n| if n.dot(geometric_normal) < 0.0 { -n } else { n });
+                let uv = m
+                    .uvs
+                    .as_ref()
+                    .map_or(Vec2::ZERO, |uv| b0 * uv[i0] + hit.b1 * uv[i1] + hit.b2 * uv[i2]);
+                SurfaceHit {
+                    t: hit.t,
+                    p,
+                    geometric_normal,
+                    shading_normal,
+                    uv,
+                    material: m.material,
+                    area_light: self.mesh_light[mesh as usize],
+                }
+            }
+            PrimRef::Sphere { sphere } => {
+                let s = &self.scene.spheres[sphere as usize];
+                let n = (ray.at(hit.t) - s.center).normalize();
+                let uv = Vec2::new(
+                    (n.z.atan2(n.x) / std::f32::consts::TAU).rem_euclid(1.0),
+                    n.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
+                );
+                SurfaceHit {
+                    t: hit.t,
+                    p: s.center + s.radius * n,
+                    geometric_normal: n,
+                    shading_normal: n,
+                    uv,
+                    material: s.material,
+                    area_light: self.sphere_light[sphere as usize],
+                }
+            }
+        })
+    }
+}

@@ -1,0 +1,280 @@
+//! Geometry: indexed triangle meshes and analytic spheres, their ray
+//! intersection tests and the surface data a hit yields.
+
+use glam::{Vec2, Vec3, Vec3A};
+
+use crate::math::{Bounds3, Rgb};
+use crate::ray::Ray;
+
+/// Index into [`crate::scene::Scene::materials`].
+pub type MaterialId = u32;
+
+/// An indexed triangle mesh in world space.
+#[derive(Clone, Debug, Default)]
+pub struct TriangleMesh {
+    /// Vertex positions.
+    pub positions: Vec<Vec3>,
+    /// Optional per-vertex shading normals (same length as `positions`).
+    pub normals: Option<Vec<Vec3>>,
+    /// Optional per-vertex texture coordinates.
+    pub uvs: Option<Vec<Vec2>>,
+    /// Triangles as vertex-index triples; the front face winds counter-clockwise.
+    pub indices: Vec<[u32; 3]>,
+    /// Surface material.
+    pub material: MaterialId,
+    /// Emitted radiance from the front face, making the mesh an area light.
+    pub emission: Option<Rgb>,
+}
+
+impl TriangleMesh {
+    /// The three corners of triangle `i`.
+    #[inline]
+    pub fn triangle(&self, i: usize) -> [Vec3; 3] {
+        let [a, b, c] = self.indices[i];
+        [
+            self.positions[a as usize],
+            self.positions[b as usize],
+            self.positions[c as usize],
+        ]
+    }
+
+    /// Area of triangle `i`.
+    pub fn triangle_area(&self, i: usize) -> f32 {
+        let [p0, p1, p2] = self.triangle(i);
+        0.5 * (p1 - p0).cross(p2 - p0).length()
+    }
+}
+
+/// An analytic sphere.
+#[derive(Clone, Copy, Debug)]
+pub struct Sphere {
+    /// Centre in world space.
+    pub center: Vec3,
+    /// Radius (> 0).
+    pub radius: f32,
+    /// Surface material.
+    pub material: MaterialId,
+    /// Emitted radiance from the outside, making the sphere an area light.
+    pub emission: Option<Rgb>,
+}
+
+impl Sphere {
+    /// World-space bounds.
+    pub fn bounds(&self) -> Bounds3 {
+        let c = Vec3A::from(self.center);
+        Bounds3 {
+            min: c - Vec3A::splat(self.radius),
+            max: c + Vec3A::splat(self.radius),
+        }
+    }
+}
+
+/// Bounds of a triangle given by its corners.
+#[inline]
+pub fn triangle_bounds(p: &[Vec3; 3]) -> Bounds3 {
+    let a = Vec3A::from(p[0]);
+    let b = Vec3A::from(p[1]);
+    let c = Vec3A::from(p[2]);
+    Bounds3 {
+        min: a.min(b).min(c),
+        max: a.max(b).max(c),
+    }
+}
+
+/// Per-ray constants of the watertight triangle test: the axis permutation
+/// and shear that map the ray direction onto +z.
+#[derive(Clone, Copy, Debug)]
+pub struct TriangleRay {
+    origin: Vec3,
+    kx: usize,
+    ky: usize,
+    kz: usize,
+    shear: Vec3,
+}
+
+impl TriangleRay {
+    /// Precomputes the permutation and shear for `ray`.
+    #[inline]
+    pub fn new(ray: &Ray) -> Self {
+        let d = ray.direction;
+        let kz = d.abs().max_position();
+        let kx = if kz == 2 { 0 } else { kz + 1 };
+        let ky = if kx == 2 { 0 } else { kx + 1 };
+        let dz = d[kz];
+        TriangleRay {
+            origin: ray.origin,
+            kx,
+            ky,
+            kz,
+            shear: Vec3::new(-d[kx] / dz, -d[ky] / dz, 1.0 / dz),
+        }
+    }
+}
+
+/// Watertight ray–triangle intersection (Woop, Benthin and Wald, "Watertight
+/// Ray/Triangle Intersection", JCGT 2013; as in pbrt-v4 `IntersectTriangle`).
+/// Returns `(t, b1, b2)` with barycentrics of `p1` and `p2`, for `0 < t < t_max`.
+/// Edge functions that round to zero are recomputed in f64, so a ray
+/// through a shared edge or vertex hits at least one of the triangles.
+#[inline]
+pub fn intersect_triangle(r: &TriangleRay, p: &[Vec3; 3], t_max: f32) -> Option<(f32, f32, f32)> {
+    let (kx, ky, kz) = (r.kx, r.ky, r.kz);
+    // Translate to the ray origin, permute so the ray runs along +z, shear.
+    let a = p[0] - r.origin;
+    let b = p[1] - r.origin;
+    let c = p[2] - r.origin;
+    let (az, bz, cz) = (a[kz], b[kz], c[kz]);
+    let ax = a[kx] + r.shear.x * az;
+    let ay = a[ky] + r.shear.y * az;
+    let bx = b[kx] + r.shear.x * bz;
+    let by = b[ky] + r.shear.y * bz;
+    let cx = c[kx] + r.shear.x * cz;
+    let cy = c[ky] + r.shear.y * cz;
+
+    // Scaled barycentric coordinates (2D edge functions).
+    let mut u = cx * by - cy * bx;
+    let mut v = ax * cy - ay * cx;
+    let mut w = bx * ay - by * ax;
+    if u == 0.0 || v == 0.0 || w == 0.0 {
+        u = (cx as f64 * by as f64 - cy as f64 * bx as f64) as f32;
+        v = (ax as f64 * cy as f64 - ay as f64 * cx as f64) as f32;
+        w = (bx as f64 * ay as f64 - by as f64 * ax as f64) as f32;
+    }
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        return None;
+    }
+    let det = u + v + w;
+    if det == 0.0 {
+        return None;
+    }
+    // Scaled hit distance, compared against the range before dividing.
+    let sz = r.shear.z;
+    let t_scaled = u * (sz * az) + v * (sz * bz) + w * (sz * cz);
+    if det < 0.0 && (t_scaled >= 0.0 || t_scaled < t_max * det) {
+        return None;
+    }
+    if det > 0.0 && (t_scaled <= 0.0 || t_scaled > t_max * det) {
+        return None;
+    }
+    let inv_det = 1.0 / det;
+    let t = t_scaled * inv_det;
+    if t <= 0.0 || t >= t_max {
+        return None;
+    }
+    Some((t, v * inv_det, w * inv_det))
+}
+
+/// Ray–sphere intersection: the nearest root in `(0, t_max)`, from outside
+/// or inside. Uses the numerically stable form of Hearn and Baker /
+/// "Precision Improvements for Ray/Sphere Intersection" (Ray Tracing Gems, ch. 7).
+#[inline]
+pub fn intersect_sphere(ray: &Ray, center: Vec3, radius: f32, t_max: f32) -> Option<f32> {
+    let f = ray.origin - center;
+    let a = ray.direction.length_squared();
+    let b_half = -f.dot(ray.direction);
+    // Discriminant computed from the distance of the centre to the ray line,
+    // which keeps precision for small spheres far away.
+    let l = f + (b_half / a) * ray.direction;
+    let disc = radius * radius - l.length_squared();
+    if disc < 0.0 {
+        return None;
+    }
+    let sq = (a * disc).sqrt();
+    let c = f.length_squared() - radius * radius;
+    let q = if b_half >= 0.0 { b_half + sq } else { b_half - sq };
+    let (mut t0, mut t1) = (c / q, q / a);
+    if q == 0.0 {
+        t0 = 0.0;
+        t1 = 0.0;
+    }
+    if t0 > t1 {
+        std::mem::swap(&mut t0, &mut t1);
+    }
+    if t0 > 0.0 && t0 < t_max {
+        Some(t0)
+    } else if t1 > 0.0 && t1 < t_max {
+        Some(t1)
+    } else {
+        None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn hits(ray: &Ray, p: &[Vec3; 3]) -> bool {
+        intersect_triangle(&TriangleRay::new(ray), p, f32::INFINITY).is_some()
+    }
+
+    #[test]
+    fn triangle_hit_distance_and_barycentrics() {
+        let p = [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0)];
+        let ray = Ray::new(Vec3::new(0.25, 0.5, 2.0), Vec3::new(0.0, 0.0, -1.0));
+        let (t, b1, b2) = intersect_triangle(&TriangleRay::new(&ray), &p, f32::INFINITY).unwrap();
+        assert!((t - 2.0).abs() < 1e-6);
+        assert!((b1 - 0.25).abs() < 1e-6 && (b2 - 0.5).abs() < 1e-6);
+        // Behind the origin, outside, and beyond t_max: no hit.
+        assert!(!hits(&Ray::new(Vec3::new(0.25, 0.5, -2.0), Vec3::new(0.0, 0.0, -1.0)), &p));
+        assert!(!hits(&Ray::new(Vec3::new(0.75, 0.5, 2.0), Vec3::new(0.0, 0.0, -1.0)), &p));
+        assert!(intersect_triangle(&TriangleRay::new(&ray), &p, 1.5).is_none());
+    }
+
+    /// Rays aimed exactly at shared edges and vertices of a fan of triangles
+    /// must hit at least one triangle: no ray slips through the mesh.
+    #[test]
+    fn triangle_fan_is_watertight_on_shared_edges_and_vertices() {
+        // A fan of 12 triangles around a centre vertex, tilted out of any axis plane.
+        let n_tris = 12;
+        let centre = Vec3::new(0.1, 0.2, 0.3);
+        let tilt = glam::Quat::from_euler(glam::EulerRot::XYZ, 0.3, -0.7, 0.2);
+        let rim: Vec<Vec3> = (0..n_tris)
+            .map(|i| {
+                let a = i as f32 / n_tris as f32 * std::f32::consts::TAU;
+                centre + tilt * Vec3::new(a.cos() * 1.3, a.sin() * 0.9, 0.0)
+            })
+            .collect();
+        let tris: Vec<[Vec3; 3]> = (0..n_tris).map(|i| [centre, rim[i], rim[(i + 1) % n_tris]]).collect();
+        let normal = tilt * Vec3::Z;
+        let mut rng = 0x2545F4914F6CDD1Du64;
+        let mut next = || {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            (rng >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let mut missed = 0;
+        let mut tested = 0;
+        for i in 0..n_tris {
+            for k in 0..2000 {
+                // Points on the shared edge centre–rim[i] (k == 0: the vertex itself).
+                let s = if k == 0 { 0.0 } else { next() };
+                let target = centre + s * (rim[i] - centre);
+                let dir = (-normal + 0.8 * Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5)).normalize();
+                let ray = Ray::new(target - 3.7 * dir, dir);
+                tested += 1;
+                if !tris.iter().any(|t| hits(&ray, t)) {
+                    missed += 1;
+                }
+            }
+        }
+        assert_eq!(missed, 0, "{missed} of {tested} rays through shared edges slipped through");
+    }
+
+    #[test]
+    fn sphere_hit_from_outside_and_inside() {
+        let c = Vec3::new(1.0, 2.0, 3.0);
+        let outside = Ray::new(c + Vec3::new(0.0, 0.0, 5.0), Vec3::new(0.0, 0.0, -1.0));
+        assert!((intersect_sphere(&outside, c, 2.0, f32::INFINITY).unwrap() - 3.0).abs() < 1e-5);
+        let inside = Ray::new(c + Vec3::new(0.5, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0));
+        assert!((intersect_sphere(&inside, c, 2.0, f32::INFINITY).unwrap() - 1.5).abs() < 1e-5);
+        let away = Ray::new(c + Vec3::new(0.0, 0.0, 5.0), Vec3::new(0.0, 0.0, 1.0));
+        assert!(intersect_sphere(&away, c, 2.0, f32::INFINITY).is_none());
+        let grazing_miss = Ray::new(c + Vec3::new(2.001, 0.0, 5.0), Vec3::new(0.0, 0.0, -1.0));
+        assert!(intersect_sphere(&grazing_miss, c, 2.0, f32::INFINITY).is_none());
+        // A tiny sphere far away is still hit (precision of the discriminant).
+        let far = Ray::new(Vec3::new(0.0, 0.0, 1.0e4), Vec3::new(0.0, 0.0, -1.0));
+        let t = intersect_sphere(&far, Vec3::ZERO, 1e-2, f32::INFINITY).unwrap();
+        assert!((t - (1.0e4 - 1e-2)).abs() < 1e-2);
+    }
+}
