@@ -1,1 +1,84 @@
-fn main(){}
+//! `lenspath`: the command-line front end of the lenspath renderer.
+//!
+//! Every error ends in one line on stderr and exit code 2; an interrupted
+//! render writes what it has and exits with 130.
+
+mod bench;
+mod progress;
+mod render;
+
+use std::process::ExitCode;
+
+use clap::{Args, Parser, Subcommand};
+
+/// A physically based path tracer whose camera is a real lens.
+#[derive(Parser)]
+#[command(name = "lenspath", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene to an image (PNG or EXR by extension).
+    Render(render::RenderArgs),
+    /// Measure performance.
+    Bench(BenchArgs),
+}
+
+#[derive(Args)]
+struct BenchArgs {
+    #[command(subcommand)]
+    what: BenchCommand,
+}
+
+#[derive(Subcommand)]
+enum BenchCommand {
+    /// BVH build time and traversal speed on a mesh.
+    Bvh(bench::BvhArgs),
+}
+
+/// Exit code of an input or usage error.
+const EXIT_USAGE: u8 = 2;
+/// Exit code after Ctrl-C (128 + SIGINT).
+const EXIT_INTERRUPTED: u8 = 130;
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion)
+                || matches!(e.kind(), ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand)
+            {
+                let _ = e.print();
+                return if e.use_stderr() { ExitCode::from(EXIT_USAGE) } else { ExitCode::SUCCESS };
+            }
+            // One line: clap's first, which names the argument and the problem.
+            let text = e.render().to_string();
+            eprintln!("{}", text.lines().next().unwrap_or("error: invalid arguments"));
+            return ExitCode::from(EXIT_USAGE);
+        }
+    };
+    let outcome = match cli.command {
+        Command::Render(args) => render::run(args),
+        Command::Bench(BenchArgs { what: BenchCommand::Bvh(args) }) => bench::run_bvh(args),
+    };
+    match outcome {
+        Ok(Outcome::Done) => ExitCode::SUCCESS,
+        Ok(Outcome::Interrupted) => ExitCode::from(EXIT_INTERRUPTED),
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(EXIT_USAGE)
+        }
+    }
+}
+
+/// How a command ended, when it did not fail.
+pub enum Outcome {
+    /// Finished.
+    Done,
+    /// Stopped by Ctrl-C after saving its partial result.
+    Interrupted,
+}

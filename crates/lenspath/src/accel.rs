@@ -8,7 +8,7 @@
 
 use std::time::Instant;
 
-use glam::{UVec3, Vec3, Vec3A};
+use glam::{Vec3, Vec3A};
 
 use crate::math::Bounds3;
 use crate::ray::Ray;
@@ -183,7 +183,7 @@ impl<T: Copy> Bvh<T> {
         let n = prims.len();
         let mut bounds: Vec<Bounds3> = prims.iter().map(|(g, _)| g.bounds()).collect();
         let mut order: Vec<u32> = (0..n as u32).collect();
-        let mut nodes: Vec<Node> = Vec::with_capacity(2 * n / settings.max_leaf_size.max(1) + 1);
+        let mut nodes: Vec<Node> = Vec::with_capacity(2 * n.max(1) - 1);
         let mut stats = BuildStats {
             primitives: n,
             ..Default::default()
@@ -229,19 +229,43 @@ impl<T: Copy> Bvh<T> {
                 continue;
             }
 
-            // Bin the centroids along all three axes at once.
+            // Two primitives: the only split is one per side; no binning needed.
+            if count == 2 {
+                let (a, b) = (bounds[task.start], bounds[task.start + 1]);
+                let split_cost = settings.traversal_cost
+                    + settings.intersection_cost * (a.surface_area() + b.surface_area())
+                        / task.bounds.surface_area().max(f32::MIN_POSITIVE);
+                if count <= settings.max_leaf_size && leaf_cost <= split_cost {
+                    push_leaf(&mut nodes, &mut stats);
+                    continue;
+                }
+                let axis = (a.centroid() - b.centroid()).abs().max_position();
+                nodes.push(make_node(&task.bounds, index as u32 + 2, 0, axis as u16));
+                stats.sah_cost += settings.traversal_cost * area_fraction;
+                for (offset, child) in [a, b].iter().enumerate() {
+                    nodes.push(make_node(child, (task.start + offset) as u32, 1, 0));
+                    stats.leaves += 1;
+                    stats.sah_cost += settings.intersection_cost * child.surface_area() / root_area;
+                }
+                stats.max_depth = stats.max_depth.max(task.depth + 1);
+                continue;
+            }
+
+            // Bin the centroids along all three axes at once. Small nodes use
+            // fewer bins: the sweep then costs no more than the binning.
+            let node_bins = bins.min(count.max(4));
+            let cmin = task.centroid_bounds.min;
+            let scale = Vec3A::select(
+                extent.cmpgt(Vec3A::ZERO),
+                Vec3A::splat(node_bins as f32 * (1.0 - 1e-6)) / extent,
+                Vec3A::ZERO,
+            );
             let mut split: Option<(usize, usize, f32)> = None;
             if extent.max_element() > 0.0 {
-                let cmin = task.centroid_bounds.min;
-                let scale = Vec3A::select(
-                    extent.cmpgt(Vec3A::ZERO),
-                    Vec3A::splat(bins as f32 * (1.0 - 1e-6)) / extent,
-                    Vec3A::ZERO,
-                );
-                let last = UVec3::splat(bins as u32 - 1);
-                bin_grid.iter_mut().for_each(|b| *b = [EMPTY_BIN; 3]);
+                let last = Vec3A::splat((node_bins - 1) as f32);
+                bin_grid[..node_bins].iter_mut().for_each(|b| *b = [EMPTY_BIN; 3]);
                 for b in &bounds[task.start..task.end] {
-                    let k = ((b.centroid() - cmin) * scale).as_uvec3().min(last);
+                    let k = bin_indices(((b.centroid() - cmin) * scale).min(last));
                     for axis in 0..3 {
                         let bin = &mut bin_grid[k[axis] as usize][axis];
                         bin.bounds = bin.bounds.union(*b);
@@ -251,7 +275,7 @@ impl<T: Copy> Bvh<T> {
                 // Sweep from the right to know the right side of every plane...
                 let mut acc = [Bounds3::EMPTY; 3];
                 let mut acc_count = [0u32; 3];
-                for i in (1..bins).rev() {
+                for i in (1..node_bins).rev() {
                     for axis in 0..3 {
                         acc[axis] = acc[axis].union(bin_grid[i][axis].bounds);
                         acc_count[axis] += bin_grid[i][axis].count;
@@ -263,7 +287,7 @@ impl<T: Copy> Bvh<T> {
                 let parent_area = task.bounds.surface_area().max(f32::MIN_POSITIVE);
                 let mut left = [Bounds3::EMPTY; 3];
                 let mut left_count = [0u32; 3];
-                for i in 1..bins {
+                for i in 1..node_bins {
                     for axis in 0..3 {
                         left[axis] = left[axis].union(bin_grid[i - 1][axis].bounds);
                         left_count[axis] += bin_grid[i - 1][axis].count;
@@ -288,16 +312,17 @@ impl<T: Copy> Bvh<T> {
                 continue;
             }
 
-            // Partition the range; the children's centroid bounds come for free.
-            let (axis, mid, left_cb, right_cb) = match split {
+            // Partition the range with the binning's own arithmetic, so every
+            // primitive lands on the side its bin is on; the children's
+            // bounds come from the bins, their centroid bounds from this pass.
+            let (axis, mid, left_bounds, right_bounds, left_cb, right_cb) = match split {
                 Some((axis, plane, _)) => {
-                    let cmin = task.centroid_bounds.min[axis];
-                    let scale = bins as f32 * (1.0 - 1e-6) / extent[axis];
+                    let last = (node_bins - 1) as f32;
                     let (mut i, mut j) = (task.start, task.end);
                     let (mut lcb, mut rcb) = (Bounds3::EMPTY, Bounds3::EMPTY);
                     while i < j {
                         let c = bounds[i].centroid();
-                        let k = (((c[axis] - cmin) * scale) as usize).min(bins - 1);
+                        let k = ((c - cmin) * scale)[axis].min(last) as usize;
                         if k < plane {
                             lcb = lcb.grow(c);
                             i += 1;
@@ -308,17 +333,20 @@ impl<T: Copy> Bvh<T> {
                             order.swap(i, j);
                         }
                     }
-                    (axis, i, lcb, rcb)
+                    let fold = |range: std::ops::Range<usize>| {
+                        bin_grid[range].iter().fold(Bounds3::EMPTY, |b, bin| b.union(bin[axis].bounds))
+                    };
+                    (axis, i, fold(0..plane), fold(plane..node_bins), lcb, rcb)
                 }
                 None => {
                     // All centroids coincide: split the range in the middle.
                     let mid = task.start + count / 2;
+                    let fold = |r: &[Bounds3]| r.iter().fold(Bounds3::EMPTY, |b, p| b.union(*p));
                     let c = task.centroid_bounds;
-                    (task.bounds.max_extent_axis(), mid, c, c)
+                    let (l, r) = (fold(&bounds[task.start..mid]), fold(&bounds[mid..task.end]));
+                    (task.bounds.max_extent_axis(), mid, l, r, c, c)
                 }
             };
-            let left_bounds = bounds[task.start..mid].iter().fold(Bounds3::EMPTY, |b, p| b.union(*p));
-            let right_bounds = bounds[mid..task.end].iter().fold(Bounds3::EMPTY, |b, p| b.union(*p));
             nodes.push(make_node(&task.bounds, 0, 0, axis as u16));
             stats.sah_cost += settings.traversal_cost * area_fraction;
             stack.push(Task {
@@ -459,6 +487,23 @@ impl<T: Copy> Bvh<T> {
                 b2: 0.0,
             }),
         }
+    }
+}
+
+/// Truncates three non-negative floats to bin indices in one conversion.
+#[inline(always)]
+fn bin_indices(v: Vec3A) -> [u32; 3] {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{__m128, __m128i, _mm_cvttps_epi32};
+        // SAFETY: SSE2 is part of the x86_64 baseline; the casts reinterpret
+        // 16-byte SIMD values of the same size.
+        let k: [u32; 4] = unsafe { std::mem::transmute::<__m128i, [u32; 4]>(_mm_cvttps_epi32(__m128::from(v))) };
+        [k[0], k[1], k[2]]
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        [v.x as u32, v.y as u32, v.z as u32]
     }
 }
 

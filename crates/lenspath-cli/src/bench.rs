@@ -1,0 +1,162 @@
+//! `lenspath bench bvh`: BVH build time and traversal throughput on a mesh.
+//! Loading the mesh and generating rays are not timed.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use clap::Args;
+use glam::Vec3;
+use lenspath::accel::{Bvh, BvhSettings, PrimGeometry};
+use lenspath::builtin::torus_knot;
+use lenspath::io::mesh::load_mesh;
+use lenspath::ray::Ray;
+use lenspath::sampling::{uniform_sphere, Rng};
+use lenspath::{Error, Result};
+use rayon::prelude::*;
+
+use crate::Outcome;
+
+/// Options of `lenspath bench bvh`.
+#[derive(Args, Debug)]
+pub struct BvhArgs {
+    /// Mesh file (.ply or .obj).
+    #[arg(required_unless_present = "procedural", conflicts_with = "procedural")]
+    mesh: Option<PathBuf>,
+    /// Use the procedural torus-knot mesh with about N triangles instead.
+    #[arg(long, value_name = "N")]
+    procedural: Option<usize>,
+    /// Rays per traversal measurement.
+    #[arg(long, default_value_t = 1_000_000)]
+    rays: usize,
+    /// Threads for the traversal measurements (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// SAH bins per axis.
+    #[arg(long, default_value_t = BvhSettings::default().bins)]
+    bins: usize,
+    /// Print one JSON object instead of a table.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Rays from a grid camera outside the bounds toward the mesh.
+fn coherent_rays(lo: Vec3, hi: Vec3, n: usize) -> Vec<Ray> {
+    let centre = 0.5 * (lo + hi);
+    let radius = 0.5 * (hi - lo).length();
+    let eye = centre + Vec3::new(0.6, 0.5, 1.0).normalize() * radius * 2.5;
+    let forward = (centre - eye).normalize();
+    let right = forward.cross(Vec3::Y).normalize();
+    let up = right.cross(forward);
+    let side = (n as f64).sqrt().ceil() as usize;
+    // A field of view that just covers the bounding sphere.
+    let half = (radius / (eye - centre).length()).asin().tan();
+    (0..n)
+        .map(|i| {
+            let (x, y) = ((i % side) as f32, (i / side) as f32);
+            let sx = (2.0 * (x + 0.5) / side as f32 - 1.0) * half;
+            let sy = (1.0 - 2.0 * (y + 0.5) / side as f32) * half;
+            Ray::new(eye, (forward + sx * right + sy * up).normalize())
+        })
+        .collect()
+}
+
+/// Uniformly random origins inside the bounds with uniformly random directions.
+fn incoherent_rays(lo: Vec3, hi: Vec3, n: usize) -> Vec<Ray> {
+    let mut rng = Rng::new(42);
+    (0..n)
+        .map(|_| {
+            let t = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform());
+            Ray::new(lo + t * (hi - lo), uniform_sphere(rng.uniform(), rng.uniform()))
+        })
+        .collect()
+}
+
+/// Millions of closest-hit rays per second, and the hit count.
+fn trace<T: Copy + Send + Sync>(bvh: &Bvh<T>, rays: &[Ray], pool: &rayon::ThreadPool) -> (f64, usize) {
+    let started = Instant::now();
+    let hits = pool.install(|| {
+        rays.par_chunks(4096)
+            .map(|chunk| chunk.iter().filter(|r| bvh.intersect(r, f32::INFINITY).is_some()).count())
+            .sum()
+    });
+    (rays.len() as f64 / started.elapsed().as_secs_f64() / 1e6, hits)
+}
+
+/// Runs `lenspath bench bvh`.
+pub fn run_bvh(args: BvhArgs) -> Result<Outcome> {
+    if args.rays == 0 {
+        return Err(Error::InvalidArgument("--rays must be positive".into()));
+    }
+    if args.threads == Some(0) {
+        return Err(Error::InvalidArgument("--threads must be at least 1".into()));
+    }
+    if !(2..=256).contains(&args.bins) {
+        return Err(Error::InvalidArgument(format!("--bins must be in 2..=256, got {}", args.bins)));
+    }
+    let (name, mesh) = match (&args.mesh, args.procedural) {
+        (Some(path), _) => (path.display().to_string(), load_mesh(path)?),
+        (None, Some(n)) => (format!("procedural torus knot ({n})"), torus_knot(n)?),
+        (None, None) => unreachable!("clap requires one of them"),
+    };
+    let prims: Vec<_> = (0..mesh.indices.len())
+        .map(|i| (PrimGeometry::Triangle(mesh.triangle(i)), i as u32))
+        .collect();
+    let settings = BvhSettings {
+        bins: args.bins,
+        ..Default::default()
+    };
+    let bvh = Bvh::build(prims, &settings);
+    let stats = *bvh.stats();
+    let bounds = bvh.bounds();
+    let (lo, hi) = (Vec3::from(bounds.min), Vec3::from(bounds.max));
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads.unwrap_or(0))
+        .build()
+        .map_err(|e| Error::InvalidArgument(format!("cannot start threads: {e}")))?;
+    let coherent = coherent_rays(lo, hi, args.rays);
+    let incoherent = incoherent_rays(lo, hi, args.rays);
+    let (coherent_mrays, coherent_hits) = trace(&bvh, &coherent, &pool);
+    let (incoherent_mrays, incoherent_hits) = trace(&bvh, &incoherent, &pool);
+    let threads = pool.current_num_threads();
+
+    if args.json {
+        let json = serde_json::json!({
+            "mesh": name,
+            "triangles": mesh.indices.len(),
+            "build_ms": stats.build_ms,
+            "build_mtris_s": mesh.indices.len() as f64 / stats.build_ms / 1e3,
+            "nodes": stats.nodes,
+            "leaves": stats.leaves,
+            "max_depth": stats.max_depth,
+            "sah_cost": stats.sah_cost,
+            "threads": threads,
+            "rays": args.rays,
+            "coherent_mrays_s": coherent_mrays,
+            "coherent_hit_fraction": coherent_hits as f64 / args.rays as f64,
+            "incoherent_mrays_s": incoherent_mrays,
+            "incoherent_hit_fraction": incoherent_hits as f64 / args.rays as f64,
+        });
+        println!("{json}");
+    } else {
+        println!("mesh                {name}");
+        println!("triangles           {}", mesh.indices.len());
+        println!(
+            "build               {:.1} ms ({:.2} M triangles/s, 1 thread)",
+            stats.build_ms,
+            mesh.indices.len() as f64 / stats.build_ms / 1e3
+        );
+        println!(
+            "tree                {} nodes, {} leaves, depth {}, SAH cost {:.2}",
+            stats.nodes, stats.leaves, stats.max_depth, stats.sah_cost
+        );
+        println!(
+            "coherent rays       {coherent_mrays:.2} M rays/s on {threads} threads ({:.0}% hit)",
+            100.0 * coherent_hits as f64 / args.rays as f64
+        );
+        println!(
+            "incoherent rays     {incoherent_mrays:.2} M rays/s on {threads} threads ({:.0}% hit)",
+            100.0 * incoherent_hits as f64 / args.rays as f64
+        );
+    }
+    Ok(Outcome::Done)
+}

@@ -1,0 +1,205 @@
+//! `lenspath render`.
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+
+use clap::{Args, ValueEnum};
+use lenspath::accel::BvhSettings;
+use lenspath::builtin::{builtin_scene, DEFAULT_MESH_TRIANGLES};
+use lenspath::camera::{Camera, PerspectiveCamera};
+use lenspath::film::Filter;
+use lenspath::integrator::PathSettings;
+use lenspath::io::image::{check_output_path, write_image};
+use lenspath::render::{render, RenderSettings};
+use lenspath::{Error, Result};
+
+use crate::progress::Progress;
+use crate::Outcome;
+
+/// Camera models.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum CameraKind {
+    /// Ideal pinhole: everything in focus.
+    Pinhole,
+    /// Ideal thin lens: depth of field from --aperture-radius and --focus-distance.
+    ThinLens,
+}
+
+/// Pixel filters.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum FilterKind {
+    /// Box of one pixel.
+    Box,
+    /// Gaussian, sigma 0.5 px, radius 1.5 px.
+    Gaussian,
+}
+
+/// Image size as WIDTHxHEIGHT.
+#[derive(Clone, Copy, Debug)]
+pub struct Resolution {
+    pub width: u32,
+    pub height: u32,
+}
+
+fn parse_resolution(s: &str) -> std::result::Result<Resolution, String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WIDTHxHEIGHT such as 640x480, got '{s}'"))?;
+    let parse = |v: &str| v.trim().parse::<u32>().map_err(|_| format!("'{v}' is not a positive whole number"));
+    let (width, height) = (parse(w)?, parse(h)?);
+    if width == 0 || height == 0 {
+        return Err(format!("width and height must be positive, got {s}"));
+    }
+    Ok(Resolution { width, height })
+}
+
+/// Options of `lenspath render`.
+#[derive(Args, Debug)]
+pub struct RenderArgs {
+    /// Built-in scene: cornell-spheres, cornell-empty or cornell-mesh.
+    #[arg(long, default_value = "cornell-spheres")]
+    scene: String,
+    /// Triangles of the procedural mesh in cornell-mesh.
+    #[arg(long, default_value_t = DEFAULT_MESH_TRIANGLES)]
+    mesh_triangles: usize,
+    /// Samples per pixel.
+    #[arg(long, default_value_t = 64)]
+    spp: u32,
+    /// Shadow rays per light at every non-specular hit.
+    #[arg(long, default_value_t = 1)]
+    light_samples: u32,
+    /// Maximum path depth (1 = direct lighting only).
+    #[arg(long, default_value_t = 16)]
+    max_depth: u32,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "640x480", value_parser = parse_resolution)]
+    res: Resolution,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Seed of the sample sequences; the same seed gives the same image.
+    #[arg(long, default_value_t = 0)]
+    seed: u32,
+    /// Output image: .png (sRGB) or .exr (linear RGB + Z).
+    #[arg(long, default_value = "render.png")]
+    out: PathBuf,
+    /// Exposure in stops applied to PNG output.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    exposure: f32,
+    /// Camera model.
+    #[arg(long, value_enum, default_value = "pinhole")]
+    camera: CameraKind,
+    /// Vertical field of view in degrees (default: the scene's).
+    #[arg(long)]
+    fov: Option<f32>,
+    /// Thin-lens aperture radius, scene units.
+    #[arg(long, default_value_t = 0.05)]
+    aperture_radius: f32,
+    /// Thin-lens focus distance, scene units (default: the scene's subject distance).
+    #[arg(long)]
+    focus_distance: Option<f32>,
+    /// Pixel reconstruction filter.
+    #[arg(long, value_enum, default_value = "box")]
+    filter: FilterKind,
+}
+
+/// Runs `lenspath render`.
+pub fn run(args: RenderArgs) -> Result<Outcome> {
+    // Check everything cheap before any slow work.
+    let settings = RenderSettings {
+        width: args.res.width,
+        height: args.res.height,
+        spp: args.spp,
+        path: PathSettings {
+            max_depth: args.max_depth,
+            light_samples: args.light_samples,
+        },
+        seed: args.seed,
+        filter: match args.filter {
+            FilterKind::Box => Filter::Box,
+            FilterKind::Gaussian => Filter::GAUSSIAN,
+        },
+        threads: args.threads,
+        tile_size: 16,
+    };
+    settings.validate()?;
+    if !args.exposure.is_finite() {
+        return Err(Error::InvalidArgument("--exposure must be a finite number".into()));
+    }
+    check_output_path(&args.out)?;
+    let scene = builtin_scene(&args.scene, args.mesh_triangles)?;
+    let view = scene
+        .view
+        .ok_or_else(|| Error::InvalidArgument(format!("scene '{}' has no camera", args.scene)))?;
+    let fov = args.fov.unwrap_or(view.fov_y_deg);
+    if !(fov > 0.0 && fov < 180.0) {
+        return Err(Error::InvalidArgument(format!("--fov must be between 0 and 180 degrees, got {fov}")));
+    }
+    let camera: Box<dyn Camera> = match args.camera {
+        CameraKind::Pinhole => Box::new(PerspectiveCamera::pinhole(view.pose, fov, settings.width, settings.height)),
+        CameraKind::ThinLens => {
+            let focus = args.focus_distance.unwrap_or(view.focus_distance);
+            if !(args.aperture_radius >= 0.0 && args.aperture_radius.is_finite()) {
+                return Err(Error::InvalidArgument(format!(
+                    "--aperture-radius must be zero or positive, got {}",
+                    args.aperture_radius
+                )));
+            }
+            if !(focus > 0.0 && focus.is_finite()) {
+                return Err(Error::InvalidArgument(format!("--focus-distance must be positive, got {focus}")));
+            }
+            Box::new(PerspectiveCamera::thin_lens(
+                view.pose,
+                fov,
+                settings.width,
+                settings.height,
+                args.aperture_radius,
+                focus,
+            ))
+        }
+    };
+
+    let compiled = scene.compile(&BvhSettings::default())?;
+    let cancel = Arc::new(AtomicBool::new(false));
+    {
+        let cancel = cancel.clone();
+        // First Ctrl-C: stop and save. Second: leave at once.
+        let _ = ctrlc::set_handler(move || {
+            if cancel.swap(true, Ordering::SeqCst) {
+                std::process::exit(i32::from(crate::EXIT_INTERRUPTED));
+            }
+        });
+    }
+    let total = u64::from(settings.width) * u64::from(settings.height) * u64::from(settings.spp);
+    let progress = Progress::new(&format!("render {}", args.scene), total);
+    let output = render(&compiled, camera.as_ref(), &settings, &|d, t| progress.update(d, t), &cancel)?;
+    progress.finish();
+    write_image(&args.out, &output.image, args.exposure)?;
+
+    let s = &output.stats;
+    let interrupted = s.cancelled;
+    if interrupted {
+        eprintln!(
+            "interrupted: saved {} with {} of {} samples per pixel",
+            args.out.display(),
+            output.image.spp_min,
+            settings.spp
+        );
+    }
+    if s.invalid_samples > 0 {
+        eprintln!("warning: {} samples were NaN or infinite and were dropped", s.invalid_samples);
+    }
+    eprintln!(
+        "rendered {} {}x{} at {} spp in {:.3} s: {:.2} M samples/s, {:.2} M rays/s -> {}",
+        args.scene,
+        settings.width,
+        settings.height,
+        output.image.spp_min,
+        s.seconds,
+        s.samples as f64 / s.seconds / 1e6,
+        s.rays as f64 / s.seconds / 1e6,
+        args.out.display()
+    );
+    Ok(if interrupted { Outcome::Interrupted } else { Outcome::Done })
+}
