@@ -8,6 +8,9 @@ use std::path::{Path, PathBuf};
 use crate::error::{Error, Result};
 use crate::film::Image;
 
+/// EXR header attribute holding (samples per pixel reached, requested).
+pub const SPP_ATTRIBUTE: &str = "lenspathSpp";
+
 /// Supported output formats.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ImageFormat {
@@ -123,17 +126,20 @@ fn write_exr(tmp: &Path, image: &Image) -> Result<()> {
     list.push(AnyChannel::new("G", FlatSamples::F32(channel(1))));
     list.push(AnyChannel::new("B", FlatSamples::F32(channel(2))));
     list.push(AnyChannel::new("Z", FlatSamples::F32(image.depth.clone())));
+    let mut attributes = LayerAttributes::default();
+    // One attribute (samples reached, samples requested): exr keeps custom
+    // attributes in a HashMap, and a single entry keeps the bytes deterministic.
+    attributes.other.insert(
+        Text::from(SPP_ATTRIBUTE),
+        AttributeValue::IntVec2(exr::math::Vec2(image.spp_min as i32, image.spp_requested as i32)),
+    );
     let layer = Layer::new(
         (image.width as usize, image.height as usize),
-        LayerAttributes::default(),
+        attributes,
         Encoding::FAST_LOSSLESS,
         AnyChannels::sort(list),
     );
-    let mut exr_image = exr::image::Image::from_layer(layer);
-    let other = &mut exr_image.attributes.other;
-    other.insert(Text::from("lenspathSpp"), AttributeValue::I32(image.spp_min as i32));
-    other.insert(Text::from("lenspathSppRequested"), AttributeValue::I32(image.spp_requested as i32));
-    exr_image
+    exr::image::Image::from_layer(layer)
         .write()
         .to_file(tmp)
         .map_err(|e| io_error(tmp, std::io::Error::other(e.to_string())))
@@ -159,16 +165,16 @@ pub fn read_exr(path: &Path) -> Result<Image> {
     };
     let (r, g, b) = (find("R")?, find("G")?, find("B")?);
     let depth = find("Z").unwrap_or_else(|_| vec![f32::INFINITY; r.len()]);
-    let attr = |name: &str| match img.attributes.other.get(&Text::from(name)) {
-        Some(AttributeValue::I32(v)) => *v as u32,
-        _ => 0,
+    let (spp_min, spp_requested) = match img.layer_data.attributes.other.get(&Text::from(SPP_ATTRIBUTE)) {
+        Some(AttributeValue::IntVec2(v)) => (v.0.max(0) as u32, v.1.max(0) as u32),
+        _ => (0, 0),
     };
     Ok(Image {
         width: size.0 as u32,
         height: size.1 as u32,
         rgb: (0..r.len()).flat_map(|i| [r[i], g[i], b[i]]).collect(),
         depth,
-        spp_min: attr("lenspathSpp"),
-        spp_requested: attr("lenspathSppRequested"),
+        spp_min,
+        spp_requested,
     })
 }
