@@ -10,7 +10,7 @@ use lenspath::accel::{Bvh, BvhSettings, PrimGeometry};
 use lenspath::builtin::torus_knot;
 use lenspath::io::mesh::load_mesh;
 use lenspath::ray::Ray;
-use lenspath::sampling::{uniform_sphere, Rng};
+use lenspath::raysets::{coherent_rays, incoherent_rays};
 use lenspath::{Error, Result};
 use rayon::prelude::*;
 
@@ -39,47 +39,27 @@ pub struct BvhArgs {
     json: bool,
 }
 
-/// Rays from a grid camera outside the bounds toward the mesh.
-fn coherent_rays(lo: Vec3, hi: Vec3, n: usize) -> Vec<Ray> {
-    let centre = 0.5 * (lo + hi);
-    let radius = 0.5 * (hi - lo).length();
-    let eye = centre + Vec3::new(0.6, 0.5, 1.0).normalize() * radius * 2.5;
-    let forward = (centre - eye).normalize();
-    let right = forward.cross(Vec3::Y).normalize();
-    let up = right.cross(forward);
-    let side = (n as f64).sqrt().ceil() as usize;
-    // A field of view that just covers the bounding sphere.
-    let half = (radius / (eye - centre).length()).asin().tan();
-    (0..n)
-        .map(|i| {
-            let (x, y) = ((i % side) as f32, (i / side) as f32);
-            let sx = (2.0 * (x + 0.5) / side as f32 - 1.0) * half;
-            let sy = (1.0 - 2.0 * (y + 0.5) / side as f32) * half;
-            Ray::new(eye, (forward + sx * right + sy * up).normalize())
-        })
-        .collect()
-}
-
-/// Uniformly random origins inside the bounds with uniformly random directions.
-fn incoherent_rays(lo: Vec3, hi: Vec3, n: usize) -> Vec<Ray> {
-    let mut rng = Rng::new(42);
-    (0..n)
-        .map(|_| {
-            let t = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform());
-            Ray::new(lo + t * (hi - lo), uniform_sphere(rng.uniform(), rng.uniform()))
-        })
-        .collect()
-}
-
 /// Millions of closest-hit rays per second, and the hit count.
-fn trace<T: Copy + Send + Sync>(bvh: &Bvh<T>, rays: &[Ray], pool: &rayon::ThreadPool) -> (f64, usize) {
+fn trace<T: Copy + Send + Sync>(
+    bvh: &Bvh<T>,
+    rays: &[Ray],
+    pool: &rayon::ThreadPool,
+) -> (f64, usize) {
     let started = Instant::now();
     let hits = pool.install(|| {
         rays.par_chunks(4096)
-            .map(|chunk| chunk.iter().filter(|r| bvh.intersect(r, f32::INFINITY).is_some()).count())
+            .map(|chunk| {
+                chunk
+                    .iter()
+                    .filter(|r| bvh.intersect(r, f32::INFINITY).is_some())
+                    .count()
+            })
             .sum()
     });
-    (rays.len() as f64 / started.elapsed().as_secs_f64() / 1e6, hits)
+    (
+        rays.len() as f64 / started.elapsed().as_secs_f64() / 1e6,
+        hits,
+    )
 }
 
 /// Runs `lenspath bench bvh`.
@@ -88,10 +68,15 @@ pub fn run_bvh(args: BvhArgs) -> Result<Outcome> {
         return Err(Error::InvalidArgument("--rays must be positive".into()));
     }
     if args.threads == Some(0) {
-        return Err(Error::InvalidArgument("--threads must be at least 1".into()));
+        return Err(Error::InvalidArgument(
+            "--threads must be at least 1".into(),
+        ));
     }
     if !(2..=256).contains(&args.bins) {
-        return Err(Error::InvalidArgument(format!("--bins must be in 2..=256, got {}", args.bins)));
+        return Err(Error::InvalidArgument(format!(
+            "--bins must be in 2..=256, got {}",
+            args.bins
+        )));
     }
     let (name, mesh) = match (&args.mesh, args.procedural) {
         (Some(path), _) => (path.display().to_string(), load_mesh(path)?),

@@ -50,20 +50,32 @@ fn main() -> ExitCode {
         Err(e) => {
             use clap::error::ErrorKind;
             if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion)
-                || matches!(e.kind(), ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand)
+                || matches!(
+                    e.kind(),
+                    ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+                )
             {
                 let _ = e.print();
-                return if e.use_stderr() { ExitCode::from(EXIT_USAGE) } else { ExitCode::SUCCESS };
+                return if e.use_stderr() {
+                    ExitCode::from(EXIT_USAGE)
+                } else {
+                    ExitCode::SUCCESS
+                };
             }
             // One line: clap's first, which names the argument and the problem.
             let text = e.render().to_string();
-            eprintln!("{}", text.lines().next().unwrap_or("error: invalid arguments"));
+            eprintln!(
+                "{}",
+                text.lines().next().unwrap_or("error: invalid arguments")
+            );
             return ExitCode::from(EXIT_USAGE);
         }
     };
     let outcome = match cli.command {
         Command::Render(args) => render::run(args),
-        Command::Bench(BenchArgs { what: BenchCommand::Bvh(args) }) => bench::run_bvh(args),
+        Command::Bench(BenchArgs {
+            what: BenchCommand::Bvh(args),
+        }) => bench::run_bvh(args),
     };
     match outcome {
         Ok(Outcome::Done) => ExitCode::SUCCESS,

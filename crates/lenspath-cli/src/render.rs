@@ -46,7 +46,11 @@ fn parse_resolution(s: &str) -> std::result::Result<Resolution, String> {
     let (w, h) = s
         .split_once(['x', 'X'])
         .ok_or_else(|| format!("expected WIDTHxHEIGHT such as 640x480, got '{s}'"))?;
-    let parse = |v: &str| v.trim().parse::<u32>().map_err(|_| format!("'{v}' is not a positive whole number"));
+    let parse = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("'{v}' is not a positive whole number"))
+    };
     let (width, height) = (parse(w)?, parse(h)?);
     if width == 0 || height == 0 {
         return Err(format!("width and height must be positive, got {s}"));
@@ -56,6 +60,7 @@ fn parse_resolution(s: &str) -> std::result::Result<Resolution, String> {
 
 /// Options of `lenspath render`.
 #[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
 pub struct RenderArgs {
     /// Built-in scene: cornell-spheres, cornell-empty or cornell-mesh.
     #[arg(long, default_value = "cornell-spheres")]
@@ -85,7 +90,7 @@ pub struct RenderArgs {
     #[arg(long, default_value = "render.png")]
     out: PathBuf,
     /// Exposure in stops applied to PNG output.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 0.0)]
     exposure: f32,
     /// Camera model.
     #[arg(long, value_enum, default_value = "pinhole")]
@@ -125,7 +130,9 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
     };
     settings.validate()?;
     if !args.exposure.is_finite() {
-        return Err(Error::InvalidArgument("--exposure must be a finite number".into()));
+        return Err(Error::InvalidArgument(
+            "--exposure must be a finite number".into(),
+        ));
     }
     check_output_path(&args.out)?;
     let scene = builtin_scene(&args.scene, args.mesh_triangles)?;
@@ -134,10 +141,17 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
         .ok_or_else(|| Error::InvalidArgument(format!("scene '{}' has no camera", args.scene)))?;
     let fov = args.fov.unwrap_or(view.fov_y_deg);
     if !(fov > 0.0 && fov < 180.0) {
-        return Err(Error::InvalidArgument(format!("--fov must be between 0 and 180 degrees, got {fov}")));
+        return Err(Error::InvalidArgument(format!(
+            "--fov must be between 0 and 180 degrees, got {fov}"
+        )));
     }
     let camera: Box<dyn Camera> = match args.camera {
-        CameraKind::Pinhole => Box::new(PerspectiveCamera::pinhole(view.pose, fov, settings.width, settings.height)),
+        CameraKind::Pinhole => Box::new(PerspectiveCamera::pinhole(
+            view.pose,
+            fov,
+            settings.width,
+            settings.height,
+        )),
         CameraKind::ThinLens => {
             let focus = args.focus_distance.unwrap_or(view.focus_distance);
             if !(args.aperture_radius >= 0.0 && args.aperture_radius.is_finite()) {
@@ -147,7 +161,9 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
                 )));
             }
             if !(focus > 0.0 && focus.is_finite()) {
-                return Err(Error::InvalidArgument(format!("--focus-distance must be positive, got {focus}")));
+                return Err(Error::InvalidArgument(format!(
+                    "--focus-distance must be positive, got {focus}"
+                )));
             }
             Box::new(PerspectiveCamera::thin_lens(
                 view.pose,
@@ -173,7 +189,13 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
     }
     let total = u64::from(settings.width) * u64::from(settings.height) * u64::from(settings.spp);
     let progress = Progress::new(&format!("render {}", args.scene), total);
-    let output = render(&compiled, camera.as_ref(), &settings, &|d, t| progress.update(d, t), &cancel)?;
+    let output = render(
+        &compiled,
+        camera.as_ref(),
+        &settings,
+        &|d, t| progress.update(d, t),
+        &cancel,
+    )?;
     progress.finish();
     write_image(&args.out, &output.image, args.exposure)?;
 
@@ -188,7 +210,10 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
         );
     }
     if s.invalid_samples > 0 {
-        eprintln!("warning: {} samples were NaN or infinite and were dropped", s.invalid_samples);
+        eprintln!(
+            "warning: {} samples were NaN or infinite and were dropped",
+            s.invalid_samples
+        );
     }
     eprintln!(
         "rendered {} {}x{} at {} spp in {:.3} s: {:.2} M samples/s, {:.2} M rays/s -> {}",
@@ -201,5 +226,9 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
         s.rays as f64 / s.seconds / 1e6,
         args.out.display()
     );
-    Ok(if interrupted { Outcome::Interrupted } else { Outcome::Done })
+    Ok(if interrupted {
+        Outcome::Interrupted
+    } else {
+        Outcome::Done
+    })
 }

@@ -76,7 +76,14 @@ fn add_material(scene: &mut Scene, m: Material) -> MaterialId {
 }
 
 /// A quad `a b c d` (counter-clockwise seen from the front) as a mesh.
-fn quad(a: Vec3, b: Vec3, c: Vec3, d: Vec3, material: MaterialId, emission: Option<Rgb>) -> TriangleMesh {
+fn quad(
+    a: Vec3,
+    b: Vec3,
+    c: Vec3,
+    d: Vec3,
+    material: MaterialId,
+    emission: Option<Rgb>,
+) -> TriangleMesh {
     TriangleMesh {
         positions: vec![a, b, c, d],
         indices: vec![[0, 1, 2], [0, 2, 3]],
@@ -90,16 +97,66 @@ fn quad(a: Vec3, b: Vec3, c: Vec3, d: Vec3, material: MaterialId, emission: Opti
 /// on the left, blue on the right, and a small square light under the ceiling.
 fn cornell_box() -> Scene {
     let mut scene = Scene::default();
-    let white = add_material(&mut scene, Material::Diffuse { reflectance: Rgb::new(0.73, 0.73, 0.73) });
-    let red = add_material(&mut scene, Material::Diffuse { reflectance: Rgb::new(0.63, 0.065, 0.05) });
-    let blue = add_material(&mut scene, Material::Diffuse { reflectance: Rgb::new(0.08, 0.16, 0.62) });
+    let white = add_material(
+        &mut scene,
+        Material::Diffuse {
+            reflectance: Rgb::new(0.73, 0.73, 0.73),
+        },
+    );
+    let red = add_material(
+        &mut scene,
+        Material::Diffuse {
+            reflectance: Rgb::new(0.63, 0.065, 0.05),
+        },
+    );
+    let blue = add_material(
+        &mut scene,
+        Material::Diffuse {
+            reflectance: Rgb::new(0.08, 0.16, 0.62),
+        },
+    );
     let v = |x, y, z| Vec3::new(x, y, z);
     // Each wall faces into the box.
-    scene.meshes.push(quad(v(-1., 0., 1.), v(1., 0., 1.), v(1., 0., -1.), v(-1., 0., -1.), white, None)); // floor
-    scene.meshes.push(quad(v(-1., 2., -1.), v(1., 2., -1.), v(1., 2., 1.), v(-1., 2., 1.), white, None)); // ceiling
-    scene.meshes.push(quad(v(-1., 0., -1.), v(1., 0., -1.), v(1., 2., -1.), v(-1., 2., -1.), white, None)); // back
-    scene.meshes.push(quad(v(-1., 0., 1.), v(-1., 0., -1.), v(-1., 2., -1.), v(-1., 2., 1.), red, None)); // left
-    scene.meshes.push(quad(v(1., 0., -1.), v(1., 0., 1.), v(1., 2., 1.), v(1., 2., -1.), blue, None)); // right
+    scene.meshes.push(quad(
+        v(-1., 0., 1.),
+        v(1., 0., 1.),
+        v(1., 0., -1.),
+        v(-1., 0., -1.),
+        white,
+        None,
+    )); // floor
+    scene.meshes.push(quad(
+        v(-1., 2., -1.),
+        v(1., 2., -1.),
+        v(1., 2., 1.),
+        v(-1., 2., 1.),
+        white,
+        None,
+    )); // ceiling
+    scene.meshes.push(quad(
+        v(-1., 0., -1.),
+        v(1., 0., -1.),
+        v(1., 2., -1.),
+        v(-1., 2., -1.),
+        white,
+        None,
+    )); // back
+    scene.meshes.push(quad(
+        v(-1., 0., 1.),
+        v(-1., 0., -1.),
+        v(-1., 2., -1.),
+        v(-1., 2., 1.),
+        red,
+        None,
+    )); // left
+    scene.meshes.push(quad(
+        v(1., 0., -1.),
+        v(1., 0., 1.),
+        v(1., 2., 1.),
+        v(1., 2., -1.),
+        blue,
+        None,
+    )); // right
     let (s, y) = (0.25, 1.98);
     scene.meshes.push(quad(
         v(-s, y, -s),
@@ -107,12 +164,12 @@ fn cornell_box() -> Scene {
         v(s, y, s),
         v(-s, y, s),
         white,
-        Some(Rgb::new(17.0, 12.0, 4.0)),
+        Some(Rgb::new(15.0, 12.5, 9.0)),
     ));
     scene.view = Some(SceneView {
-        pose: CameraPose::look_at(v(0.0, 1.0, 3.9), v(0.0, 1.0, 0.0), Vec3::Y),
-        fov_y_deg: 38.0,
-        focus_distance: 3.9,
+        pose: CameraPose::look_at(v(0.0, 1.0, 3.2), v(0.0, 0.92, 0.0), Vec3::Y),
+        fov_y_deg: 37.0,
+        focus_distance: 3.2,
     });
     scene
 }

@@ -26,7 +26,10 @@ pub enum Filter {
 
 impl Filter {
     /// pbrt's default Gaussian.
-    pub const GAUSSIAN: Filter = Filter::Gaussian { sigma: 0.5, radius: 1.5 };
+    pub const GAUSSIAN: Filter = Filter::Gaussian {
+        sigma: 0.5,
+        radius: 1.5,
+    };
 
     /// Offset from the pixel centre, in pixels, distributed as the filter.
     #[inline]
@@ -89,7 +92,10 @@ mod tests {
 
     #[test]
     fn gaussian_offsets_have_the_filter_variance() {
-        let f = Filter::Gaussian { sigma: 0.5, radius: 3.0 };
+        let f = Filter::Gaussian {
+            sigma: 0.5,
+            radius: 3.0,
+        };
         let mut rng = Rng::new(3);
         let n = 200_000;
         let mut var = 0.0f64;
@@ -98,7 +104,11 @@ mod tests {
             assert!(o.abs().max_element() <= 3.0);
             var += f64::from(o.x * o.x);
         }
-        assert!((var / n as f64 - 0.25).abs() < 0.005, "variance {}", var / n as f64);
+        assert!(
+            (var / n as f64 - 0.25).abs() < 0.005,
+            "variance {}",
+            var / n as f64
+        );
         let b = Filter::Box.sample_offset(Vec2::new(0.0, 0.999));
         assert!(b.x == -0.5 && b.y < 0.5);
     }

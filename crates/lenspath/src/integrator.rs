@@ -24,7 +24,13 @@ pub struct PathSettings {
 const SHADOW_EPSILON: f32 = 1e-4;
 
 /// Radiance arriving along a camera ray. `rays` counts traced rays.
-pub fn radiance(scene: &CompiledScene, camera_ray: Ray, sampler: &mut Sampler, settings: &PathSettings, rays: &mut u64) -> Rgb {
+pub fn radiance(
+    scene: &CompiledScene,
+    camera_ray: Ray,
+    sampler: &mut Sampler,
+    settings: &PathSettings,
+    rays: &mut u64,
+) -> Rgb {
     let n_light = settings.light_samples as f32;
     let mut l = Rgb::ZERO;
     let mut beta = Rgb::ONE;
@@ -39,7 +45,11 @@ pub fn radiance(scene: &CompiledScene, camera_ray: Ray, sampler: &mut Sampler, s
         let Some(hit) = scene.intersect(&ray) else {
             for light in scene.lights() {
                 if let Some((le, light_pdf)) = light.escaped() {
-                    let w = if specular_bounce { 1.0 } else { power_heuristic(1.0, bsdf_pdf, n_light, light_pdf) };
+                    let w = if specular_bounce {
+                        1.0
+                    } else {
+                        power_heuristic(1.0, bsdf_pdf, n_light, light_pdf)
+                    };
                     l += beta * le * w;
                 }
             }
@@ -143,7 +153,11 @@ fn direct_lighting(
             if blocked {
                 continue;
             }
-            let w = if ls.delta { 1.0 } else { power_heuristic(n_light, ls.pdf, 1.0, material.pdf(wo, wi)) };
+            let w = if ls.delta {
+                1.0
+            } else {
+                power_heuristic(n_light, ls.pdf, 1.0, material.pdf(wo, wi))
+            };
             sum += f * ls.radiance * (w / (ls.pdf * n_light));
         }
     }

@@ -21,6 +21,7 @@ pub mod lights;
 pub mod materials;
 pub mod math;
 pub mod ray;
+pub mod raysets;
 pub mod render;
 pub mod sampling;
 pub mod scene;

@@ -265,7 +265,10 @@ impl Complex {
         Complex::new(self.re - o.re, self.im - o.im)
     }
     fn mul(self, o: Complex) -> Complex {
-        Complex::new(self.re * o.re - self.im * o.im, self.re * o.im + self.im * o.re)
+        Complex::new(
+            self.re * o.re - self.im * o.im,
+            self.re * o.im + self.im * o.re,
+        )
     }
     fn div(self, o: Complex) -> Complex {
         let s = 1.0 / (o.re * o.re + o.im * o.im);
@@ -362,7 +365,11 @@ impl Ggx {
         if wh.z < 0.0 {
             wh = -wh;
         }
-        let t1 = if wh.z < 0.99999 { Vec3::Z.cross(wh).normalize() } else { Vec3::X };
+        let t1 = if wh.z < 0.99999 {
+            Vec3::Z.cross(wh).normalize()
+        } else {
+            Vec3::X
+        };
         let t2 = wh.cross(t1);
         let r = u.x.sqrt();
         let phi = 2.0 * PI * u.y;
@@ -430,7 +437,9 @@ mod tests {
                 for _ in 0..n {
                     let wi = uniform_sphere(rng.uniform(), rng.uniform());
                     integral += f64::from(m.pdf(wo, wi) / UNIFORM_SPHERE_PDF);
-                    if m.sample(wo, rng.uniform(), Vec2::new(rng.uniform(), rng.uniform())).is_some() {
+                    if m.sample(wo, rng.uniform(), Vec2::new(rng.uniform(), rng.uniform()))
+                        .is_some()
+                    {
                         successes += 1;
                     }
                 }
@@ -453,12 +462,17 @@ mod tests {
             let mut rng = Rng::new(5);
             for _ in 0..20_000 {
                 let wo = uniform_sphere(rng.uniform(), rng.uniform());
-                let Some(s) = m.sample(wo, rng.uniform(), Vec2::new(rng.uniform(), rng.uniform())) else {
+                let Some(s) = m.sample(wo, rng.uniform(), Vec2::new(rng.uniform(), rng.uniform()))
+                else {
                     continue;
                 };
                 let f = m.eval(wo, s.wi);
                 let pdf = m.pdf(wo, s.wi);
-                assert!((s.pdf - pdf).abs() <= 2e-3 * pdf.max(1.0), "{m:?}: pdf {} vs {pdf}", s.pdf);
+                assert!(
+                    (s.pdf - pdf).abs() <= 2e-3 * pdf.max(1.0),
+                    "{m:?}: pdf {} vs {pdf}",
+                    s.pdf
+                );
                 assert!((s.f - f).abs().max_element() <= 2e-3 * f.max_element().max(1.0));
             }
         }
@@ -472,7 +486,10 @@ mod tests {
                 let wo = uniform_sphere(rng.uniform(), rng.uniform());
                 let wi = uniform_sphere(rng.uniform(), rng.uniform());
                 let (a, b) = (m.eval(wo, wi), m.eval(wi, wo));
-                assert!((a - b).abs().max_element() <= 1e-4 * a.max_element().max(1.0), "{m:?}");
+                assert!(
+                    (a - b).abs().max_element() <= 1e-4 * a.max_element().max(1.0),
+                    "{m:?}"
+                );
             }
         }
     }
@@ -495,18 +512,26 @@ mod tests {
                 let n = 100_000;
                 let mut sum = glam::DVec3::ZERO;
                 for _ in 0..n {
-                    if let Some(s) = m.sample(wo, rng.uniform(), Vec2::new(rng.uniform(), rng.uniform())) {
+                    if let Some(s) =
+                        m.sample(wo, rng.uniform(), Vec2::new(rng.uniform(), rng.uniform()))
+                    {
                         sum += (s.f * s.wi.z.abs() / s.pdf).as_dvec3();
                     }
                 }
                 let albedo = (sum / n as f64).as_vec3();
-                assert!(albedo.max_element() <= 1.0 + 5e-3, "{m:?} θ={theta}: albedo {albedo}");
+                assert!(
+                    albedo.max_element() <= 1.0 + 5e-3,
+                    "{m:?} θ={theta}: albedo {albedo}"
+                );
                 if let Material::Diffuse { reflectance } = m {
                     assert!((albedo - reflectance).abs().max_element() < 1e-4);
                 }
                 if let Material::Conductor { k, .. } = m {
                     if k.x == 20.0 && theta < 50.0 {
-                        assert!(albedo.x > 0.9, "a near-perfect rough conductor loses too much: {albedo}");
+                        assert!(
+                            albedo.x > 0.9,
+                            "a near-perfect rough conductor loses too much: {albedo}"
+                        );
                     }
                 }
             }
@@ -520,24 +545,35 @@ mod tests {
     fn dielectric_conserves_energy_and_obeys_snell() {
         let eta = 1.5;
         let glass = Material::Dielectric { eta };
-        for theta in [0.0, 20.0, 40.0, 41.0, 60.0, 89.0, 100.0, 130.0, 150.0, 179.0] {
+        for theta in [
+            0.0, 20.0, 40.0, 41.0, 60.0, 89.0, 100.0, 130.0, 150.0, 179.0,
+        ] {
             let wo = direction(theta, 35.0);
             let mut energy = 0.0;
             let n = 2000;
             for i in 0..n {
-                let s = glass.sample(wo, (i as f32 + 0.5) / n as f32, Vec2::ZERO).unwrap();
+                let s = glass
+                    .sample(wo, (i as f32 + 0.5) / n as f32, Vec2::ZERO)
+                    .unwrap();
                 assert!(s.specular);
                 let mut e = s.f.x * s.wi.z.abs() / s.pdf;
                 if s.wi.z * wo.z < 0.0 {
                     let (eta_i, eta_t) = if wo.z > 0.0 { (1.0, eta) } else { (eta, 1.0) };
                     let sin_o = (1.0 - wo.z * wo.z).sqrt();
                     let sin_i = (1.0 - s.wi.z * s.wi.z).sqrt();
-                    assert!((eta_i * sin_o - eta_t * sin_i).abs() < 1e-4, "Snell violated at θ={theta}");
+                    assert!(
+                        (eta_i * sin_o - eta_t * sin_i).abs() < 1e-4,
+                        "Snell violated at θ={theta}"
+                    );
                     e *= (eta_t / eta_i) * (eta_t / eta_i);
                 }
                 energy += e;
             }
-            assert!((energy / n as f32 - 1.0).abs() < 1e-4, "θ={theta}: energy {}", energy / n as f32);
+            assert!(
+                (energy / n as f32 - 1.0).abs() < 1e-4,
+                "θ={theta}: energy {}",
+                energy / n as f32
+            );
         }
         // From inside at 60° (critical angle 41.8°): total internal reflection.
         let wo = direction(180.0 - 60.0, 0.0);

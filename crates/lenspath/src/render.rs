@@ -59,16 +59,28 @@ impl RenderSettings {
     pub fn validate(&self) -> Result<()> {
         let fail = |m: String| Err(Error::InvalidArgument(m));
         if self.width == 0 || self.height == 0 {
-            return fail(format!("image size must be positive, got {}x{}", self.width, self.height));
+            return fail(format!(
+                "image size must be positive, got {}x{}",
+                self.width, self.height
+            ));
         }
         if self.width > 65_536 || self.height > 65_536 {
-            return fail(format!("image size {}x{} exceeds 65536 pixels on a side", self.width, self.height));
+            return fail(format!(
+                "image size {}x{} exceeds 65536 pixels on a side",
+                self.width, self.height
+            ));
         }
         if self.spp == 0 || self.spp > MAX_SAMPLES_PER_PIXEL {
-            return fail(format!("samples per pixel must be in 1..={MAX_SAMPLES_PER_PIXEL}, got {}", self.spp));
+            return fail(format!(
+                "samples per pixel must be in 1..={MAX_SAMPLES_PER_PIXEL}, got {}",
+                self.spp
+            ));
         }
         if self.path.light_samples > 1024 {
-            return fail(format!("light samples must be at most 1024, got {}", self.path.light_samples));
+            return fail(format!(
+                "light samples must be at most 1024, got {}",
+                self.path.light_samples
+            ));
         }
         if self.threads == Some(0) {
             return fail("threads must be at least 1".into());
@@ -78,7 +90,9 @@ impl RenderSettings {
         }
         if let Filter::Gaussian { sigma, radius } = self.filter {
             if !(sigma > 0.0 && radius > 0.0 && sigma.is_finite() && radius.is_finite()) {
-                return fail(format!("Gaussian filter needs positive sigma and radius, got {sigma} and {radius}"));
+                return fail(format!(
+                    "Gaussian filter needs positive sigma and radius, got {sigma} and {radius}"
+                ));
             }
         }
         Ok(())
@@ -204,7 +218,14 @@ fn render_in_pool(
                         let lens = sampler.get_2d();
                         let mut l = Rgb::ZERO;
                         if let Some(cr) = camera.generate_ray(CameraSample { film, lens }) {
-                            l = cr.weight * radiance(scene, cr.ray, &mut sampler, &settings.path, &mut tile_rays);
+                            l = cr.weight
+                                * radiance(
+                                    scene,
+                                    cr.ray,
+                                    &mut sampler,
+                                    &settings.path,
+                                    &mut tile_rays,
+                                );
                         }
                         if l.is_finite() {
                             sum += l.as_dvec3();
@@ -239,7 +260,11 @@ fn render_in_pool(
                 let n = tile.count[i];
                 spp_min = spp_min.min(n);
                 samples += u64::from(n);
-                let mean = if n > 0 { tile.sum[i] / f64::from(n) } else { DVec3::ZERO };
+                let mean = if n > 0 {
+                    tile.sum[i] / f64::from(n)
+                } else {
+                    DVec3::ZERO
+                };
                 rgb[3 * o..3 * o + 3].copy_from_slice(&mean.as_vec3().to_array());
                 depth[o] = tile.depth[i];
             }

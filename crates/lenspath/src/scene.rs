@@ -86,7 +86,9 @@ pub struct CompiledScene {
 
 fn check_rgb(what: &str, c: Rgb) -> Result<()> {
     if !c.is_finite() || c.min_element() < 0.0 {
-        return Err(Error::InvalidScene(format!("{what} must be finite and non-negative, got {c}")));
+        return Err(Error::InvalidScene(format!(
+            "{what} must be finite and non-negative, got {c}"
+        )));
     }
     Ok(())
 }
@@ -111,7 +113,9 @@ impl Scene {
         for (i, m) in self.meshes.iter().enumerate() {
             check_material(format!("mesh {i}"), m.material)?;
             if let Some(p) = m.positions.iter().position(|p| !p.is_finite()) {
-                return Err(Error::InvalidScene(format!("mesh {i}: vertex {p} is not finite")));
+                return Err(Error::InvalidScene(format!(
+                    "mesh {i}: vertex {p} is not finite"
+                )));
             }
             let n = m.positions.len() as u32;
             if let Some(t) = m.indices.iter().position(|tri| tri.iter().any(|&v| v >= n)) {
@@ -119,11 +123,21 @@ impl Scene {
                     "mesh {i}: triangle {t} indexes a vertex beyond the {n} it has"
                 )));
             }
-            if m.normals.as_ref().is_some_and(|ns| ns.len() != m.positions.len()) {
-                return Err(Error::InvalidScene(format!("mesh {i}: normal count differs from vertex count")));
+            if m.normals
+                .as_ref()
+                .is_some_and(|ns| ns.len() != m.positions.len())
+            {
+                return Err(Error::InvalidScene(format!(
+                    "mesh {i}: normal count differs from vertex count"
+                )));
             }
-            if m.uvs.as_ref().is_some_and(|uv| uv.len() != m.positions.len()) {
-                return Err(Error::InvalidScene(format!("mesh {i}: uv count differs from vertex count")));
+            if m.uvs
+                .as_ref()
+                .is_some_and(|uv| uv.len() != m.positions.len())
+            {
+                return Err(Error::InvalidScene(format!(
+                    "mesh {i}: uv count differs from vertex count"
+                )));
             }
             if let Some(e) = m.emission {
                 check_rgb(&format!("mesh {i} emission"), e)?;
@@ -131,7 +145,7 @@ impl Scene {
         }
         for (i, s) in self.spheres.iter().enumerate() {
             check_material(format!("sphere {i}"), s.material)?;
-            if !s.center.is_finite() || !(s.radius > 0.0 && s.radius.is_finite()) {
+            if !(s.center.is_finite() && s.radius > 0.0 && s.radius.is_finite()) {
                 return Err(Error::InvalidScene(format!(
                     "sphere {i}: centre must be finite and radius positive, got {} and {}",
                     s.center, s.radius
@@ -148,29 +162,43 @@ impl Scene {
                 }
                 Material::Dielectric { eta } => {
                     if !(eta > 0.0 && eta.is_finite()) {
-                        return Err(Error::InvalidScene(format!("material {i}: eta must be positive, got {eta}")));
+                        return Err(Error::InvalidScene(format!(
+                            "material {i}: eta must be positive, got {eta}"
+                        )));
                     }
                 }
                 Material::Conductor { eta, k, alpha } => {
                     check_rgb(&format!("material {i} eta"), eta)?;
                     check_rgb(&format!("material {i} k"), k)?;
                     if !(alpha >= 0.0 && alpha.is_finite()) {
-                        return Err(Error::InvalidScene(format!("material {i}: alpha must be ≥ 0, got {alpha}")));
+                        return Err(Error::InvalidScene(format!(
+                            "material {i}: alpha must be ≥ 0, got {alpha}"
+                        )));
                     }
                 }
             }
         }
         for (i, l) in self.lights.iter().enumerate() {
             let (what, value) = match *l {
-                Light::Point { intensity, position } => {
+                Light::Point {
+                    intensity,
+                    position,
+                } => {
                     if !position.is_finite() {
-                        return Err(Error::InvalidScene(format!("light {i}: position is not finite")));
+                        return Err(Error::InvalidScene(format!(
+                            "light {i}: position is not finite"
+                        )));
                     }
                     ("intensity", intensity)
                 }
-                Light::Directional { irradiance, direction } => {
+                Light::Directional {
+                    irradiance,
+                    direction,
+                } => {
                     if !direction.is_finite() || direction.length_squared() == 0.0 {
-                        return Err(Error::InvalidScene(format!("light {i}: direction must be non-zero")));
+                        return Err(Error::InvalidScene(format!(
+                            "light {i}: direction must be non-zero"
+                        )));
                     }
                     ("irradiance", irradiance)
                 }
@@ -295,12 +323,19 @@ impl CompiledScene {
                 let shading_normal = m
                     .normals
                     .as_ref()
-                    .and_then(|ns| (b0 * ns[i0] + hit.b1 * ns[i1] + hit.b2 * ns[i2]).try_normalize())
-                    .map_or(geometric_normal, |n| if n.dot(geometric_normal) < 0.0 { -n } else { n });
-                let uv = m
-                    .uvs
-                    .as_ref()
-                    .map_or(Vec2::ZERO, |uv| b0 * uv[i0] + hit.b1 * uv[i1] + hit.b2 * uv[i2]);
+                    .and_then(|ns| {
+                        (b0 * ns[i0] + hit.b1 * ns[i1] + hit.b2 * ns[i2]).try_normalize()
+                    })
+                    .map_or(geometric_normal, |n| {
+                        if n.dot(geometric_normal) < 0.0 {
+                            -n
+                        } else {
+                            n
+                        }
+                    });
+                let uv = m.uvs.as_ref().map_or(Vec2::ZERO, |uv| {
+                    b0 * uv[i0] + hit.b1 * uv[i1] + hit.b2 * uv[i2]
+                });
                 SurfaceHit {
                     t: hit.t,
                     p,

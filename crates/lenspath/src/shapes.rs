@@ -181,7 +181,11 @@ pub fn intersect_sphere(ray: &Ray, center: Vec3, radius: f32, t_max: f32) -> Opt
     }
     let sq = (a * disc).sqrt();
     let c = f.length_squared() - radius * radius;
-    let q = if b_half >= 0.0 { b_half + sq } else { b_half - sq };
+    let q = if b_half >= 0.0 {
+        b_half + sq
+    } else {
+        b_half - sq
+    };
     let (mut t0, mut t1) = (c / q, q / a);
     if q == 0.0 {
         t0 = 0.0;
@@ -209,14 +213,24 @@ mod tests {
 
     #[test]
     fn triangle_hit_distance_and_barycentrics() {
-        let p = [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0)];
+        let p = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(0.0, 1.0, 0.0),
+        ];
         let ray = Ray::new(Vec3::new(0.25, 0.5, 2.0), Vec3::new(0.0, 0.0, -1.0));
         let (t, b1, b2) = intersect_triangle(&TriangleRay::new(&ray), &p, f32::INFINITY).unwrap();
         assert!((t - 2.0).abs() < 1e-6);
         assert!((b1 - 0.25).abs() < 1e-6 && (b2 - 0.5).abs() < 1e-6);
         // Behind the origin, outside, and beyond t_max: no hit.
-        assert!(!hits(&Ray::new(Vec3::new(0.25, 0.5, -2.0), Vec3::new(0.0, 0.0, -1.0)), &p));
-        assert!(!hits(&Ray::new(Vec3::new(0.75, 0.5, 2.0), Vec3::new(0.0, 0.0, -1.0)), &p));
+        assert!(!hits(
+            &Ray::new(Vec3::new(0.25, 0.5, -2.0), Vec3::new(0.0, 0.0, -1.0)),
+            &p
+        ));
+        assert!(!hits(
+            &Ray::new(Vec3::new(0.75, 0.5, 2.0), Vec3::new(0.0, 0.0, -1.0)),
+            &p
+        ));
         assert!(intersect_triangle(&TriangleRay::new(&ray), &p, 1.5).is_none());
     }
 
@@ -234,7 +248,9 @@ mod tests {
                 centre + tilt * Vec3::new(a.cos() * 1.3, a.sin() * 0.9, 0.0)
             })
             .collect();
-        let tris: Vec<[Vec3; 3]> = (0..n_tris).map(|i| [centre, rim[i], rim[(i + 1) % n_tris]]).collect();
+        let tris: Vec<[Vec3; 3]> = (0..n_tris)
+            .map(|i| [centre, rim[i], rim[(i + 1) % n_tris]])
+            .collect();
         let normal = tilt * Vec3::Z;
         let mut rng = 0x2545F4914F6CDD1Du64;
         let mut next = || {
@@ -245,12 +261,13 @@ mod tests {
         };
         let mut missed = 0;
         let mut tested = 0;
-        for i in 0..n_tris {
+        for corner in &rim {
             for k in 0..2000 {
-                // Points on the shared edge centre–rim[i] (k == 0: the vertex itself).
+                // Points on the shared edge centre–corner (k == 0: the centre vertex itself).
                 let s = if k == 0 { 0.0 } else { next() };
-                let target = centre + s * (rim[i] - centre);
-                let dir = (-normal + 0.8 * Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5)).normalize();
+                let target = centre + s * (*corner - centre);
+                let dir = (-normal + 0.8 * Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5))
+                    .normalize();
                 let ray = Ray::new(target - 3.7 * dir, dir);
                 tested += 1;
                 if !tris.iter().any(|t| hits(&ray, t)) {
@@ -258,7 +275,10 @@ mod tests {
                 }
             }
         }
-        assert_eq!(missed, 0, "{missed} of {tested} rays through shared edges slipped through");
+        assert_eq!(
+            missed, 0,
+            "{missed} of {tested} rays through shared edges slipped through"
+        );
     }
 
     #[test]

@@ -44,7 +44,11 @@ fn render_scene(scene: Scene, camera: &PerspectiveCamera, s: &RenderSettings) ->
 fn mean_and_error(values: &[f32]) -> (f64, f64) {
     let n = values.len() as f64;
     let mean = values.iter().map(|&v| f64::from(v)).sum::<f64>() / n;
-    let var = values.iter().map(|&v| (f64::from(v) - mean).powi(2)).sum::<f64>() / (n - 1.0);
+    let var = values
+        .iter()
+        .map(|&v| (f64::from(v) - mean).powi(2))
+        .sum::<f64>()
+        / (n - 1.0);
     (mean, (var / n).sqrt())
 }
 
@@ -55,8 +59,12 @@ fn mean_and_error(values: &[f32]) -> (f64, f64) {
 #[test]
 fn white_furnace_sphere_disappears() {
     let materials = [
-        Material::Diffuse { reflectance: Rgb::ONE },
-        Material::Mirror { reflectance: Rgb::ONE },
+        Material::Diffuse {
+            reflectance: Rgb::ONE,
+        },
+        Material::Mirror {
+            reflectance: Rgb::ONE,
+        },
         Material::Dielectric { eta: 1.5 },
     ];
     for material in materials {
@@ -107,8 +115,18 @@ fn closed_emissive_box_reaches_the_geometric_series() {
         v(-1., 1., 1.),
     ];
     // Faces wound so their normals point into the box.
-    let quads = [[0, 1, 2, 3], [4, 7, 6, 5], [0, 4, 5, 1], [3, 2, 6, 7], [0, 3, 7, 4], [1, 5, 6, 2]];
-    let indices = quads.iter().flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]).collect();
+    let quads = [
+        [0, 1, 2, 3],
+        [4, 7, 6, 5],
+        [0, 4, 5, 1],
+        [3, 2, 6, 7],
+        [0, 3, 7, 4],
+        [1, 5, 6, 2],
+    ];
+    let indices = quads
+        .iter()
+        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+        .collect();
     let scene = Scene {
         meshes: vec![TriangleMesh {
             positions: corners.to_vec(),
@@ -123,7 +141,11 @@ fn closed_emissive_box_reaches_the_geometric_series() {
         ..Default::default()
     };
     for light_samples in [1, 4] {
-        let pose = CameraPose::look_at(Vec3::new(0.1, 0.2, 0.3), Vec3::new(0.5, -0.3, -1.0), Vec3::Y);
+        let pose = CameraPose::look_at(
+            Vec3::new(0.1, 0.2, 0.3),
+            Vec3::new(0.5, -0.3, -1.0),
+            Vec3::Y,
+        );
         let camera = PerspectiveCamera::pinhole(pose, 70.0, 24, 24);
         let mut s = settings(24, 24, 64, 2);
         s.path.light_samples = light_samples;
@@ -154,10 +176,18 @@ fn cornell_box_converges_across_seeds() {
     let (a, b) = (render_seed(1), render_seed(2));
     assert_ne!(a.rgb, b.rgb, "different seeds must give independent images");
     for c in 0..3 {
-        let diff: Vec<f32> = a.rgb.chunks(3).zip(b.rgb.chunks(3)).map(|(p, q)| p[c] - q[c]).collect();
+        let diff: Vec<f32> = a
+            .rgb
+            .chunks(3)
+            .zip(b.rgb.chunks(3))
+            .map(|(p, q)| p[c] - q[c])
+            .collect();
         let (mean, err) = mean_and_error(&diff);
         assert!(err > 0.0);
-        assert!(mean.abs() < 4.0 * err, "channel {c}: seeds differ by {mean} ± {err}");
+        assert!(
+            mean.abs() < 4.0 * err,
+            "channel {c}: seeds differ by {mean} ± {err}"
+        );
     }
     // The lit box is neither black nor blown out.
     let m = a.mean();
@@ -169,7 +199,12 @@ fn cornell_box_converges_across_seeds() {
 fn same_seed_is_bit_identical_across_thread_counts() {
     let dir = tempfile::tempdir().unwrap();
     let mut files = Vec::new();
-    for (threads, filter) in [(1, Filter::Box), (2, Filter::Box), (1, Filter::GAUSSIAN), (2, Filter::GAUSSIAN)] {
+    for (threads, filter) in [
+        (1, Filter::Box),
+        (2, Filter::Box),
+        (1, Filter::GAUSSIAN),
+        (2, Filter::GAUSSIAN),
+    ] {
         let scene = builtin_scene("cornell-spheres", 0).unwrap();
         let view = scene.view.unwrap();
         let camera = PerspectiveCamera::thin_lens(view.pose, view.fov_y_deg, 40, 30, 0.1, 3.5);
@@ -187,8 +222,14 @@ fn same_seed_is_bit_identical_across_thread_counts() {
         assert_eq!(back.spp_min, 8);
         files.push(std::fs::read(&path).unwrap());
     }
-    assert!(files[0] == files[1], "box filter: the EXRs of 1 and 2 threads differ");
-    assert!(files[2] == files[3], "Gaussian filter: the EXRs of 1 and 2 threads differ");
+    assert!(
+        files[0] == files[1],
+        "box filter: the EXRs of 1 and 2 threads differ"
+    );
+    assert!(
+        files[2] == files[3],
+        "Gaussian filter: the EXRs of 1 and 2 threads differ"
+    );
     assert!(files[0] != files[2], "the filter must change the image");
 }
 
@@ -204,6 +245,9 @@ fn depth_channel_is_distance_along_the_view_axis() {
     let expected = camera_z + 1.0;
     for (x, y) in [(16, 16), (14, 18), (18, 13)] {
         let z = image.depth[(y * 33 + x) as usize];
-        assert!((z - expected).abs() < 1e-4, "depth {z} at ({x}, {y}), expected {expected}");
+        assert!(
+            (z - expected).abs() < 1e-4,
+            "depth {z} at ({x}, {y}), expected {expected}"
+        );
     }
 }

@@ -23,7 +23,12 @@ pub enum ImageFormat {
 impl ImageFormat {
     /// The format for `path`'s extension, or an error naming the supported ones.
     pub fn from_path(path: &Path) -> Result<ImageFormat> {
-        match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        match path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .as_deref()
+        {
             Some("png") => Ok(ImageFormat::Png),
             Some("exr") => Ok(ImageFormat::Exr),
             other => Err(Error::InvalidArgument(format!(
@@ -45,7 +50,9 @@ pub fn linear_to_srgb(x: f32) -> f32 {
 }
 
 fn temp_path(path: &Path) -> PathBuf {
-    let name = path.file_name().map_or_else(|| "image".into(), |n| n.to_string_lossy().into_owned());
+    let name = path
+        .file_name()
+        .map_or_else(|| "image".into(), |n| n.to_string_lossy().into_owned());
     path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
 }
 
@@ -61,7 +68,10 @@ fn io_error(path: &Path, source: std::io::Error) -> Error {
 pub fn check_output_path(path: &Path) -> Result<ImageFormat> {
     let format = ImageFormat::from_path(path)?;
     if path.is_dir() {
-        return Err(Error::InvalidArgument(format!("{} is a directory", path.display())));
+        return Err(Error::InvalidArgument(format!(
+            "{} is a directory",
+            path.display()
+        )));
     }
     let probe = temp_path(path);
     std::fs::File::create(&probe).map_err(|e| io_error(path, e))?;
@@ -116,8 +126,8 @@ fn write_png(tmp: &Path, image: &Image, exposure: f32) -> Result<()> {
 
 fn write_exr(tmp: &Path, image: &Image) -> Result<()> {
     use exr::prelude::{
-        AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Layer, LayerAttributes, SmallVec, Text,
-        WritableImage,
+        AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Layer, LayerAttributes,
+        SmallVec, Text, WritableImage,
     };
     let n = image.width as usize * image.height as usize;
     let channel = |c: usize| (0..n).map(|i| image.rgb[3 * i + c]).collect::<Vec<f32>>();
@@ -131,7 +141,10 @@ fn write_exr(tmp: &Path, image: &Image) -> Result<()> {
     // attributes in a HashMap, and a single entry keeps the bytes deterministic.
     attributes.other.insert(
         Text::from(SPP_ATTRIBUTE),
-        AttributeValue::IntVec2(exr::math::Vec2(image.spp_min as i32, image.spp_requested as i32)),
+        AttributeValue::IntVec2(exr::math::Vec2(
+            image.spp_min as i32,
+            image.spp_requested as i32,
+        )),
     );
     let layer = Layer::new(
         (image.width as usize, image.height as usize),
@@ -159,13 +172,18 @@ pub fn read_exr(path: &Path) -> Result<Image> {
             .channel_data
             .list
             .iter()
-            .find(|c| c.name == Text::from(name))
+            .find(|c| c.name == *name)
             .map(|c| c.sample_data.values_as_f32().collect::<Vec<f32>>())
             .ok_or_else(|| fail(format!("no '{name}' channel")))
     };
     let (r, g, b) = (find("R")?, find("G")?, find("B")?);
     let depth = find("Z").unwrap_or_else(|_| vec![f32::INFINITY; r.len()]);
-    let (spp_min, spp_requested) = match img.layer_data.attributes.other.get(&Text::from(SPP_ATTRIBUTE)) {
+    let (spp_min, spp_requested) = match img
+        .layer_data
+        .attributes
+        .other
+        .get(&Text::from(SPP_ATTRIBUTE))
+    {
         Some(AttributeValue::IntVec2(v)) => (v.0.max(0) as u32, v.1.max(0) as u32),
         _ => (0, 0),
     };

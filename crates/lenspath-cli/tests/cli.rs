@@ -1,0 +1,201 @@
+//! The `lenspath` binary as a user meets it: exit codes, error lines,
+//! outputs, Ctrl-C.
+
+use std::path::Path;
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+fn lenspath(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_lenspath"))
+        .args(args)
+        .output()
+        .expect("the lenspath binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+#[test]
+fn renders_png_and_exr_with_a_summary_line() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["small.png", "small.exr"] {
+        let out = dir.path().join(name);
+        let o = lenspath(&[
+            "render",
+            "--res",
+            "32x24",
+            "--spp",
+            "2",
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(
+            stderr(&o).contains("rendered cornell-spheres 32x24 at 2 spp"),
+            "{}",
+            stderr(&o)
+        );
+        assert!(stderr(&o).contains("M rays/s"));
+        assert!(out.metadata().unwrap().len() > 100);
+    }
+    let exr = lenspath::io::image::read_exr(&dir.path().join("small.exr")).unwrap();
+    assert_eq!(
+        (exr.width, exr.height, exr.spp_min, exr.spp_requested),
+        (32, 24, 2, 2)
+    );
+    assert!(
+        exr.depth.iter().all(|z| z.is_finite() && *z > 0.0),
+        "the box surrounds the camera's view"
+    );
+    // No temporary files are left behind.
+    let names: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names.len(), 2, "{names:?}");
+}
+
+#[test]
+fn bad_input_gives_one_error_line_and_exit_code_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let ok_out = dir.path().join("x.png");
+    let ok = ok_out.to_str().unwrap();
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec!["render", "--scene", "teapot-nope", "--out", ok],
+            "unknown scene 'teapot-nope'",
+        ),
+        (
+            vec!["render", "--res", "0x10", "--out", ok],
+            "must be positive",
+        ),
+        (vec!["render", "--res", "ten", "--out", ok], "WIDTHxHEIGHT"),
+        (
+            vec!["render", "--spp", "0", "--out", ok],
+            "samples per pixel must be in 1..=",
+        ),
+        (vec!["render", "--spp", "-4", "--out", ok], "--spp"),
+        (
+            vec!["render", "--out", "/nonexistent-dir/x.png"],
+            "/nonexistent-dir/x.png",
+        ),
+        (
+            vec!["render", "--out", "picture.bmp"],
+            "unknown image extension '.bmp'",
+        ),
+        (
+            vec!["render", "--threads", "0", "--out", ok],
+            "threads must be at least 1",
+        ),
+        (vec!["render", "--fov", "200", "--out", ok], "--fov"),
+        (
+            vec!["render", "--camera", "fisheye", "--out", ok],
+            "fisheye",
+        ),
+        (vec!["render", "--no-such-flag"], "--no-such-flag"),
+        (vec!["bench", "bvh", "missing.ply"], "missing.ply"),
+        (vec!["bench", "bvh", "--procedural", "10"], "512"),
+    ];
+    for (args, expected) in cases {
+        let o = lenspath(&args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?} → {err}");
+        assert!(
+            err.contains(expected),
+            "{args:?}: expected '{expected}' in: {err}"
+        );
+        assert_eq!(
+            err.trim_end().lines().count(),
+            1,
+            "{args:?}: one line, got: {err}"
+        );
+        assert!(!err.contains("panicked"));
+    }
+    assert!(!ok_out.exists(), "a failed command must not write output");
+}
+
+#[test]
+fn failed_write_keeps_the_previous_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("keep.png");
+    std::fs::write(&out, b"previous").unwrap();
+    // A run that fails before rendering leaves the file alone.
+    let o = lenspath(&["render", "--spp", "0", "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(std::fs::read(&out).unwrap(), b"previous");
+}
+
+#[test]
+fn ctrl_c_stops_within_a_second_and_saves_the_partial_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("partial.exr");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_lenspath"))
+        .args([
+            "render",
+            "--res",
+            "64x48",
+            "--spp",
+            "60000",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    let sent = Instant::now();
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let status = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break status;
+        }
+        assert!(
+            sent.elapsed() < Duration::from_secs(5),
+            "render did not stop after Ctrl-C"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let stopped_after = sent.elapsed();
+    let mut err = String::new();
+    std::io::Read::read_to_string(child.stderr.as_mut().unwrap(), &mut err).unwrap();
+    assert_eq!(status.code(), Some(130), "{err}");
+    assert!(
+        stopped_after < Duration::from_secs(1),
+        "stopping took {stopped_after:?}"
+    );
+    assert!(err.contains("interrupted: saved"), "{err}");
+    let image = lenspath::io::image::read_exr(Path::new(&out)).unwrap();
+    assert!(
+        image.spp_min > 0 && image.spp_min < 60000,
+        "spp reached {}",
+        image.spp_min
+    );
+    assert_eq!(image.spp_requested, 60000);
+    assert!(image.mean()[0] > 0.01, "the partial image holds light");
+}
+
+#[test]
+fn bench_bvh_reports_json() {
+    let o = lenspath(&[
+        "bench",
+        "bvh",
+        "--procedural",
+        "20000",
+        "--rays",
+        "20000",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!((19_000..=21_000).contains(&v["triangles"].as_u64().unwrap()));
+    for key in ["build_ms", "coherent_mrays_s", "incoherent_mrays_s"] {
+        assert!(v[key].as_f64().unwrap() > 0.0, "{key}");
+    }
+    // Coherent rays come from outside toward the mesh; many must hit it.
+    assert!(v["coherent_hit_fraction"].as_f64().unwrap() > 0.1);
+}
