@@ -19,7 +19,8 @@ fn primitives(mesh: &TriangleMesh) -> Vec<(PrimGeometry, u32)> {
 
 fn meshes() -> Vec<(String, TriangleMesh)> {
     let mut meshes = vec![("torus_knot_1m".to_string(), torus_knot(1_000_000).unwrap())];
-    let dragon = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/meshes/dragon_100k.ply");
+    let dragon =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/meshes/dragon_100k.ply");
     match load_mesh(&dragon) {
         Ok(mesh) => meshes.push(("dragon_100k".to_string(), mesh)),
         Err(e) => eprintln!("skipping the dragon ({e}): ../shared is not beside the repository"),
@@ -35,7 +36,11 @@ fn bvh(c: &mut Criterion) {
         group.sample_size(10);
         group.throughput(Throughput::Elements(prims.len() as u64));
         group.bench_function(BenchmarkId::from_parameter(&name), |b| {
-            b.iter_batched(|| prims.clone(), |p| Bvh::build(p, &settings), criterion::BatchSize::LargeInput)
+            b.iter_batched(
+                || prims.clone(),
+                |p| Bvh::build(p, &settings),
+                criterion::BatchSize::LargeInput,
+            )
         });
         group.finish();
 
@@ -46,9 +51,16 @@ fn bvh(c: &mut Criterion) {
         let mut group = c.benchmark_group("bvh_traverse_1thread");
         group.sample_size(10);
         group.throughput(Throughput::Elements(n as u64));
-        for (kind, rays) in [("coherent", coherent_rays(lo, hi, n)), ("incoherent", incoherent_rays(lo, hi, n))] {
+        for (kind, rays) in [
+            ("coherent", coherent_rays(lo, hi, n)),
+            ("incoherent", incoherent_rays(lo, hi, n)),
+        ] {
             group.bench_function(BenchmarkId::new(kind, &name), |b| {
-                b.iter(|| rays.iter().filter(|r| bvh.intersect(r, f32::INFINITY).is_some()).count())
+                b.iter(|| {
+                    rays.iter()
+                        .filter(|r| bvh.intersect(r, f32::INFINITY).is_some())
+                        .count()
+                })
             });
         }
         group.finish();

@@ -7,6 +7,22 @@
 //! along each; the [`film::Image`] is written by [`io::image`].
 //!
 //! The library never prints or exits; every failure is an [`Error`].
+//!
+//! ```
+//! use std::sync::atomic::AtomicBool;
+//! use lenspath::{accel::BvhSettings, builtin::builtin_scene, camera::PerspectiveCamera};
+//! use lenspath::render::{render, RenderSettings};
+//!
+//! let scene = builtin_scene("cornell-spheres", 0)?;
+//! let view = scene.view.expect("built-in scenes have a view");
+//! let camera = PerspectiveCamera::pinhole(view.pose, view.fov_y_deg, 32, 24);
+//! let settings = RenderSettings { width: 32, height: 24, spp: 4, ..Default::default() };
+//! let compiled = scene.compile(&BvhSettings::default())?;
+//! let output = render(&compiled, &camera, &settings, &|_done, _total| {}, &AtomicBool::new(false))?;
+//! assert_eq!(output.image.rgb.len(), 32 * 24 * 3);
+//! assert!(output.image.mean()[0] > 0.0);
+//! # Ok::<(), lenspath::Error>(())
+//! ```
 
 #![warn(missing_docs)]
 

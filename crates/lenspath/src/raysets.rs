@@ -40,4 +40,3 @@ pub fn incoherent_rays(lo: Vec3, hi: Vec3, n: usize) -> Vec<Ray> {
         })
         .collect()
 }
-

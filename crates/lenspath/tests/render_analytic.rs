@@ -233,21 +233,101 @@ fn same_seed_is_bit_identical_across_thread_counts() {
     assert!(files[0] != files[2], "the filter must change the image");
 }
 
-/// The depth channel holds the distance along the viewing axis: the back
-/// wall of the Cornell box is 4.9 units from the camera.
+/// The depth channel holds the distance along the viewing axis: for pixels
+/// that see the back wall (the plane z = -1), that is the wall point's
+/// projection onto the axis, computed here by plane intersection.
 #[test]
 fn depth_channel_is_distance_along_the_view_axis() {
+    use lenspath::camera::{Camera, CameraSample};
     let scene = builtin_scene("cornell-empty", 0).unwrap();
     let view = scene.view.unwrap();
     let camera = PerspectiveCamera::pinhole(view.pose, view.fov_y_deg, 33, 33);
     let image = render_scene(scene, &camera, &settings(33, 33, 1, 0));
-    let camera_z = view.pose.render_from_camera.translation.z;
-    let expected = camera_z + 1.0;
-    for (x, y) in [(16, 16), (14, 18), (18, 13)] {
+    let (eye, forward) = camera.view_axis();
+    for (x, y) in [(16u32, 16u32), (14, 18), (18, 13)] {
+        let film = glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+        let ray = camera
+            .generate_ray(CameraSample {
+                film,
+                lens: glam::Vec2::splat(0.5),
+            })
+            .unwrap()
+            .ray;
+        let t = (-1.0 - ray.origin.z) / ray.direction.z;
+        let expected = (ray.at(t) - eye).dot(forward);
         let z = image.depth[(y * 33 + x) as usize];
         assert!(
             (z - expected).abs() < 1e-4,
             "depth {z} at ({x}, {y}), expected {expected}"
         );
+        assert!(
+            (expected - (eye.z + 1.0)).abs() < 0.1,
+            "the pixel must see the back wall"
+        );
+    }
+}
+
+/// Delta lights on a diffuse floor seen from above, direct lighting only:
+/// a point light of intensity I at height h gives L = ρ I cos³θ / (π h²),
+/// and a directional light of irradiance E at angle θ gives L = ρ E cosθ / π
+/// everywhere (no noise: both are exact for every sample).
+#[test]
+fn delta_lights_match_the_closed_form() {
+    let albedo = 0.5f32;
+    let floor = TriangleMesh {
+        positions: vec![
+            Vec3::new(-50.0, 0.0, -50.0),
+            Vec3::new(-50.0, 0.0, 50.0),
+            Vec3::new(50.0, 0.0, 50.0),
+            Vec3::new(50.0, 0.0, -50.0),
+        ],
+        indices: vec![[0, 1, 2], [0, 2, 3]],
+        material: 0,
+        ..Default::default()
+    };
+    let (h, intensity) = (2.0f32, 10.0f32);
+    let theta = 30f32.to_radians();
+    let lights = [
+        Light::Point {
+            position: Vec3::new(0.0, h, 0.0),
+            intensity: Rgb::splat(intensity),
+        },
+        Light::Directional {
+            direction: Vec3::new(theta.sin(), -theta.cos(), 0.0),
+            irradiance: Rgb::splat(3.0),
+        },
+    ];
+    for light in lights {
+        let scene = Scene {
+            meshes: vec![floor.clone()],
+            materials: vec![Material::Diffuse {
+                reflectance: Rgb::splat(albedo),
+            }],
+            lights: vec![light],
+            ..Default::default()
+        };
+        let pose = CameraPose::look_at(Vec3::new(0.0, 1.0, 0.0), Vec3::ZERO, Vec3::Z);
+        let camera = PerspectiveCamera::pinhole(pose, 60.0, 41, 41);
+        let mut s = settings(41, 41, 4, 0);
+        s.path.max_depth = 1;
+        let image = render_scene(scene, &camera, &s);
+        for (x, y) in [(20u32, 20u32), (5, 30), (35, 8)] {
+            // Where the pixel centre's ray meets the floor.
+            let ndc = |p: u32| (2.0 * (p as f32 + 0.5) / 41.0 - 1.0) * 30f32.to_radians().tan();
+            let (px, pz) = (ndc(x), ndc(y));
+            let expected = match light {
+                Light::Point { .. } => {
+                    let d2 = px * px + pz * pz + h * h;
+                    albedo * intensity * (h / d2.sqrt()) / (std::f32::consts::PI * d2)
+                }
+                _ => albedo * 3.0 * theta.cos() / std::f32::consts::PI,
+            };
+            let got = image.pixel(x, y)[0];
+            // Box-filtered pixels average a small footprint: allow 2% for the point light's falloff.
+            assert!(
+                (got - expected).abs() <= 0.02 * expected,
+                "{light:?} at ({x}, {y}): {got} vs {expected}"
+            );
+        }
     }
 }

@@ -10,7 +10,9 @@ use lenspath::raysets::{coherent_rays, incoherent_rays};
 use lenspath::shapes::{intersect_triangle, TriangleRay};
 
 fn shared(path: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../../shared").join(path);
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared")
+        .join(path);
     if p.exists() {
         Some(p)
     } else {
@@ -31,22 +33,35 @@ fn meshes_load_with_the_documented_counts() {
     ] {
         let Some(file) = shared(path) else { return };
         let mesh = load_mesh(&file).unwrap();
-        assert_eq!((mesh.positions.len(), mesh.indices.len()), (vertices, triangles), "{path}");
+        assert_eq!(
+            (mesh.positions.len(), mesh.indices.len()),
+            (vertices, triangles),
+            "{path}"
+        );
     }
 }
 
 /// The BVH on the real dragon agrees with brute force on camera and random rays.
 #[test]
 fn dragon_bvh_matches_brute_force() {
-    let Some(file) = shared("meshes/dragon_100k.ply") else { return };
+    let Some(file) = shared("meshes/dragon_100k.ply") else {
+        return;
+    };
     let mesh = load_mesh(&file).unwrap();
     let tris: Vec<[Vec3; 3]> = (0..mesh.indices.len()).map(|i| mesh.triangle(i)).collect();
-    let prims = tris.iter().enumerate().map(|(i, t)| (PrimGeometry::Triangle(*t), i as u32)).collect();
+    let prims = tris
+        .iter()
+        .enumerate()
+        .map(|(i, t)| (PrimGeometry::Triangle(*t), i as u32))
+        .collect();
     let bvh = Bvh::build(prims, &BvhSettings::default());
     let b = bvh.bounds();
     let (lo, hi) = (Vec3::from(b.min), Vec3::from(b.max));
     let mut hits = 0;
-    for ray in coherent_rays(lo, hi, 400).into_iter().chain(incoherent_rays(lo, hi, 400)) {
+    for ray in coherent_rays(lo, hi, 400)
+        .into_iter()
+        .chain(incoherent_rays(lo, hi, 400))
+    {
         let tr = TriangleRay::new(&ray);
         let expected = tris
             .iter()
