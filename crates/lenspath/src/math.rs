@@ -73,7 +73,7 @@ impl Bounds3 {
     #[inline]
     pub fn surface_area(&self) -> f32 {
         let d = self.diagonal();
-        2.0 * (d.x * d.y + d.y * d.z + d.z * d.x)
+        2.0 * d.dot(glam::Vec3A::new(d.y, d.z, d.x))
     }
 
     /// Centre of the box.
