@@ -40,11 +40,7 @@ pub struct BvhArgs {
 }
 
 /// Millions of closest-hit rays per second, and the hit count.
-fn trace<T: Copy + Send + Sync>(
-    bvh: &Bvh<T>,
-    rays: &[Ray],
-    pool: &rayon::ThreadPool,
-) -> (f64, usize) {
+fn trace<T: Copy + Send + Sync>(bvh: &Bvh<T>, rays: &[Ray], pool: &rayon::ThreadPool) -> (f64, usize) {
     let started = Instant::now();
     let hits = pool.install(|| {
         rays.par_chunks(4096)
@@ -56,10 +52,7 @@ fn trace<T: Copy + Send + Sync>(
             })
             .sum()
     });
-    (
-        rays.len() as f64 / started.elapsed().as_secs_f64() / 1e6,
-        hits,
-    )
+    (rays.len() as f64 / started.elapsed().as_secs_f64() / 1e6, hits)
 }
 
 /// Runs `lenspath bench bvh`.
@@ -68,9 +61,7 @@ pub fn run_bvh(args: BvhArgs) -> Result<Outcome> {
         return Err(Error::InvalidArgument("--rays must be positive".into()));
     }
     if args.threads == Some(0) {
-        return Err(Error::InvalidArgument(
-            "--threads must be at least 1".into(),
-        ));
+        return Err(Error::InvalidArgument("--threads must be at least 1".into()));
     }
     if !(2..=256).contains(&args.bins) {
         return Err(Error::InvalidArgument(format!(

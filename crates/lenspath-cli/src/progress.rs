@@ -23,11 +23,9 @@ impl Progress {
         if std::io::stderr().is_terminal() {
             let bar = ProgressBar::new(total);
             bar.set_style(
-                ProgressStyle::with_template(
-                    "{msg} [{bar:40}] {percent:>3}% {elapsed_precise} ETA {eta}",
-                )
-                .expect("static template")
-                .progress_chars("=> "),
+                ProgressStyle::with_template("{msg} [{bar:40}] {percent:>3}% {elapsed_precise} ETA {eta}")
+                    .expect("static template")
+                    .progress_chars("=> "),
             );
             bar.set_message(label.to_string());
             bar.enable_steady_tick(Duration::from_millis(200));
@@ -47,8 +45,7 @@ impl Progress {
             Progress::Plain { label, state } => {
                 let percent = done * 100 / total.max(1);
                 let mut s = state.lock().unwrap_or_else(|p| p.into_inner());
-                if percent >= s.0 + 10 || (percent > s.0 && s.1.elapsed() > Duration::from_secs(2))
-                {
+                if percent >= s.0 + 10 || (percent > s.0 && s.1.elapsed() > Duration::from_secs(2)) {
                     *s = (percent, Instant::now());
                     eprintln!("{label}: {percent}%");
                 }

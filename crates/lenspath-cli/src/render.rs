@@ -130,9 +130,7 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
     };
     settings.validate()?;
     if !args.exposure.is_finite() {
-        return Err(Error::InvalidArgument(
-            "--exposure must be a finite number".into(),
-        ));
+        return Err(Error::InvalidArgument("--exposure must be a finite number".into()));
     }
     check_output_path(&args.out)?;
     let scene = builtin_scene(&args.scene, args.mesh_triangles)?;

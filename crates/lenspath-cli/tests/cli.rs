@@ -21,15 +21,7 @@ fn renders_png_and_exr_with_a_summary_line() {
     let dir = tempfile::tempdir().unwrap();
     for name in ["small.png", "small.exr"] {
         let out = dir.path().join(name);
-        let o = lenspath(&[
-            "render",
-            "--res",
-            "32x24",
-            "--spp",
-            "2",
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+        let o = lenspath(&["render", "--res", "32x24", "--spp", "2", "--out", out.to_str().unwrap()]);
         assert!(o.status.success(), "{}", stderr(&o));
         assert!(
             stderr(&o).contains("rendered cornell-spheres 32x24 at 2 spp"),
@@ -40,10 +32,7 @@ fn renders_png_and_exr_with_a_summary_line() {
         assert!(out.metadata().unwrap().len() > 100);
     }
     let exr = lenspath::io::image::read_exr(&dir.path().join("small.exr")).unwrap();
-    assert_eq!(
-        (exr.width, exr.height, exr.spp_min, exr.spp_requested),
-        (32, 24, 2, 2)
-    );
+    assert_eq!((exr.width, exr.height, exr.spp_min, exr.spp_requested), (32, 24, 2, 2));
     assert!(
         exr.depth.iter().all(|z| z.is_finite() && *z > 0.0),
         "the box surrounds the camera's view"
@@ -66,10 +55,7 @@ fn bad_input_gives_one_error_line_and_exit_code_2() {
             vec!["render", "--scene", "teapot-nope", "--out", ok],
             "unknown scene 'teapot-nope'",
         ),
-        (
-            vec!["render", "--res", "0x10", "--out", ok],
-            "must be positive",
-        ),
+        (vec!["render", "--res", "0x10", "--out", ok], "must be positive"),
         (vec!["render", "--res", "ten", "--out", ok], "WIDTHxHEIGHT"),
         (
             vec!["render", "--spp", "0", "--out", ok],
@@ -80,19 +66,13 @@ fn bad_input_gives_one_error_line_and_exit_code_2() {
             vec!["render", "--out", "/nonexistent-dir/x.png"],
             "/nonexistent-dir/x.png",
         ),
-        (
-            vec!["render", "--out", "picture.bmp"],
-            "unknown image extension '.bmp'",
-        ),
+        (vec!["render", "--out", "picture.bmp"], "unknown image extension '.bmp'"),
         (
             vec!["render", "--threads", "0", "--out", ok],
             "threads must be at least 1",
         ),
         (vec!["render", "--fov", "200", "--out", ok], "--fov"),
-        (
-            vec!["render", "--camera", "fisheye", "--out", ok],
-            "fisheye",
-        ),
+        (vec!["render", "--camera", "fisheye", "--out", ok], "fisheye"),
         (vec!["render", "--no-such-flag"], "--no-such-flag"),
         (vec!["bench", "bvh", "missing.ply"], "missing.ply"),
         (vec!["bench", "bvh", "--procedural", "10"], "512"),
@@ -101,15 +81,8 @@ fn bad_input_gives_one_error_line_and_exit_code_2() {
         let o = lenspath(&args);
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(2), "{args:?} → {err}");
-        assert!(
-            err.contains(expected),
-            "{args:?}: expected '{expected}' in: {err}"
-        );
-        assert_eq!(
-            err.trim_end().lines().count(),
-            1,
-            "{args:?}: one line, got: {err}"
-        );
+        assert!(err.contains(expected), "{args:?}: expected '{expected}' in: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: one line, got: {err}");
         assert!(!err.contains("panicked"));
     }
     assert!(!ok_out.exists(), "a failed command must not write output");
@@ -181,15 +154,7 @@ fn ctrl_c_stops_within_a_second_and_saves_the_partial_image() {
 
 #[test]
 fn bench_bvh_reports_json() {
-    let o = lenspath(&[
-        "bench",
-        "bvh",
-        "--procedural",
-        "20000",
-        "--rays",
-        "20000",
-        "--json",
-    ]);
+    let o = lenspath(&["bench", "bvh", "--procedural", "20000", "--rays", "20000", "--json"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert!((19_000..=21_000).contains(&v["triangles"].as_u64().unwrap()));

@@ -19,8 +19,7 @@ fn primitives(mesh: &TriangleMesh) -> Vec<(PrimGeometry, u32)> {
 
 fn meshes() -> Vec<(String, TriangleMesh)> {
     let mut meshes = vec![("torus_knot_1m".to_string(), torus_knot(1_000_000).unwrap())];
-    let dragon =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/meshes/dragon_100k.ply");
+    let dragon = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/meshes/dragon_100k.ply");
     match load_mesh(&dragon) {
         Ok(mesh) => meshes.push(("dragon_100k".to_string(), mesh)),
         Err(e) => eprintln!("skipping the dragon ({e}): ../shared is not beside the repository"),

@@ -30,16 +30,7 @@ fn cornell(c: &mut Criterion) {
         };
         let id = BenchmarkId::from_parameter(format!("{spp}spp_{light_samples}ls"));
         group.bench_function(id, |b| {
-            b.iter(|| {
-                render(
-                    &compiled,
-                    &camera,
-                    &settings,
-                    &|_, _| {},
-                    &AtomicBool::new(false),
-                )
-                .unwrap()
-            })
+            b.iter(|| render(&compiled, &camera, &settings, &|_, _| {}, &AtomicBool::new(false)).unwrap())
         });
     }
     group.finish();

@@ -163,11 +163,7 @@ impl TraversalRay {
     fn new(ray: &Ray) -> Self {
         // A zero component becomes a tiny one so 0 · ∞ never makes a NaN.
         let d = Vec3A::from(ray.direction);
-        let d = Vec3A::select(
-            d.abs().cmplt(Vec3A::splat(1e-30)),
-            Vec3A::splat(1e-30).copysign(d),
-            d,
-        );
+        let d = Vec3A::select(d.abs().cmplt(Vec3A::splat(1e-30)), Vec3A::splat(1e-30).copysign(d), d);
         TraversalRay {
             origin: Vec3A::from(ray.origin),
             inv_dir: d.recip(),
@@ -201,9 +197,7 @@ impl<T: Copy> Bvh<T> {
         };
 
         let root_bounds = bounds.iter().fold(Bounds3::EMPTY, |b, p| b.union(*p));
-        let root_centroids = bounds
-            .iter()
-            .fold(Bounds3::EMPTY, |b, p| b.grow(p.centroid()));
+        let root_centroids = bounds.iter().fold(Bounds3::EMPTY, |b, p| b.grow(p.centroid()));
         let root_area = root_bounds.surface_area().max(f32::MIN_POSITIVE);
         let mut bin_grids: Box<[[[Bin; 3]; 256]; 2]> = Box::new([[[EMPTY_BIN; 3]; 256]; 2]);
         let mut right_area = vec![[0f32; 3]; bins];
@@ -448,22 +442,6 @@ impl<T: Copy> Bvh<T> {
         self.tags[prim as usize]
     }
 
-    /// The geometry of primitive `prim` (traversal order).
-    #[inline]
-    pub fn geometry(&self, prim: u32) -> &PrimGeometry {
-        &self.geometry[prim as usize]
-    }
-
-    /// Number of primitives.
-    pub fn len(&self) -> usize {
-        self.geometry.len()
-    }
-
-    /// True when the tree holds nothing.
-    pub fn is_empty(&self) -> bool {
-        self.geometry.is_empty()
-    }
-
     /// The closest hit with `0 < t < t_max`, visiting the near child first.
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         self.traverse::<false>(ray, t_max)
@@ -524,22 +502,18 @@ impl<T: Copy> Bvh<T> {
     #[inline(always)]
     fn intersect_prim(&self, tr: &TraversalRay, ray: &Ray, prim: usize, t_max: f32) -> Option<Hit> {
         match &self.geometry[prim] {
-            PrimGeometry::Triangle(p) => {
-                intersect_triangle(&tr.tri, p, t_max).map(|(t, b1, b2)| Hit {
-                    t,
-                    prim: prim as u32,
-                    b1,
-                    b2,
-                })
-            }
-            PrimGeometry::Sphere { center, radius } => {
-                intersect_sphere(ray, *center, *radius, t_max).map(|t| Hit {
-                    t,
-                    prim: prim as u32,
-                    b1: 0.0,
-                    b2: 0.0,
-                })
-            }
+            PrimGeometry::Triangle(p) => intersect_triangle(&tr.tri, p, t_max).map(|(t, b1, b2)| Hit {
+                t,
+                prim: prim as u32,
+                b1,
+                b2,
+            }),
+            PrimGeometry::Sphere { center, radius } => intersect_sphere(ray, *center, *radius, t_max).map(|t| Hit {
+                t,
+                prim: prim as u32,
+                b1: 0.0,
+                b2: 0.0,
+            }),
         }
     }
 }
@@ -574,12 +548,7 @@ impl Binner {
         bin.count += 1;
     }
 
-    fn bin_all_axes(
-        &self,
-        grid: &mut [[Bin; 3]; 256],
-        odd_grid: &mut [[Bin; 3]; 256],
-        prims: &[Bounds3],
-    ) {
+    fn bin_all_axes(&self, grid: &mut [[Bin; 3]; 256], odd_grid: &mut [[Bin; 3]; 256], prims: &[Bounds3]) {
         let mut pairs = prims.chunks_exact(2);
         for pair in &mut pairs {
             let (k0, k1) = (self.indices(&pair[0]), self.indices(&pair[1]));
@@ -650,8 +619,7 @@ fn bin_indices(v: Vec3A) -> [u32; 3] {
         use std::arch::x86_64::{__m128, __m128i, _mm_cvttps_epi32};
         // SAFETY: SSE2 is part of the x86_64 baseline; the casts reinterpret
         // 16-byte SIMD values of the same size.
-        let k: [u32; 4] =
-            unsafe { std::mem::transmute::<__m128i, [u32; 4]>(_mm_cvttps_epi32(__m128::from(v))) };
+        let k: [u32; 4] = unsafe { std::mem::transmute::<__m128i, [u32; 4]>(_mm_cvttps_epi32(__m128::from(v))) };
         [k[0], k[1], k[2]]
     }
     #[cfg(not(target_arch = "x86_64"))]
@@ -679,12 +647,8 @@ mod tests {
         (0..n)
             .map(|i| {
                 let c = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 10.0;
-                let mut corner =
-                    || c + (Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) - 0.5) * 0.6;
-                (
-                    PrimGeometry::Triangle([corner(), corner(), corner()]),
-                    i as u32,
-                )
+                let mut corner = || c + (Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) - 0.5) * 0.6;
+                (PrimGeometry::Triangle([corner(), corner(), corner()]), i as u32)
             })
             .collect()
     }
@@ -695,9 +659,7 @@ mod tests {
         for (g, tag) in prims {
             let t = match g {
                 PrimGeometry::Triangle(p) => intersect_triangle(&tr, p, f32::INFINITY).map(|h| h.0),
-                PrimGeometry::Sphere { center, radius } => {
-                    intersect_sphere(ray, *center, *radius, f32::INFINITY)
-                }
+                PrimGeometry::Sphere { center, radius } => intersect_sphere(ray, *center, *radius, f32::INFINITY),
             };
             if let Some(t) = t {
                 if best.is_none_or(|(bt, _)| t < bt) {
@@ -748,9 +710,7 @@ mod tests {
                 let d = crate::sampling::uniform_sphere(rng.uniform(), rng.uniform());
                 let ray = Ray::new(o, d);
                 let expected = brute_force(&prims, &ray);
-                let got = bvh
-                    .intersect(&ray, f32::INFINITY)
-                    .map(|h| (h.t, bvh.tag(h.prim)));
+                let got = bvh.intersect(&ray, f32::INFINITY).map(|h| (h.t, bvh.tag(h.prim)));
                 assert_eq!(got, expected, "closest hit differs for {ray:?}");
                 assert_eq!(bvh.intersect_any(&ray, f32::INFINITY), expected.is_some());
                 if let Some((t, _)) = expected {

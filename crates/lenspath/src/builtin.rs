@@ -76,14 +76,7 @@ fn add_material(scene: &mut Scene, m: Material) -> MaterialId {
 }
 
 /// A quad `a b c d` (counter-clockwise seen from the front) as a mesh.
-fn quad(
-    a: Vec3,
-    b: Vec3,
-    c: Vec3,
-    d: Vec3,
-    material: MaterialId,
-    emission: Option<Rgb>,
-) -> TriangleMesh {
+fn quad(a: Vec3, b: Vec3, c: Vec3, d: Vec3, material: MaterialId, emission: Option<Rgb>) -> TriangleMesh {
     TriangleMesh {
         positions: vec![a, b, c, d],
         indices: vec![[0, 1, 2], [0, 2, 3]],

@@ -54,12 +54,7 @@ impl CameraPose {
         let true_up = right.cross(forward);
         CameraPose {
             render_from_camera: Affine3A::from_mat3_translation(
-                Mat3A::from_cols(
-                    Vec3A::from(right),
-                    Vec3A::from(true_up),
-                    Vec3A::from(forward),
-                )
-                .into(),
+                Mat3A::from_cols(Vec3A::from(right), Vec3A::from(true_up), Vec3A::from(forward)).into(),
                 eye,
             ),
         }
@@ -126,20 +121,14 @@ impl Camera for PerspectiveCamera {
         };
         let m = &self.pose.render_from_camera;
         Some(CameraRay {
-            ray: Ray::new(
-                m.transform_point3(origin),
-                m.transform_vector3(dir).normalize(),
-            ),
+            ray: Ray::new(m.transform_point3(origin), m.transform_vector3(dir).normalize()),
             weight: 1.0,
         })
     }
 
     fn view_axis(&self) -> (Vec3, Vec3) {
         let m = &self.pose.render_from_camera;
-        (
-            m.transform_point3(Vec3::ZERO),
-            m.transform_vector3(Vec3::Z).normalize(),
-        )
+        (m.transform_point3(Vec3::ZERO), m.transform_vector3(Vec3::Z).normalize())
     }
 }
 
@@ -149,8 +138,7 @@ mod tests {
 
     #[test]
     fn pinhole_centre_ray_looks_at_the_target_and_corners_span_the_fov() {
-        let pose =
-            CameraPose::look_at(Vec3::new(1.0, 2.0, 3.0), Vec3::new(1.0, 2.0, -7.0), Vec3::Y);
+        let pose = CameraPose::look_at(Vec3::new(1.0, 2.0, 3.0), Vec3::new(1.0, 2.0, -7.0), Vec3::Y);
         let cam = PerspectiveCamera::pinhole(pose, 60.0, 200, 100);
         let centre = cam
             .generate_ray(CameraSample {
@@ -181,17 +169,13 @@ mod tests {
         let pose = CameraPose::look_at(Vec3::ZERO, Vec3::new(0.0, 0.0, 1.0), Vec3::Y);
         let cam = PerspectiveCamera::thin_lens(pose, 40.0, 64, 64, 0.5, 4.0);
         let film = Vec2::new(10.0, 50.0);
-        let points: Vec<Vec3> = [
-            Vec2::new(0.1, 0.2),
-            Vec2::new(0.9, 0.5),
-            Vec2::new(0.4, 0.95),
-        ]
-        .iter()
-        .map(|&lens| {
-            let r = cam.generate_ray(CameraSample { film, lens }).unwrap().ray;
-            r.at((4.0 - r.origin.z) / r.direction.z)
-        })
-        .collect();
+        let points: Vec<Vec3> = [Vec2::new(0.1, 0.2), Vec2::new(0.9, 0.5), Vec2::new(0.4, 0.95)]
+            .iter()
+            .map(|&lens| {
+                let r = cam.generate_ray(CameraSample { film, lens }).unwrap().ray;
+                r.at((4.0 - r.origin.z) / r.direction.z)
+            })
+            .collect();
         assert!((points[0] - points[1]).length() < 1e-5 && (points[0] - points[2]).length() < 1e-5);
         let r = cam
             .generate_ray(CameraSample {
@@ -200,9 +184,6 @@ mod tests {
             })
             .unwrap()
             .ray;
-        assert!(
-            r.origin.length() > 0.1,
-            "lens samples must spread over the aperture"
-        );
+        assert!(r.origin.length() > 0.1, "lens samples must spread over the aperture");
     }
 }

@@ -104,11 +104,7 @@ mod tests {
             assert!(o.abs().max_element() <= 3.0);
             var += f64::from(o.x * o.x);
         }
-        assert!(
-            (var / n as f64 - 0.25).abs() < 0.005,
-            "variance {}",
-            var / n as f64
-        );
+        assert!((var / n as f64 - 0.25).abs() < 0.005, "variance {}", var / n as f64);
         let b = Filter::Box.sample_offset(Vec2::new(0.0, 0.999));
         assert!(b.x == -0.5 && b.y < 0.5);
     }

@@ -158,10 +158,7 @@ impl Light {
     /// Samples the light from point `p`.
     pub fn sample(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
         match *self {
-            Light::Point {
-                position,
-                intensity,
-            } => {
+            Light::Point { position, intensity } => {
                 let to_light = position - p;
                 let dist2 = to_light.length_squared();
                 (dist2 > 0.0).then(|| LightSample {
@@ -172,10 +169,7 @@ impl Light {
                     delta: true,
                 })
             }
-            Light::Directional {
-                direction,
-                irradiance,
-            } => Some(LightSample {
+            Light::Directional { direction, irradiance } => Some(LightSample {
                 wi: -direction,
                 radiance: irradiance,
                 pdf: 1.0,
@@ -219,11 +213,8 @@ mod tests {
             Vec3::new(-a, a, h),
         ];
         // Wound so the normal faces -z, toward the receiver at the origin.
-        let light = AreaLight::from_triangles(
-            vec![[quad[0], quad[2], quad[1]], [quad[0], quad[3], quad[2]]],
-            Rgb::ONE,
-        )
-        .unwrap();
+        let light = AreaLight::from_triangles(vec![[quad[0], quad[2], quad[1]], [quad[0], quad[3], quad[2]]], Rgb::ONE)
+            .unwrap();
         let mut rng = Rng::new(4);
         let n = 400_000;
         let mut e = 0.0f64;
@@ -239,10 +230,7 @@ mod tests {
         let s = (1.0 + x * x).sqrt();
         let f_corner = (2.0 * x / s * (x / s).atan()) / (2.0 * std::f64::consts::PI);
         let expected = std::f64::consts::PI * 4.0 * f_corner; // E = π L F
-        assert!(
-            (e - expected).abs() / expected < 0.01,
-            "irradiance {e} vs {expected}"
-        );
+        assert!((e - expected).abs() / expected < 0.01, "irradiance {e} vs {expected}");
     }
 
     #[test]

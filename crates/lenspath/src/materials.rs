@@ -265,10 +265,7 @@ impl Complex {
         Complex::new(self.re - o.re, self.im - o.im)
     }
     fn mul(self, o: Complex) -> Complex {
-        Complex::new(
-            self.re * o.re - self.im * o.im,
-            self.re * o.im + self.im * o.re,
-        )
+        Complex::new(self.re * o.re - self.im * o.im, self.re * o.im + self.im * o.re)
     }
     fn div(self, o: Complex) -> Complex {
         let s = 1.0 / (o.re * o.re + o.im * o.im);
@@ -462,8 +459,7 @@ mod tests {
             let mut rng = Rng::new(5);
             for _ in 0..20_000 {
                 let wo = uniform_sphere(rng.uniform(), rng.uniform());
-                let Some(s) = m.sample(wo, rng.uniform(), Vec2::new(rng.uniform(), rng.uniform()))
-                else {
+                let Some(s) = m.sample(wo, rng.uniform(), Vec2::new(rng.uniform(), rng.uniform())) else {
                     continue;
                 };
                 let f = m.eval(wo, s.wi);
@@ -486,10 +482,7 @@ mod tests {
                 let wo = uniform_sphere(rng.uniform(), rng.uniform());
                 let wi = uniform_sphere(rng.uniform(), rng.uniform());
                 let (a, b) = (m.eval(wo, wi), m.eval(wi, wo));
-                assert!(
-                    (a - b).abs().max_element() <= 1e-4 * a.max_element().max(1.0),
-                    "{m:?}"
-                );
+                assert!((a - b).abs().max_element() <= 1e-4 * a.max_element().max(1.0), "{m:?}");
             }
         }
     }
@@ -512,17 +505,12 @@ mod tests {
                 let n = 100_000;
                 let mut sum = glam::DVec3::ZERO;
                 for _ in 0..n {
-                    if let Some(s) =
-                        m.sample(wo, rng.uniform(), Vec2::new(rng.uniform(), rng.uniform()))
-                    {
+                    if let Some(s) = m.sample(wo, rng.uniform(), Vec2::new(rng.uniform(), rng.uniform())) {
                         sum += (s.f * s.wi.z.abs() / s.pdf).as_dvec3();
                     }
                 }
                 let albedo = (sum / n as f64).as_vec3();
-                assert!(
-                    albedo.max_element() <= 1.0 + 5e-3,
-                    "{m:?} θ={theta}: albedo {albedo}"
-                );
+                assert!(albedo.max_element() <= 1.0 + 5e-3, "{m:?} θ={theta}: albedo {albedo}");
                 if let Material::Diffuse { reflectance } = m {
                     assert!((albedo - reflectance).abs().max_element() < 1e-4);
                 }
@@ -545,16 +533,12 @@ mod tests {
     fn dielectric_conserves_energy_and_obeys_snell() {
         let eta = 1.5;
         let glass = Material::Dielectric { eta };
-        for theta in [
-            0.0, 20.0, 40.0, 41.0, 60.0, 89.0, 100.0, 130.0, 150.0, 179.0,
-        ] {
+        for theta in [0.0, 20.0, 40.0, 41.0, 60.0, 89.0, 100.0, 130.0, 150.0, 179.0] {
             let wo = direction(theta, 35.0);
             let mut energy = 0.0;
             let n = 2000;
             for i in 0..n {
-                let s = glass
-                    .sample(wo, (i as f32 + 0.5) / n as f32, Vec2::ZERO)
-                    .unwrap();
+                let s = glass.sample(wo, (i as f32 + 0.5) / n as f32, Vec2::ZERO).unwrap();
                 assert!(s.specular);
                 let mut e = s.f.x * s.wi.z.abs() / s.pdf;
                 if s.wi.z * wo.z < 0.0 {

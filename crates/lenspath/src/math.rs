@@ -11,12 +11,6 @@ pub fn max_component(c: Rgb) -> f32 {
     c.x.max(c.y).max(c.z)
 }
 
-/// Luminance of linear Rec.709 RGB (ITU-R BT.709 weights).
-#[inline]
-pub fn luminance(c: Rgb) -> f32 {
-    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
-}
-
 /// An axis-aligned bounding box. Empty boxes have `min > max`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Bounds3 {
@@ -151,9 +145,7 @@ mod tests {
             let f = Frame::from_normal(n);
             assert!((f.s.length() - 1.0).abs() < 1e-5);
             assert!((f.t.length() - 1.0).abs() < 1e-5);
-            assert!(
-                f.s.dot(f.t).abs() < 1e-5 && f.s.dot(n).abs() < 1e-5 && f.t.dot(n).abs() < 1e-5
-            );
+            assert!(f.s.dot(f.t).abs() < 1e-5 && f.s.dot(n).abs() < 1e-5 && f.t.dot(n).abs() < 1e-5);
             let v = Vec3::new(0.2, 0.5, -0.7);
             assert!((f.from_local(f.to_local(v)) - v).length() < 1e-5);
         }

@@ -33,10 +33,7 @@ pub fn incoherent_rays(lo: Vec3, hi: Vec3, n: usize) -> Vec<Ray> {
     (0..n)
         .map(|_| {
             let t = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform());
-            Ray::new(
-                lo + t * (hi - lo),
-                uniform_sphere(rng.uniform(), rng.uniform()),
-            )
+            Ray::new(lo + t * (hi - lo), uniform_sphere(rng.uniform(), rng.uniform()))
         })
         .collect()
 }

@@ -218,14 +218,7 @@ fn render_in_pool(
                         let lens = sampler.get_2d();
                         let mut l = Rgb::ZERO;
                         if let Some(cr) = camera.generate_ray(CameraSample { film, lens }) {
-                            l = cr.weight
-                                * radiance(
-                                    scene,
-                                    cr.ray,
-                                    &mut sampler,
-                                    &settings.path,
-                                    &mut tile_rays,
-                                );
+                            l = cr.weight * radiance(scene, cr.ray, &mut sampler, &settings.path, &mut tile_rays);
                         }
                         if l.is_finite() {
                             sum += l.as_dvec3();
@@ -260,11 +253,7 @@ fn render_in_pool(
                 let n = tile.count[i];
                 spp_min = spp_min.min(n);
                 samples += u64::from(n);
-                let mean = if n > 0 {
-                    tile.sum[i] / f64::from(n)
-                } else {
-                    DVec3::ZERO
-                };
+                let mean = if n > 0 { tile.sum[i] / f64::from(n) } else { DVec3::ZERO };
                 rgb[3 * o..3 * o + 3].copy_from_slice(&mean.as_vec3().to_array());
                 depth[o] = tile.depth[i];
             }

@@ -39,9 +39,7 @@ pub struct Sampler {
 impl Sampler {
     /// The sampler of sample `index` of pixel `(x, y)` under `seed`.
     pub fn new(x: u32, y: u32, index: u32, seed: u32) -> Self {
-        let pixel_seed = hash_u32(
-            x.wrapping_mul(0x9E3779B1) ^ hash_u32(y ^ hash_u32(seed.wrapping_add(0x85EBCA6B))),
-        );
+        let pixel_seed = hash_u32(x.wrapping_mul(0x9E3779B1) ^ hash_u32(y ^ hash_u32(seed.wrapping_add(0x85EBCA6B))));
         Sampler {
             seed: pixel_seed,
             index,
@@ -175,7 +173,6 @@ pub fn power_heuristic(nf: f32, f_pdf: f32, ng: f32, g_pdf: f32) -> f32 {
 #[derive(Clone, Debug)]
 pub struct Distribution1D {
     cdf: Vec<f32>,
-    total: f32,
 }
 
 impl Distribution1D {
@@ -192,12 +189,7 @@ impl Distribution1D {
         for c in &mut cdf {
             *c /= total;
         }
-        Distribution1D { cdf, total }
-    }
-
-    /// Sum of the weights.
-    pub fn total(&self) -> f32 {
-        self.total
+        Distribution1D { cdf }
     }
 
     /// Picks an item for `u` in [0, 1): returns it, its probability, and `u`
@@ -253,8 +245,7 @@ pub fn erf_inv(a: f32) -> f32 {
 pub fn erf(x: f32) -> f32 {
     let t = 1.0 / (1.0 + 0.3275911 * x.abs());
     let y = 1.0
-        - (((((1.061405429 * t - 1.453152027) * t) + 1.421413741) * t - 0.284496736) * t
-            + 0.254829592)
+        - (((((1.061405429 * t - 1.453152027) * t) + 1.421413741) * t - 0.284496736) * t + 0.254829592)
             * t
             * (-x * x).exp();
     y.copysign(x)

@@ -113,9 +113,7 @@ impl Scene {
         for (i, m) in self.meshes.iter().enumerate() {
             check_material(format!("mesh {i}"), m.material)?;
             if let Some(p) = m.positions.iter().position(|p| !p.is_finite()) {
-                return Err(Error::InvalidScene(format!(
-                    "mesh {i}: vertex {p} is not finite"
-                )));
+                return Err(Error::InvalidScene(format!("mesh {i}: vertex {p} is not finite")));
             }
             let n = m.positions.len() as u32;
             if let Some(t) = m.indices.iter().position(|tri| tri.iter().any(|&v| v >= n)) {
@@ -123,18 +121,12 @@ impl Scene {
                     "mesh {i}: triangle {t} indexes a vertex beyond the {n} it has"
                 )));
             }
-            if m.normals
-                .as_ref()
-                .is_some_and(|ns| ns.len() != m.positions.len())
-            {
+            if m.normals.as_ref().is_some_and(|ns| ns.len() != m.positions.len()) {
                 return Err(Error::InvalidScene(format!(
                     "mesh {i}: normal count differs from vertex count"
                 )));
             }
-            if m.uvs
-                .as_ref()
-                .is_some_and(|uv| uv.len() != m.positions.len())
-            {
+            if m.uvs.as_ref().is_some_and(|uv| uv.len() != m.positions.len()) {
                 return Err(Error::InvalidScene(format!(
                     "mesh {i}: uv count differs from vertex count"
                 )));
@@ -180,25 +172,15 @@ impl Scene {
         }
         for (i, l) in self.lights.iter().enumerate() {
             let (what, value) = match *l {
-                Light::Point {
-                    intensity,
-                    position,
-                } => {
+                Light::Point { intensity, position } => {
                     if !position.is_finite() {
-                        return Err(Error::InvalidScene(format!(
-                            "light {i}: position is not finite"
-                        )));
+                        return Err(Error::InvalidScene(format!("light {i}: position is not finite")));
                     }
                     ("intensity", intensity)
                 }
-                Light::Directional {
-                    irradiance,
-                    direction,
-                } => {
+                Light::Directional { irradiance, direction } => {
                     if !direction.is_finite() || direction.length_squared() == 0.0 {
-                        return Err(Error::InvalidScene(format!(
-                            "light {i}: direction must be non-zero"
-                        )));
+                        return Err(Error::InvalidScene(format!("light {i}: direction must be non-zero")));
                     }
                     ("irradiance", irradiance)
                 }
@@ -271,16 +253,6 @@ impl Scene {
 }
 
 impl CompiledScene {
-    /// The description this was compiled from.
-    pub fn description(&self) -> &Scene {
-        &self.scene
-    }
-
-    /// The acceleration structure.
-    pub fn bvh(&self) -> &Bvh<PrimRef> {
-        &self.bvh
-    }
-
     /// Bounds of all geometry.
     pub fn bounds(&self) -> Bounds3 {
         self.bvh.bounds()
@@ -323,19 +295,12 @@ impl CompiledScene {
                 let shading_normal = m
                     .normals
                     .as_ref()
-                    .and_then(|ns| {
-                        (b0 * ns[i0] + hit.b1 * ns[i1] + hit.b2 * ns[i2]).try_normalize()
-                    })
-                    .map_or(geometric_normal, |n| {
-                        if n.dot(geometric_normal) < 0.0 {
-                            -n
-                        } else {
-                            n
-                        }
-                    });
-                let uv = m.uvs.as_ref().map_or(Vec2::ZERO, |uv| {
-                    b0 * uv[i0] + hit.b1 * uv[i1] + hit.b2 * uv[i2]
-                });
+                    .and_then(|ns| (b0 * ns[i0] + hit.b1 * ns[i1] + hit.b2 * ns[i2]).try_normalize())
+                    .map_or(geometric_normal, |n| if n.dot(geometric_normal) < 0.0 { -n } else { n });
+                let uv = m
+                    .uvs
+                    .as_ref()
+                    .map_or(Vec2::ZERO, |uv| b0 * uv[i0] + hit.b1 * uv[i1] + hit.b2 * uv[i2]);
                 SurfaceHit {
                     t: hit.t,
                     p,

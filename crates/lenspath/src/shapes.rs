@@ -38,11 +38,6 @@ impl TriangleMesh {
         ]
     }
 
-    /// Area of triangle `i`.
-    pub fn triangle_area(&self, i: usize) -> f32 {
-        let [p0, p1, p2] = self.triangle(i);
-        0.5 * (p1 - p0).cross(p2 - p0).length()
-    }
 }
 
 /// An analytic sphere.
@@ -181,11 +176,7 @@ pub fn intersect_sphere(ray: &Ray, center: Vec3, radius: f32, t_max: f32) -> Opt
     }
     let sq = (a * disc).sqrt();
     let c = f.length_squared() - radius * radius;
-    let q = if b_half >= 0.0 {
-        b_half + sq
-    } else {
-        b_half - sq
-    };
+    let q = if b_half >= 0.0 { b_half + sq } else { b_half - sq };
     let (mut t0, mut t1) = (c / q, q / a);
     if q == 0.0 {
         t0 = 0.0;
@@ -248,9 +239,7 @@ mod tests {
                 centre + tilt * Vec3::new(a.cos() * 1.3, a.sin() * 0.9, 0.0)
             })
             .collect();
-        let tris: Vec<[Vec3; 3]> = (0..n_tris)
-            .map(|i| [centre, rim[i], rim[(i + 1) % n_tris]])
-            .collect();
+        let tris: Vec<[Vec3; 3]> = (0..n_tris).map(|i| [centre, rim[i], rim[(i + 1) % n_tris]]).collect();
         let normal = tilt * Vec3::Z;
         let mut rng = 0x2545F4914F6CDD1Du64;
         let mut next = || {
@@ -266,8 +255,7 @@ mod tests {
                 // Points on the shared edge centre–corner (k == 0: the centre vertex itself).
                 let s = if k == 0 { 0.0 } else { next() };
                 let target = centre + s * (*corner - centre);
-                let dir = (-normal + 0.8 * Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5))
-                    .normalize();
+                let dir = (-normal + 0.8 * Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5)).normalize();
                 let ray = Ray::new(target - 3.7 * dir, dir);
                 tested += 1;
                 if !tris.iter().any(|t| hits(&ray, t)) {

@@ -44,11 +44,7 @@ fn render_scene(scene: Scene, camera: &PerspectiveCamera, s: &RenderSettings) ->
 fn mean_and_error(values: &[f32]) -> (f64, f64) {
     let n = values.len() as f64;
     let mean = values.iter().map(|&v| f64::from(v)).sum::<f64>() / n;
-    let var = values
-        .iter()
-        .map(|&v| (f64::from(v) - mean).powi(2))
-        .sum::<f64>()
-        / (n - 1.0);
+    let var = values.iter().map(|&v| (f64::from(v) - mean).powi(2)).sum::<f64>() / (n - 1.0);
     (mean, (var / n).sqrt())
 }
 
@@ -59,12 +55,8 @@ fn mean_and_error(values: &[f32]) -> (f64, f64) {
 #[test]
 fn white_furnace_sphere_disappears() {
     let materials = [
-        Material::Diffuse {
-            reflectance: Rgb::ONE,
-        },
-        Material::Mirror {
-            reflectance: Rgb::ONE,
-        },
+        Material::Diffuse { reflectance: Rgb::ONE },
+        Material::Mirror { reflectance: Rgb::ONE },
         Material::Dielectric { eta: 1.5 },
     ];
     for material in materials {
@@ -141,11 +133,7 @@ fn closed_emissive_box_reaches_the_geometric_series() {
         ..Default::default()
     };
     for light_samples in [1, 4] {
-        let pose = CameraPose::look_at(
-            Vec3::new(0.1, 0.2, 0.3),
-            Vec3::new(0.5, -0.3, -1.0),
-            Vec3::Y,
-        );
+        let pose = CameraPose::look_at(Vec3::new(0.1, 0.2, 0.3), Vec3::new(0.5, -0.3, -1.0), Vec3::Y);
         let camera = PerspectiveCamera::pinhole(pose, 70.0, 24, 24);
         let mut s = settings(24, 24, 64, 2);
         s.path.light_samples = light_samples;
@@ -176,18 +164,10 @@ fn cornell_box_converges_across_seeds() {
     let (a, b) = (render_seed(1), render_seed(2));
     assert_ne!(a.rgb, b.rgb, "different seeds must give independent images");
     for c in 0..3 {
-        let diff: Vec<f32> = a
-            .rgb
-            .chunks(3)
-            .zip(b.rgb.chunks(3))
-            .map(|(p, q)| p[c] - q[c])
-            .collect();
+        let diff: Vec<f32> = a.rgb.chunks(3).zip(b.rgb.chunks(3)).map(|(p, q)| p[c] - q[c]).collect();
         let (mean, err) = mean_and_error(&diff);
         assert!(err > 0.0);
-        assert!(
-            mean.abs() < 4.0 * err,
-            "channel {c}: seeds differ by {mean} ± {err}"
-        );
+        assert!(mean.abs() < 4.0 * err, "channel {c}: seeds differ by {mean} ± {err}");
     }
     // The lit box is neither black nor blown out.
     let m = a.mean();
@@ -222,10 +202,7 @@ fn same_seed_is_bit_identical_across_thread_counts() {
         assert_eq!(back.spp_min, 8);
         files.push(std::fs::read(&path).unwrap());
     }
-    assert!(
-        files[0] == files[1],
-        "box filter: the EXRs of 1 and 2 threads differ"
-    );
+    assert!(files[0] == files[1], "box filter: the EXRs of 1 and 2 threads differ");
     assert!(
         files[2] == files[3],
         "Gaussian filter: the EXRs of 1 and 2 threads differ"

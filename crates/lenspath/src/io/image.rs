@@ -68,10 +68,7 @@ fn io_error(path: &Path, source: std::io::Error) -> Error {
 pub fn check_output_path(path: &Path) -> Result<ImageFormat> {
     let format = ImageFormat::from_path(path)?;
     if path.is_dir() {
-        return Err(Error::InvalidArgument(format!(
-            "{} is a directory",
-            path.display()
-        )));
+        return Err(Error::InvalidArgument(format!("{} is a directory", path.display())));
     }
     let probe = temp_path(path);
     std::fs::File::create(&probe).map_err(|e| io_error(path, e))?;
@@ -126,8 +123,8 @@ fn write_png(tmp: &Path, image: &Image, exposure: f32) -> Result<()> {
 
 fn write_exr(tmp: &Path, image: &Image) -> Result<()> {
     use exr::prelude::{
-        AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Layer, LayerAttributes,
-        SmallVec, Text, WritableImage,
+        AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Layer, LayerAttributes, SmallVec, Text,
+        WritableImage,
     };
     let n = image.width as usize * image.height as usize;
     let channel = |c: usize| (0..n).map(|i| image.rgb[3 * i + c]).collect::<Vec<f32>>();
@@ -141,10 +138,7 @@ fn write_exr(tmp: &Path, image: &Image) -> Result<()> {
     // attributes in a HashMap, and a single entry keeps the bytes deterministic.
     attributes.other.insert(
         Text::from(SPP_ATTRIBUTE),
-        AttributeValue::IntVec2(exr::math::Vec2(
-            image.spp_min as i32,
-            image.spp_requested as i32,
-        )),
+        AttributeValue::IntVec2(exr::math::Vec2(image.spp_min as i32, image.spp_requested as i32)),
     );
     let layer = Layer::new(
         (image.width as usize, image.height as usize),
@@ -178,12 +172,7 @@ pub fn read_exr(path: &Path) -> Result<Image> {
     };
     let (r, g, b) = (find("R")?, find("G")?, find("B")?);
     let depth = find("Z").unwrap_or_else(|_| vec![f32::INFINITY; r.len()]);
-    let (spp_min, spp_requested) = match img
-        .layer_data
-        .attributes
-        .other
-        .get(&Text::from(SPP_ATTRIBUTE))
-    {
+    let (spp_min, spp_requested) = match img.layer_data.attributes.other.get(&Text::from(SPP_ATTRIBUTE)) {
         Some(AttributeValue::IntVec2(v)) => (v.0.max(0) as u32, v.1.max(0) as u32),
         _ => (0, 0),
     };

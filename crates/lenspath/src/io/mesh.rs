@@ -14,10 +14,7 @@ use crate::shapes::TriangleMesh;
 
 /// Loads the geometry of a `.ply` or `.obj` file as one mesh (material 0, no emission).
 pub fn load_mesh(path: &Path) -> Result<TriangleMesh> {
-    let ext = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase);
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     let mesh = match ext.as_deref() {
         Some("ply") => load_ply(path)?,
         Some("obj") => load_obj(path)?,
@@ -37,9 +34,7 @@ pub fn load_mesh(path: &Path) -> Result<TriangleMesh> {
     }
     let n = mesh.positions.len() as u32;
     if let Some(t) = mesh.indices.iter().position(|t| t.iter().any(|&v| v >= n)) {
-        return Err(fail(format!(
-            "face {t} refers to a vertex beyond the {n} vertices"
-        )));
+        return Err(fail(format!("face {t} refers to a vertex beyond the {n} vertices")));
     }
     if mesh.indices.is_empty() {
         return Err(fail("no triangles".into()));
@@ -157,11 +152,8 @@ fn load_obj(path: &Path) -> Result<TriangleMesh> {
     for model in models {
         let base = mesh.positions.len() as u32;
         let m = model.mesh;
-        mesh.positions.extend(
-            m.positions
-                .chunks_exact(3)
-                .map(|p| Vec3::new(p[0], p[1], p[2])),
-        );
+        mesh.positions
+            .extend(m.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])));
         mesh.indices.extend(
             m.indices
                 .chunks_exact(3)
