@@ -34,6 +34,9 @@ pub struct BvhArgs {
     /// SAH bins per axis.
     #[arg(long, default_value_t = BvhSettings::default().bins)]
     bins: usize,
+    /// Nodes with fewer primitives bin only their longest axis.
+    #[arg(long, value_name = "N", default_value_t = BvhSettings::default().all_axes_min_primitives)]
+    all_axes_below: usize,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     json: bool,
@@ -79,6 +82,7 @@ pub fn run_bvh(args: BvhArgs) -> Result<Outcome> {
         .collect();
     let settings = BvhSettings {
         bins: args.bins,
+        all_axes_min_primitives: args.all_axes_below,
         ..Default::default()
     };
     let bvh = Bvh::build(prims, &settings);

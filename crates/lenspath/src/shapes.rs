@@ -37,7 +37,6 @@ impl TriangleMesh {
             self.positions[c as usize],
         ]
     }
-
 }
 
 /// An analytic sphere.
