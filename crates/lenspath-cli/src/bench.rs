@@ -77,8 +77,10 @@ pub fn run_bvh(args: BvhArgs) -> Result<Outcome> {
         (None, Some(n)) => (format!("procedural torus knot ({n})"), torus_knot(n)?),
         (None, None) => unreachable!("clap requires one of them"),
     };
-    let prims: Vec<_> = (0..mesh.indices.len())
-        .map(|i| (PrimGeometry::Triangle(mesh.triangle(i)), i as u32))
+    let prims: Vec<_> = mesh
+        .triangles()
+        .enumerate()
+        .map(|(i, t)| (PrimGeometry::Triangle(t), i as u32))
         .collect();
     let settings = BvhSettings {
         bins: args.bins,

@@ -12,8 +12,9 @@ use lenspath::raysets::{coherent_rays, incoherent_rays};
 use lenspath::shapes::TriangleMesh;
 
 fn primitives(mesh: &TriangleMesh) -> Vec<(PrimGeometry, u32)> {
-    (0..mesh.indices.len())
-        .map(|i| (PrimGeometry::Triangle(mesh.triangle(i)), i as u32))
+    mesh.triangles()
+        .enumerate()
+        .map(|(i, t)| (PrimGeometry::Triangle(t), i as u32))
         .collect()
 }
 

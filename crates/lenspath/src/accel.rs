@@ -231,7 +231,9 @@ impl<T: Copy> Bvh<T> {
                 nodes[parent].offset = index as u32;
             }
             let count = task.end - task.start;
-            let area_fraction = task.bounds.surface_area() / root_area;
+            let node_area = task.bounds.surface_area();
+            let parent_area = node_area.max(f32::MIN_POSITIVE);
+            let area_fraction = node_area / root_area;
             let leaf_cost = settings.intersection_cost * count as f32;
             stats.max_depth = stats.max_depth.max(task.depth);
             let push_leaf = |nodes: &mut Vec<Node>, stats: &mut BuildStats| {
@@ -251,8 +253,7 @@ impl<T: Copy> Bvh<T> {
             if count == 2 {
                 let (a, b) = (bounds[task.start], bounds[task.start + 1]);
                 let split_cost = settings.traversal_cost
-                    + settings.intersection_cost * (a.surface_area() + b.surface_area())
-                        / task.bounds.surface_area().max(f32::MIN_POSITIVE);
+                    + settings.intersection_cost * (a.surface_area() + b.surface_area()) / parent_area;
                 if count <= settings.max_leaf_size && leaf_cost <= split_cost {
                     push_leaf(&mut nodes, &mut stats);
                     continue;
@@ -272,8 +273,9 @@ impl<T: Copy> Bvh<T> {
             // Deep in the tree, halving the range bounds the depth (`max_sah_depth`).
             let sah_allowed = task.depth < settings.max_sah_depth;
 
-            // Bin the centroids along all three axes at once. Small nodes use
-            // fewer bins: the sweep then costs no more than the binning.
+            // Bin the centroids: along all three axes, or only the longest one in
+            // small nodes. Small nodes also use fewer bins, so the sweep costs
+            // no more than the binning.
             let node_bins = bins.min(count.max(4));
             let cmin = task.centroid_bounds.min;
             let scale = Vec3A::select(
@@ -289,9 +291,6 @@ impl<T: Copy> Bvh<T> {
                 0..3
             };
             if extent.max_element() > 0.0 && sah_allowed {
-                // Even and odd primitives go to separate grids, merged after:
-                // consecutive primitives in one bin no longer wait on each
-                // other's stores.
                 let [grid, odd_grid] = &mut *bin_grids;
                 let prims = &bounds[task.start..task.end];
                 let last = (node_bins - 1) as f32;
@@ -340,7 +339,6 @@ impl<T: Copy> Bvh<T> {
                     }
                 }
                 // ...then from the left, evaluating the SAH at each distinct plane.
-                let parent_area = task.bounds.surface_area().max(f32::MIN_POSITIVE);
                 let mut left = [Bounds3::EMPTY; 3];
                 let mut left_count = [0u32; 3];
                 for i in 1..node_bins {

@@ -196,8 +196,7 @@ impl Scene {
         self.validate()?;
         let mut prims = Vec::with_capacity(self.triangle_count() + self.spheres.len());
         for (mi, m) in self.meshes.iter().enumerate() {
-            for (ti, _) in m.indices.iter().enumerate() {
-                let tri = m.triangle(ti);
+            for (ti, tri) in m.triangles().enumerate() {
                 // Zero-area triangles can never be hit; leave them out.
                 if (tri[1] - tri[0]).cross(tri[2] - tri[0]).length_squared() > 0.0 {
                     prims.push((
@@ -227,7 +226,7 @@ impl Scene {
             .iter()
             .map(|m| {
                 let radiance = m.emission.filter(|e| e.max_element() > 0.0)?;
-                let tris = (0..m.indices.len()).map(|i| m.triangle(i)).collect();
+                let tris = m.triangles().collect();
                 let light = AreaLight::from_triangles(tris, radiance)?;
                 area_lights.push(light);
                 Some(area_lights.len() as u32 - 1)

@@ -27,6 +27,11 @@ pub struct TriangleMesh {
 }
 
 impl TriangleMesh {
+    /// The corners of every triangle, in index order.
+    pub fn triangles(&self) -> impl Iterator<Item = [Vec3; 3]> + '_ {
+        (0..self.indices.len()).map(|i| self.triangle(i))
+    }
+
     /// The three corners of triangle `i`.
     #[inline]
     pub fn triangle(&self, i: usize) -> [Vec3; 3] {

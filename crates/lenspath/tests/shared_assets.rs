@@ -48,7 +48,7 @@ fn dragon_bvh_matches_brute_force() {
         return;
     };
     let mesh = load_mesh(&file).unwrap();
-    let tris: Vec<[Vec3; 3]> = (0..mesh.indices.len()).map(|i| mesh.triangle(i)).collect();
+    let tris: Vec<[Vec3; 3]> = mesh.triangles().collect();
     let prims = tris
         .iter()
         .enumerate()
