@@ -8,7 +8,7 @@ use clap::Args;
 use glam::Vec3;
 use lenspath::accel::{Bvh, BvhSettings, PrimGeometry};
 use lenspath::builtin::torus_knot;
-use lenspath::io::mesh::load_mesh;
+use lenspath::io::mesh::{load_mesh, write_ply};
 use lenspath::ray::Ray;
 use lenspath::raysets::{coherent_rays, incoherent_rays};
 use lenspath::{Error, Result};
@@ -37,6 +37,12 @@ pub struct BvhArgs {
     /// Nodes with fewer primitives bin only their longest axis.
     #[arg(long, value_name = "N", default_value_t = BvhSettings::default().all_axes_min_primitives)]
     all_axes_below: usize,
+    /// SAH cost of one primitive test relative to one node visit.
+    #[arg(long, value_name = "C", default_value_t = BvhSettings::default().intersection_cost)]
+    intersection_cost: f32,
+    /// Also write the benchmarked mesh as binary PLY (to run other BVH builders on the same triangles).
+    #[arg(long, value_name = "FILE")]
+    save_mesh: Option<PathBuf>,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     json: bool,
@@ -72,11 +78,20 @@ pub fn run_bvh(args: BvhArgs) -> Result<Outcome> {
             args.bins
         )));
     }
+    if !(args.intersection_cost.is_finite() && args.intersection_cost > 0.0) {
+        return Err(Error::InvalidArgument(format!(
+            "--intersection-cost must be positive, got {}",
+            args.intersection_cost
+        )));
+    }
     let (name, mesh) = match (&args.mesh, args.procedural) {
         (Some(path), _) => (path.display().to_string(), load_mesh(path)?),
         (None, Some(n)) => (format!("procedural torus knot ({n})"), torus_knot(n)?),
         (None, None) => unreachable!("clap requires one of them"),
     };
+    if let Some(path) = &args.save_mesh {
+        write_ply(path, &mesh)?;
+    }
     let prims: Vec<_> = mesh
         .triangles()
         .enumerate()
@@ -85,6 +100,7 @@ pub fn run_bvh(args: BvhArgs) -> Result<Outcome> {
     let settings = BvhSettings {
         bins: args.bins,
         all_axes_min_primitives: args.all_axes_below,
+        intersection_cost: args.intersection_cost,
         ..Default::default()
     };
     let bvh = Bvh::build(prims, &settings);

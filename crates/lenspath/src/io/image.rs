@@ -3,8 +3,9 @@
 //! to a temporary name beside the target and renamed, so a reader never
 //! sees a half-written file and a failed write never destroys the old one.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
+use super::{io_error, temp_path, write_atomically};
 use crate::error::{Error, Result};
 use crate::film::Image;
 
@@ -49,20 +50,6 @@ pub fn linear_to_srgb(x: f32) -> f32 {
     }
 }
 
-fn temp_path(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map_or_else(|| "image".into(), |n| n.to_string_lossy().into_owned());
-    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
-}
-
-fn io_error(path: &Path, source: std::io::Error) -> Error {
-    Error::Io {
-        path: path.to_path_buf(),
-        source,
-    }
-}
-
 /// Fails early (before a long render) when `path` has an unknown extension
 /// or its directory cannot be written.
 pub fn check_output_path(path: &Path) -> Result<ImageFormat> {
@@ -80,18 +67,9 @@ pub fn check_output_path(path: &Path) -> Result<ImageFormat> {
 /// `exposure` (in stops) scales PNG output only; EXR stays linear.
 pub fn write_image(path: &Path, image: &Image, exposure: f32) -> Result<()> {
     let format = ImageFormat::from_path(path)?;
-    let tmp = temp_path(path);
-    let written = match format {
-        ImageFormat::Png => write_png(&tmp, image, exposure),
-        ImageFormat::Exr => write_exr(&tmp, image),
-    };
-    if let Err(e) = written {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(e);
-    }
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        io_error(path, e)
+    write_atomically(path, |tmp| match format {
+        ImageFormat::Png => write_png(tmp, image, exposure),
+        ImageFormat::Exr => write_exr(tmp, image),
     })
 }
 

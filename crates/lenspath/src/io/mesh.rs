@@ -1,14 +1,16 @@
-//! Triangle meshes from PLY (ASCII and binary, via ply-rs-bw) and OBJ (via tobj).
+//! Triangle meshes from PLY (ASCII and binary, via ply-rs-bw) and OBJ (via tobj),
+//! and to binary PLY (for running other renderers on the same triangles).
 //! Polygons are fan-triangulated. Full scene import (materials, COLLADA,
 //! glTF) lives elsewhere; this reads geometry.
 
-use std::io::BufReader;
+use std::io::{BufReader, BufWriter, Write};
 use std::path::Path;
 
 use glam::Vec3;
 use ply_rs_bw::parser::Parser;
 use ply_rs_bw::ply::{Property, PropertyAccess};
 
+use super::{io_error, write_atomically};
 use crate::error::{Error, Result};
 use crate::shapes::TriangleMesh;
 
@@ -94,10 +96,7 @@ impl PropertyAccess for PlyFace {
 }
 
 fn load_ply(path: &Path) -> Result<TriangleMesh> {
-    let file = std::fs::File::open(path).map_err(|e| Error::Io {
-        path: path.to_path_buf(),
-        source: e,
-    })?;
+    let file = std::fs::File::open(path).map_err(|e| io_error(path, e))?;
     let fail = |m: String| Error::Parse {
         path: path.to_path_buf(),
         message: m,
@@ -138,6 +137,38 @@ fn load_ply(path: &Path) -> Result<TriangleMesh> {
     Ok(mesh)
 }
 
+/// Writes the mesh's positions and triangles as binary little-endian PLY
+/// (float x y z; uchar-counted int vertex_indices), atomically.
+pub fn write_ply(path: &Path, mesh: &TriangleMesh) -> Result<()> {
+    write_atomically(path, |tmp| {
+        let file = std::fs::File::create(tmp).map_err(|e| io_error(path, e))?;
+        let mut out = BufWriter::new(file);
+        let header = format!(
+            "ply\nformat binary_little_endian 1.0\ncomment written by lenspath\n\
+             element vertex {}\nproperty float x\nproperty float y\nproperty float z\n\
+             element face {}\nproperty list uchar int vertex_indices\nend_header\n",
+            mesh.positions.len(),
+            mesh.indices.len()
+        );
+        let mut bytes = header.into_bytes();
+        bytes.reserve(12 * mesh.positions.len() + 13 * mesh.indices.len());
+        for p in &mesh.positions {
+            for c in p.to_array() {
+                bytes.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        for t in &mesh.indices {
+            bytes.push(3);
+            for &v in t {
+                bytes.extend_from_slice(&(v as i32).to_le_bytes());
+            }
+        }
+        out.write_all(&bytes)
+            .and_then(|()| out.flush())
+            .map_err(|e| io_error(path, e))
+    })
+}
+
 fn load_obj(path: &Path) -> Result<TriangleMesh> {
     let options = tobj::LoadOptions {
         triangulate: true,
@@ -161,4 +192,30 @@ fn load_obj(path: &Path) -> Result<TriangleMesh> {
         );
     }
     Ok(mesh)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn written_ply_reads_back_identically() {
+        let mesh = crate::builtin::torus_knot(2_000).unwrap();
+        let dir = std::env::temp_dir().join(format!("lenspath-ply-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("knot.ply");
+        write_ply(&path, &mesh).unwrap();
+        let back = load_mesh(&path).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert_eq!(back.positions, mesh.positions);
+        assert_eq!(back.indices, mesh.indices);
+    }
+
+    #[test]
+    fn unwritable_ply_path_is_an_io_error_naming_it() {
+        let mesh = crate::builtin::torus_knot(2_000).unwrap();
+        let path = Path::new("/nonexistent-dir/knot.ply");
+        let err = write_ply(path, &mesh).unwrap_err();
+        assert!(err.to_string().contains("/nonexistent-dir/knot.ply"), "{err}");
+    }
 }

@@ -1,0 +1,69 @@
+// Peer for `lenspath bench bvh`: times tinybvh's single-threaded SAH builders
+// (BVH::Build, the scalar reference, and BVH::BuildAVX) on the same triangles.
+// Reads the binary PLY written by `lenspath bench bvh --save-mesh`.
+// Usage: tinybvh_build MESH.ply C_INT ROUNDS  -> one JSON line per builder.
+#define NO_THREADED_BUILDS
+#define TINYBVH_IMPLEMENTATION
+#include "tiny_bvh.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+// Only the layout lenspath writes: float x y z vertices, uchar-counted int faces.
+static std::vector<tinybvh::bvhvec4> read_triangles(const char* path) {
+    FILE* f = fopen(path, "rb");
+    if (!f) { fprintf(stderr, "%s: cannot open\n", path); exit(2); }
+    char line[256];
+    long vertices = -1, faces = -1;
+    while (fgets(line, sizeof line, f) && strcmp(line, "end_header\n") != 0) {
+        sscanf(line, "element vertex %ld", &vertices);
+        sscanf(line, "element face %ld", &faces);
+    }
+    if (vertices < 0 || faces < 0) { fprintf(stderr, "%s: not a lenspath PLY\n", path); exit(2); }
+    std::vector<float> xyz(3 * vertices);
+    if (fread(xyz.data(), 4, xyz.size(), f) != xyz.size()) { fprintf(stderr, "%s: short read\n", path); exit(2); }
+    std::vector<tinybvh::bvhvec4> soup;
+    soup.reserve(3 * faces);
+    for (long i = 0; i < faces; i++) {
+        unsigned char n;
+        int v[3];
+        if (fread(&n, 1, 1, f) != 1 || n != 3 || fread(v, 4, 3, f) != 3) {
+            fprintf(stderr, "%s: face %ld is not a triangle\n", path, i);
+            exit(2);
+        }
+        for (int k = 0; k < 3; k++) soup.emplace_back(xyz[3 * v[k]], xyz[3 * v[k] + 1], xyz[3 * v[k] + 2], 0.0f);
+    }
+    fclose(f);
+    return soup;
+}
+
+int main(int argc, char** argv) {
+    if (argc != 4) { fprintf(stderr, "usage: %s MESH.ply C_INT ROUNDS\n", argv[0]); return 2; }
+    std::vector<tinybvh::bvhvec4> soup = read_triangles(argv[1]);
+    const uint32_t triangles = (uint32_t)(soup.size() / 3);
+    const float c_int = (float)atof(argv[2]);
+    const int rounds = atoi(argv[3]);
+    for (const std::string builder : {"Build", "BuildAVX"}) {
+        std::vector<double> ms;
+        uint32_t nodes = 0;
+        for (int r = 0; r < rounds; r++) {
+            tinybvh::BVH bvh;
+            bvh.c_int = c_int;
+            bvh.c_trav = 1.0f;
+            auto t0 = std::chrono::steady_clock::now();
+            if (builder == "Build") bvh.Build(soup.data(), triangles); else bvh.BuildAVX(soup.data(), triangles);
+            ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+            nodes = bvh.usedNodes;
+        }
+        std::sort(ms.begin(), ms.end());
+        printf("{\"builder\": \"tinybvh %s\", \"triangles\": %u, \"intersection_cost\": %g, \"nodes\": %u, "
+               "\"build_ms_min\": %.1f, \"build_ms_median\": %.1f}\n",
+               builder.c_str(), triangles, c_int, nodes, ms.front(), ms[ms.size() / 2]);
+    }
+    return 0;
+}
