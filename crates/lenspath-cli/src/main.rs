@@ -4,6 +4,7 @@
 //! render writes what it has and exits with 130.
 
 mod bench;
+mod lens;
 mod progress;
 mod render;
 
@@ -23,6 +24,8 @@ struct Cli {
 enum Command {
     /// Render a scene to an image (PNG or EXR by extension).
     Render(render::RenderArgs),
+    /// Analyse a lens: focal lengths, pupils, focus, a layout plot.
+    Lens(lens::LensArgs),
     /// Measure performance.
     Bench(BenchArgs),
 }
@@ -67,6 +70,7 @@ fn main() -> ExitCode {
     };
     let outcome = match cli.command {
         Command::Render(args) => render::run(args),
+        Command::Lens(args) => lens::run(args),
         Command::Bench(BenchArgs {
             what: BenchCommand::Bvh(args),
         }) => bench::run_bvh(args),

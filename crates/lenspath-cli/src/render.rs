@@ -7,10 +7,11 @@ use std::sync::Arc;
 use clap::{Args, ValueEnum};
 use lenspath::accel::BvhSettings;
 use lenspath::builtin::{builtin_scene, DEFAULT_MESH_TRIANGLES};
-use lenspath::camera::{Camera, PerspectiveCamera};
+use lenspath::camera::{Camera, LensFocus, PerspectiveCamera, Radiometry, RealisticCamera, RealisticCameraSettings};
 use lenspath::film::Filter;
 use lenspath::integrator::PathSettings;
 use lenspath::io::image::{check_output_path, write_image};
+use lenspath::lens::LensPrescription;
 use lenspath::render::{render, RenderSettings};
 use lenspath::{Error, Result};
 
@@ -24,6 +25,38 @@ pub enum CameraKind {
     Pinhole,
     /// Ideal thin lens: depth of field from --aperture-radius and --focus-distance.
     ThinLens,
+    /// A real lens prescription (--lens), traced surface by surface.
+    Realistic,
+}
+
+/// Exposure normalisation of the realistic camera.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum RadiometryKind {
+    /// The image centre reads the scene radiance at any f-number.
+    Normalized,
+    /// Stopping down darkens the image by (N2/N1)^2, as on a real camera.
+    Physical,
+}
+
+/// Sensor size as WIDTHxHEIGHT in mm.
+#[derive(Clone, Copy, Debug)]
+pub struct SensorSize {
+    pub width_mm: f64,
+    pub height_mm: f64,
+}
+
+pub fn parse_sensor(s: &str) -> std::result::Result<SensorSize, String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WIDTHxHEIGHT in mm such as 36x24, got '{s}'"))?;
+    let parse = |v: &str| match v.trim().parse::<f64>() {
+        Ok(x) if x > 0.0 && x.is_finite() => Ok(x),
+        _ => Err(format!("'{v}' is not a positive number of mm")),
+    };
+    Ok(SensorSize {
+        width_mm: parse(w)?,
+        height_mm: parse(h)?,
+    })
 }
 
 /// Pixel filters.
@@ -93,15 +126,33 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 0.0)]
     exposure: f32,
     /// Camera model.
-    #[arg(long, value_enum, default_value = "pinhole")]
+    #[arg(long, value_enum, default_value = "realistic")]
     camera: CameraKind,
-    /// Vertical field of view in degrees (default: the scene's).
+    /// Realistic camera: built-in lens (dgauss50, wide22, tele250, fisheye10) or a lens table file.
+    #[arg(long, default_value = "dgauss50")]
+    lens: String,
+    /// Realistic camera: sensor WIDTHxHEIGHT in mm; its width is kept and its height follows the --res aspect.
+    #[arg(long, default_value = "36x24", value_parser = parse_sensor)]
+    sensor: SensorSize,
+    /// Realistic camera: put the sensor this many mm behind the aperture stop instead of focusing by distance.
+    #[arg(long, value_name = "MM", conflicts_with = "focus_distance")]
+    sensor_depth: Option<f64>,
+    /// Realistic camera: stop down to this f-number (default: wide open).
+    #[arg(long, value_name = "N")]
+    fstop: Option<f64>,
+    /// Realistic camera: metres per scene unit (lenses are in mm).
+    #[arg(long, value_name = "M", default_value_t = 1.0)]
+    scene_unit: f64,
+    /// Realistic camera: exposure normalisation.
+    #[arg(long, value_enum, default_value = "normalized")]
+    radiometry: RadiometryKind,
+    /// Pinhole and thin lens: vertical field of view in degrees (default: the scene's).
     #[arg(long)]
     fov: Option<f32>,
     /// Thin-lens aperture radius, scene units.
     #[arg(long, default_value_t = 0.05)]
     aperture_radius: f32,
-    /// Thin-lens focus distance, scene units (default: the scene's subject distance).
+    /// Focus distance from the sensor, scene units (default: the scene's subject distance).
     #[arg(long)]
     focus_distance: Option<f32>,
     /// Pixel reconstruction filter.
@@ -171,6 +222,32 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
                 args.aperture_radius,
                 focus,
             ))
+        }
+        CameraKind::Realistic => {
+            let lens = LensPrescription::load(&args.lens)?;
+            let focus = match args.sensor_depth {
+                Some(mm) => LensFocus::SensorPositionMm(mm),
+                None => LensFocus::Distance(f64::from(args.focus_distance.unwrap_or(view.focus_distance))),
+            };
+            let width_mm = args.sensor.width_mm;
+            let height_mm = width_mm * f64::from(settings.height) / f64::from(settings.width);
+            let camera = RealisticCamera::new(
+                view.pose,
+                settings.width,
+                settings.height,
+                &RealisticCameraSettings {
+                    lens,
+                    sensor_mm: (width_mm, height_mm),
+                    focus,
+                    f_number: args.fstop,
+                    scene_unit_m: args.scene_unit,
+                    radiometry: match args.radiometry {
+                        RadiometryKind::Normalized => Radiometry::Normalized,
+                        RadiometryKind::Physical => Radiometry::Physical,
+                    },
+                },
+            )?;
+            Box::new(camera)
         }
     };
 

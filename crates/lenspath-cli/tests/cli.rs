@@ -50,7 +50,40 @@ fn bad_input_gives_one_error_line_and_exit_code_2() {
     let dir = tempfile::tempdir().unwrap();
     let ok_out = dir.path().join("x.png");
     let ok = ok_out.to_str().unwrap();
+    let bad_lens = dir.path().join("bad.dat");
+    std::fs::write(&bad_lens, "# a lens\n10 2 1.5 8\n0 1 0 4\n-10 x 1 8\n").unwrap();
+    let bad_lens = bad_lens.to_str().unwrap();
     let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["render", "--lens", "nosuch", "--out", ok], "unknown lens 'nosuch'"),
+        (
+            vec!["render", "--lens", bad_lens, "--out", ok],
+            "bad.dat: line 4: thickness 'x' is not a number",
+        ),
+        (
+            vec!["render", "--fstop", "1.2", "--out", ok],
+            "f/1.2 is faster than dgauss50",
+        ),
+        (
+            vec!["render", "--sensor", "0x24", "--out", ok],
+            "not a positive number of mm",
+        ),
+        (
+            vec!["render", "--focus-distance", "0.05", "--out", ok],
+            "cannot focus at 0.0500 m",
+        ),
+        (
+            vec!["render", "--sensor-depth", "3", "--out", ok],
+            "must lie behind the rear element",
+        ),
+        (
+            vec!["render", "--scene-unit", "0", "--out", ok],
+            "scene unit must be a positive",
+        ),
+        (vec!["lens", "nosuch"], "unknown lens 'nosuch'"),
+        (
+            vec!["lens", "dgauss50", "--ray-height-mm", "-1"],
+            "--ray-height-mm must be positive",
+        ),
         (
             vec!["render", "--scene", "teapot-nope", "--out", ok],
             "unknown scene 'teapot-nope'",
@@ -163,4 +196,50 @@ fn bench_bvh_reports_json() {
     }
     // Coherent rays come from outside toward the mesh; many must hit it.
     assert!(v["coherent_hit_fraction"].as_f64().unwrap() > 0.1);
+}
+
+#[test]
+fn lens_reports_json_and_plots_the_layout() {
+    let dir = tempfile::tempdir().unwrap();
+    let svg = dir.path().join("dgauss.svg");
+    let o = lenspath(&[
+        "lens",
+        "dgauss50",
+        "--json",
+        "--plot",
+        svg.to_str().unwrap(),
+        "--focus-distance",
+        "2",
+        "--sensor-depth",
+        "52",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let field = |name: &str| json[name].as_f64().unwrap_or_else(|| panic!("no {name} in {json}"));
+    assert!((field("effective_focal_length_mm") - 50.0).abs() < 1.0);
+    assert!((field("focal_length_mm") - field("effective_focal_length_mm")).abs() < 0.01);
+    assert!(field("close_focus_mm") > field("infinity_focus_mm"));
+    assert!((field("f_number") - 2.0).abs() < 0.1);
+    for name in [
+        "back_focal_distance_mm",
+        "front_focal_distance_mm",
+        "entrance_pupil_diameter_mm",
+        "exit_pupil_mm",
+        "diagonal_fov_deg",
+        "passing_fraction_centre",
+    ] {
+        assert!(field(name).is_finite(), "{name}");
+    }
+    // The two focus conversions are each other's inverse.
+    assert!(field("sensor_depth_for_focus_distance_mm") > field("infinity_focus_mm"));
+    assert!(
+        field("focus_distance_for_sensor_depth_m") > 2.0,
+        "52 mm is nearer the infinity focus than 2 m's"
+    );
+    let drawing = std::fs::read_to_string(&svg).unwrap();
+    assert!(
+        drawing.starts_with("<svg") && drawing.matches("<polygon").count() == 6,
+        "six glass elements"
+    );
+    assert!(drawing.matches("<polyline").count() >= 15, "three ray fans");
 }

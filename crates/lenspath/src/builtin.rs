@@ -36,12 +36,21 @@ pub fn builtin_scene(name: &str, mesh_triangles: usize) -> Result<Scene> {
                 material: white,
                 emission: None,
             });
-            scene.spheres.push(Sphere {
+            let near = Sphere {
                 center: Vec3::new(0.45, 0.33, 0.25),
                 radius: 0.33,
                 material: white,
                 emission: None,
-            });
+            };
+            scene.spheres.push(near);
+            // Focus on the nearer sphere's front.
+            if let Some(view) = &mut scene.view {
+                let (eye, axis) = (
+                    view.pose.render_from_camera.translation,
+                    view.pose.render_from_camera.z_axis,
+                );
+                view.focus_distance = (near.center - Vec3::from(eye)).dot(Vec3::from(axis)) - near.radius;
+            }
             Ok(scene)
         }
         "cornell-mesh" => {
@@ -159,10 +168,11 @@ fn cornell_box() -> Scene {
         white,
         Some(Rgb::new(15.0, 12.5, 9.0)),
     ));
+    // Framed for a 50 mm lens on a 36 mm wide sensor at 4:3 (about 29° vertically).
     scene.view = Some(SceneView {
-        pose: CameraPose::look_at(v(0.0, 1.0, 3.2), v(0.0, 0.92, 0.0), Vec3::Y),
-        fov_y_deg: 37.0,
-        focus_distance: 3.2,
+        pose: CameraPose::look_at(v(0.0, 1.0, 3.85), v(0.0, 0.92, 0.0), Vec3::Y),
+        fov_y_deg: 29.0,
+        focus_distance: 3.85,
     });
     scene
 }

@@ -33,6 +33,7 @@ pub mod error;
 pub mod film;
 pub mod integrator;
 pub mod io;
+pub mod lens;
 pub mod lights;
 pub mod materials;
 pub mod math;

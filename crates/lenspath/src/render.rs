@@ -15,6 +15,13 @@ use crate::math::Rgb;
 use crate::sampling::{Sampler, MAX_SAMPLES_PER_PIXEL};
 use crate::scene::CompiledScene;
 
+/// Lens samples tried for a pixel's depth: the middle of the lens first,
+/// then a 5×5 grid, for lenses that block some of their pupil.
+fn depth_lens_samples() -> impl Iterator<Item = Vec2> {
+    std::iter::once(Vec2::splat(0.5))
+        .chain((0..25).map(|k| Vec2::new((k % 5) as f32 + 0.5, (k / 5) as f32 + 0.5) / 5.0))
+}
+
 /// Everything that controls one render.
 #[derive(Clone, Copy, Debug)]
 pub struct RenderSettings {
@@ -200,15 +207,12 @@ fn render_in_pool(
                     let i = (ty * tile.width + tx) as usize;
                     let centre = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
                     if pass_start == 0 {
-                        let sample = CameraSample {
-                            film: centre,
-                            lens: Vec2::splat(0.5),
-                        };
-                        if let Some(cr) = camera.generate_ray(sample) {
-                            tile_rays += 1;
-                            if let Some(hit) = scene.intersect(&cr.ray) {
-                                tile.depth[i] = (hit.p - axis_origin).dot(axis_dir);
-                            }
+                        // Depth along the first lens position the optics let through.
+                        let ray = depth_lens_samples()
+                            .find_map(|lens| camera.generate_ray(CameraSample { film: centre, lens }));
+                        tile_rays += u64::from(ray.is_some());
+                        if let Some(hit) = ray.and_then(|cr| scene.intersect(&cr.ray)) {
+                            tile.depth[i] = (hit.p - axis_origin).dot(axis_dir);
                         }
                     }
                     let mut sum = tile.sum[i];

@@ -1,4 +1,4 @@
-//! Tests on the third-party meshes in ../shared (see ../shared/ASSETS.md).
+//! Tests on the third-party meshes and lens tables in ../shared (see ../shared/ASSETS.md).
 //! They skip, saying so, when ../shared is not beside the repository.
 
 use std::path::PathBuf;
@@ -72,4 +72,54 @@ fn dragon_bvh_matches_brute_force() {
         hits += usize::from(got.is_some());
     }
     assert!(hits > 100, "only {hits} of 800 rays hit the dragon");
+}
+
+/// The unscaled tables (older distance-from-previous convention) are the
+/// scaled ones up to scale, and the scaled ones are the built-in lenses.
+#[test]
+fn unscaled_lens_tables_match_their_scaled_twins() {
+    use lenspath::lens::{LensPrescription, LensSystem};
+    for (unscaled, scaled, builtin, factor) in [
+        ("lenses/dgauss.dat", "lenses/dgauss.50mm.dat", "dgauss50", 0.5),
+        ("lenses/wide.dat", "lenses/wide.22mm.dat", "wide22", 0.22),
+        ("lenses/telephoto.dat", "lenses/telephoto.250mm.dat", "tele250", 2.5),
+        ("lenses/fisheye.dat", "lenses/fisheye.10mm.dat", "fisheye10", 0.1),
+    ] {
+        let (Some(unscaled_path), Some(scaled_path)) = (shared(unscaled), shared(scaled)) else {
+            return;
+        };
+        let load = |p: &PathBuf| LensPrescription::load(p.to_str().unwrap()).unwrap();
+        let (small, big) = (load(&scaled_path), load(&unscaled_path).scaled(factor));
+        assert_eq!(small.surfaces.len(), big.surfaces.len(), "{unscaled}");
+        // The last thickness is absent from the older tables (the sensor is placed by focusing).
+        let last = small.surfaces.len() - 1;
+        for (i, (a, b)) in small.surfaces.iter().zip(&big.surfaces).enumerate() {
+            let close = |x: f64, y: f64| (x - y).abs() <= 1e-9 + 1e-6 * x.abs().max(y.abs());
+            assert!(
+                close(a.radius_mm, b.radius_mm),
+                "{unscaled} row {i}: radius {} vs {}",
+                a.radius_mm,
+                b.radius_mm
+            );
+            assert!(close(a.ior, b.ior), "{unscaled} row {i}: index");
+            assert!(
+                close(a.aperture_diameter_mm, b.aperture_diameter_mm),
+                "{unscaled} row {i}: aperture"
+            );
+            if i < last {
+                assert!(close(a.thickness_mm, b.thickness_mm), "{unscaled} row {i}: thickness");
+            }
+        }
+        let efl = |l: &LensPrescription| LensSystem::new(l).paraxial().unwrap().effective_focal_length_mm;
+        let unscaled_efl = efl(&load(&unscaled_path));
+        assert!(
+            (efl(&small) / unscaled_efl / factor - 1.0).abs() < 1e-6,
+            "{unscaled}: focal lengths"
+        );
+        assert_eq!(
+            small.surfaces,
+            LensPrescription::load(builtin).unwrap().surfaces,
+            "{builtin}"
+        );
+    }
 }

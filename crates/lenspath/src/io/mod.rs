@@ -38,3 +38,8 @@ fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Res
         io_error(path, e)
     })
 }
+
+/// Writes `contents` to `path` atomically.
+pub fn write_text(path: &Path, contents: &str) -> Result<()> {
+    write_atomically(path, |tmp| std::fs::write(tmp, contents).map_err(|e| io_error(path, e)))
+}

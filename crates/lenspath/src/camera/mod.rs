@@ -10,6 +10,9 @@ use glam::{Affine3A, Mat3A, Vec2, Vec3, Vec3A};
 use crate::ray::Ray;
 use crate::sampling::concentric_disk;
 
+mod realistic;
+pub use realistic::{LensFocus, Radiometry, RealisticCamera, RealisticCameraSettings};
+
 /// Where on the film and where on the lens a camera ray starts.
 #[derive(Clone, Copy, Debug)]
 pub struct CameraSample {

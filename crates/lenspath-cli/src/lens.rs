@@ -1,0 +1,194 @@
+//! `lenspath lens`: first-order and real-ray data of a lens, focusing, the
+//! exit-pupil sampling efficiency, and a layout plot.
+
+use std::path::PathBuf;
+
+use clap::Args;
+use glam::{Vec2, Vec3};
+use lenspath::camera::{CameraPose, LensFocus, Radiometry, RealisticCamera, RealisticCameraSettings};
+use lenspath::io::write_text;
+use lenspath::lens::plot::layout_svg;
+use lenspath::lens::{AnalysisSettings, LensAnalysis, LensPrescription, LensSystem};
+use lenspath::{Error, Result};
+
+use crate::render::{parse_sensor, SensorSize};
+use crate::Outcome;
+
+/// Options of `lenspath lens`.
+#[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
+pub struct LensArgs {
+    /// Built-in lens (dgauss50, wide22, tele250, fisheye10) or a lens table file.
+    lens: String,
+    /// Print one JSON object instead of a table.
+    #[arg(long)]
+    json: bool,
+    /// Also write the lens layout (elements, stop, sensor, ray fans) as SVG.
+    #[arg(long, value_name = "FILE")]
+    plot: Option<PathBuf>,
+    /// Sensor WIDTHxHEIGHT in mm (field of view, pupil sampling).
+    #[arg(long, default_value = "36x24", value_parser = parse_sensor)]
+    sensor: SensorSize,
+    /// Stop down to this f-number before analysing (default: wide open).
+    #[arg(long, value_name = "N")]
+    fstop: Option<f64>,
+    /// Height of the near-axis real rays, mm (the CS184 lens simulator used 0.1 mm).
+    #[arg(long, value_name = "MM", default_value_t = 0.1)]
+    ray_height_mm: f64,
+    /// Distance of the close-focus object in front of the aperture stop, mm (default: 5 x focal length).
+    #[arg(long, value_name = "MM")]
+    close_object_mm: Option<f64>,
+    /// Also print the sensor position (mm behind the stop) that focuses this distance (m, from the sensor).
+    #[arg(long, value_name = "M")]
+    focus_distance: Option<f64>,
+    /// Also print the focus distance (m, from the sensor) of a sensor this many mm behind the stop.
+    #[arg(long, value_name = "MM")]
+    sensor_depth: Option<f64>,
+}
+
+/// Rays per passing-fraction estimate.
+const PASSING_SAMPLES: usize = 20_000;
+
+/// Runs `lenspath lens`.
+pub fn run(args: LensArgs) -> Result<Outcome> {
+    if !(args.ray_height_mm > 0.0 && args.ray_height_mm.is_finite()) {
+        return Err(Error::InvalidArgument(format!(
+            "--ray-height-mm must be positive, got {}",
+            args.ray_height_mm
+        )));
+    }
+    if let Some(d) = args.close_object_mm.filter(|d| !(*d > 0.0 && d.is_finite())) {
+        return Err(Error::InvalidArgument(format!(
+            "--close-object-mm must be positive, got {d}"
+        )));
+    }
+    let prescription = LensPrescription::load(&args.lens)?;
+    let wide_open = LensSystem::new(&prescription);
+    let system = match args.fstop {
+        Some(n) => wide_open.with_f_number(n)?,
+        None => wide_open,
+    };
+    let sensor_mm = (args.sensor.width_mm, args.sensor.height_mm);
+    let analysis = LensAnalysis::new(
+        &system,
+        &AnalysisSettings {
+            ray_height_mm: args.ray_height_mm,
+            close_object_distance_mm: args.close_object_mm,
+            sensor_mm,
+        },
+    )?;
+    let h = args.ray_height_mm;
+    let sensor_for_distance = args
+        .focus_distance
+        .map(|m| system.sensor_z_for_focus_distance(m * 1e3, h))
+        .transpose()?;
+    let distance_for_sensor = match args.sensor_depth {
+        Some(z) if z.is_nan() || z <= system.rear_z() => {
+            return Err(Error::InvalidArgument(format!(
+                "--sensor-depth {z} mm must lie behind the rear element ({:.3} mm)",
+                system.rear_z()
+            )))
+        }
+        Some(z) => Some(system.focus_distance_mm(z, h).map(|mm| mm * 1e-3)),
+        None => None,
+    };
+    // How many generated rays get through, focused at infinity (the sensor at infinity focus).
+    let (width_px, height_px) = (1000u32, (1000.0 * sensor_mm.1 / sensor_mm.0).round().max(1.0) as u32);
+    let camera = RealisticCamera::new(
+        CameraPose::look_at(Vec3::ZERO, Vec3::Z, Vec3::Y),
+        width_px,
+        height_px,
+        &RealisticCameraSettings {
+            lens: prescription.clone(),
+            sensor_mm,
+            focus: LensFocus::SensorPositionMm(analysis.infinity_focus_mm),
+            f_number: args.fstop,
+            scene_unit_m: 1.0,
+            radiometry: Radiometry::Normalized,
+        },
+    )?;
+    let centre = camera.passing_fraction(Vec2::new(width_px as f32, height_px as f32) * 0.5, PASSING_SAMPLES);
+    let corner = camera.passing_fraction(Vec2::splat(0.5), PASSING_SAMPLES);
+
+    if let Some(path) = &args.plot {
+        let diagonal = sensor_mm.0.hypot(sensor_mm.1);
+        write_text(path, &layout_svg(&system, &analysis, diagonal))?;
+    }
+
+    if args.json {
+        let mut json = serde_json::to_value(analysis).map_err(|e| Error::InvalidArgument(e.to_string()))?;
+        let object = json.as_object_mut().expect("a struct serialises to an object");
+        object.insert("lens".into(), prescription.name.clone().into());
+        object.insert("sensor_width_mm".into(), sensor_mm.0.into());
+        object.insert("sensor_height_mm".into(), sensor_mm.1.into());
+        object.insert("passing_fraction_centre".into(), centre.into());
+        object.insert("passing_fraction_corner".into(), corner.into());
+        if let (Some(m), Some(z)) = (args.focus_distance, sensor_for_distance) {
+            object.insert("focus_distance_m".into(), m.into());
+            object.insert("sensor_depth_for_focus_distance_mm".into(), z.into());
+        }
+        if let (Some(z), Some(d)) = (args.sensor_depth, distance_for_sensor) {
+            object.insert("sensor_depth_mm".into(), z.into());
+            object.insert("focus_distance_for_sensor_depth_m".into(), d.into());
+        }
+        println!("{json}");
+        return Ok(Outcome::Done);
+    }
+
+    let a = &analysis;
+    println!("lens                      {}", prescription.name);
+    println!("                          positions in mm along the axis from the aperture stop, + toward the sensor");
+    println!("paraxial");
+    println!("  effective focal length  {:.4} mm", a.effective_focal_length_mm);
+    println!("  f-number                f/{:.3}", a.f_number);
+    println!(
+        "  back focal distance     {:.4} mm (rear vertex to F')",
+        a.back_focal_distance_mm
+    );
+    println!(
+        "  front focal distance    {:.4} mm (F to front vertex)",
+        a.front_focal_distance_mm
+    );
+    println!(
+        "  principal planes        P {:.4} mm, P' {:.4} mm",
+        a.front_principal_plane_mm, a.rear_principal_plane_mm
+    );
+    println!(
+        "  entrance pupil          at {:.4} mm, {:.4} mm across",
+        a.entrance_pupil_mm, a.entrance_pupil_diameter_mm
+    );
+    println!(
+        "  exit pupil              at {:.4} mm, {:.4} mm across",
+        a.exit_pupil_mm, a.exit_pupil_diameter_mm
+    );
+    println!(
+        "  field of view           {:.2} deg diagonal, {:.2} deg horizontal ({}x{} mm sensor)",
+        a.diagonal_fov_deg, a.horizontal_fov_deg, sensor_mm.0, sensor_mm.1
+    );
+    println!("real rays at {} mm height", a.ray_height_mm);
+    println!("  infinity focus          sensor at {:.4} mm", a.infinity_focus_mm);
+    println!(
+        "  close focus             sensor at {:.4} mm (object {:.4} mm in front of the stop)",
+        a.close_focus_mm, a.close_focus_object_distance_mm
+    );
+    println!("  focal length |P'-F'|    {:.4} mm", a.focal_length_mm);
+    println!(
+        "  lens vertices           front {:.4} mm, rear {:.4} mm",
+        a.front_vertex_mm, a.rear_vertex_mm
+    );
+    println!(
+        "rays through (inf. focus) {:.1}% at the centre, {:.1}% at the corner",
+        100.0 * centre,
+        100.0 * corner
+    );
+    if let (Some(m), Some(z)) = (args.focus_distance, sensor_for_distance) {
+        println!("focus at {m} m             sensor at {z:.4} mm");
+    }
+    if let (Some(z), Some(d)) = (args.sensor_depth, distance_for_sensor) {
+        match d {
+            Some(m) => println!("sensor at {z} mm          focuses at {m:.6} m"),
+            None => println!("sensor at {z} mm          focuses beyond infinity (nearer than the infinity focus)"),
+        }
+    }
+    Ok(Outcome::Done)
+}

@@ -1,0 +1,692 @@
+//! A lens prescription placed on its optical axis: exact ray tracing through
+//! every surface in both directions, the paraxial (y–nu) trace, and focusing.
+//!
+//! Lens coordinates, in mm, f64 throughout: `z` runs along the optical axis
+//! from the scene toward the sensor with the aperture stop at `z = 0`, so
+//! sensor positions are distances behind the stop (the CS184 lens
+//! simulator's convention); `x` and `y` are across the axis.
+
+use glam::DVec3;
+
+use super::prescription::LensPrescription;
+use crate::error::{Error, Result};
+
+/// A ray in lens coordinates (mm) with a unit direction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LensRay {
+    /// Origin.
+    pub origin: DVec3,
+    /// Unit direction.
+    pub direction: DVec3,
+}
+
+impl LensRay {
+    /// The ray from `origin` toward `target`.
+    pub fn between(origin: DVec3, target: DVec3) -> LensRay {
+        LensRay {
+            origin,
+            direction: (target - origin).normalize(),
+        }
+    }
+
+    /// Where the ray (as a line) meets the axial plane at `z`, if it is not parallel to it.
+    pub fn at_z(&self, z: f64) -> Option<DVec3> {
+        (self.direction.z != 0.0).then(|| self.origin + self.direction * ((z - self.origin.z) / self.direction.z))
+    }
+
+    /// The `z` where the ray (as a line) crosses the axis in the x–z plane
+    /// (for meridional rays with y = 0), if it is not parallel to the axis.
+    pub fn axis_crossing_z(&self) -> Option<f64> {
+        (self.direction.x != 0.0).then(|| self.origin.z - self.origin.x * self.direction.z / self.direction.x)
+    }
+}
+
+/// Which way light goes through the lens.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Direction {
+    /// From the scene through the front element to the sensor.
+    ToSensor,
+    /// From the sensor through the rear element out into the scene.
+    ToScene,
+}
+
+/// One surface on the axis.
+#[derive(Clone, Copy, Debug)]
+struct Surface {
+    /// Vertex position on the axis.
+    z: f64,
+    /// Signed radius (0: the stop, a flat disc).
+    radius: f64,
+    /// Clear aperture radius (for the stop: the current, possibly stopped-down, radius).
+    aperture_radius: f64,
+    /// Index in front of (scene side) and behind (sensor side) the surface.
+    ior_front: f64,
+    ior_back: f64,
+}
+
+/// A lens ready to trace.
+#[derive(Clone, Debug)]
+pub struct LensSystem {
+    prescription: LensPrescription,
+    surfaces: Vec<Surface>,
+    stop: usize,
+}
+
+/// A paraxial ray in travel coordinates: position along the travel direction, height, slope.
+#[derive(Clone, Copy, Debug)]
+struct ParaxialRay {
+    z: f64,
+    y: f64,
+    u: f64,
+}
+
+/// First-order (paraxial) data, lengths in mm in lens coordinates.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ParaxialData {
+    /// Effective focal length (P′ to F′).
+    pub effective_focal_length_mm: f64,
+    /// Rear vertex to rear focal point F′.
+    pub back_focal_distance_mm: f64,
+    /// Front focal point F to front vertex.
+    pub front_focal_distance_mm: f64,
+    /// Rear focal point F′.
+    pub rear_focal_point_z_mm: f64,
+    /// Front focal point F.
+    pub front_focal_point_z_mm: f64,
+    /// Rear principal plane P′.
+    pub rear_principal_plane_z_mm: f64,
+    /// Front principal plane P.
+    pub front_principal_plane_z_mm: f64,
+    /// Entrance pupil (image of the stop seen from the scene).
+    pub entrance_pupil_z_mm: f64,
+    /// Entrance pupil diameter.
+    pub entrance_pupil_diameter_mm: f64,
+    /// Exit pupil (image of the stop seen from the sensor).
+    pub exit_pupil_z_mm: f64,
+    /// Exit pupil diameter.
+    pub exit_pupil_diameter_mm: f64,
+    /// Focal length over entrance pupil diameter (for an object at infinity).
+    pub f_number: f64,
+}
+
+impl LensSystem {
+    /// Places `prescription` on the axis with its stop at z = 0, wide open.
+    pub fn new(prescription: &LensPrescription) -> LensSystem {
+        let stop = prescription.stop_index();
+        let before_stop: f64 = prescription.surfaces[..stop].iter().map(|s| s.thickness_mm).sum();
+        let mut z = -before_stop;
+        let mut ior_front = 1.0;
+        let surfaces = prescription
+            .surfaces
+            .iter()
+            .map(|s| {
+                let surface = Surface {
+                    z,
+                    radius: s.radius_mm,
+                    aperture_radius: 0.5 * s.aperture_diameter_mm,
+                    ior_front,
+                    ior_back: s.ior,
+                };
+                z += s.thickness_mm;
+                ior_front = s.ior;
+                surface
+            })
+            .collect();
+        LensSystem {
+            prescription: prescription.clone(),
+            surfaces,
+            stop,
+        }
+    }
+
+    /// The prescription this system was built from.
+    pub fn prescription(&self) -> &LensPrescription {
+        &self.prescription
+    }
+
+    /// Front vertex position.
+    pub fn front_z(&self) -> f64 {
+        self.surfaces[0].z
+    }
+
+    /// Rear vertex position.
+    pub fn rear_z(&self) -> f64 {
+        self.surfaces[self.surfaces.len() - 1].z
+    }
+
+    /// Clear aperture radius of the rear element.
+    pub fn rear_aperture_radius(&self) -> f64 {
+        self.surfaces[self.surfaces.len() - 1].aperture_radius
+    }
+
+    /// Clear aperture radius of the front element.
+    pub fn front_aperture_radius(&self) -> f64 {
+        self.surfaces[0].aperture_radius
+    }
+
+    /// Current radius of the aperture stop.
+    pub fn stop_radius(&self) -> f64 {
+        self.surfaces[self.stop].aperture_radius
+    }
+
+    /// The surfaces as (vertex z, signed radius, clear aperture radius, index behind), front to back.
+    pub fn surface_layout(&self) -> impl Iterator<Item = (f64, f64, f64, f64)> + '_ {
+        self.surfaces
+            .iter()
+            .map(|s| (s.z, s.radius, s.aperture_radius, s.ior_back))
+    }
+
+    /// The same lens stopped down (or opened up to its full aperture) to the
+    /// paraxial f-number `f_number`; fails when the lens cannot open that wide.
+    pub fn with_f_number(&self, f_number: f64) -> Result<LensSystem> {
+        let wide_open = LensSystem::new(&self.prescription);
+        let data = wide_open.paraxial()?;
+        if !(f_number.is_finite() && f_number > 0.0) {
+            return Err(Error::InvalidArgument(format!(
+                "f-number must be positive, got {f_number}"
+            )));
+        }
+        if f_number < data.f_number * (1.0 - 1e-9) {
+            return Err(Error::InvalidArgument(format!(
+                "f/{f_number} is faster than {} opens (f/{:.2} wide open)",
+                self.prescription.name, data.f_number
+            )));
+        }
+        // The entrance pupil scales with the stop (paraxial imaging is linear).
+        let mut system = wide_open;
+        system.surfaces[system.stop].aperture_radius *= data.f_number / f_number;
+        Ok(system)
+    }
+
+    /// Traces `ray` through every surface in `direction`. `None` when the ray
+    /// misses a surface, is clipped by an aperture or the stop, or is totally
+    /// internally reflected. The returned ray starts on the last surface crossed.
+    pub fn trace(&self, ray: &LensRay, direction: Direction) -> Option<LensRay> {
+        self.trace_visiting(ray, direction, |_| {})
+    }
+
+    /// [`LensSystem::trace`], calling `visit` with each point where the ray
+    /// meets a surface (also the one where it is blocked, if it reaches it).
+    pub fn trace_visiting(&self, ray: &LensRay, direction: Direction, mut visit: impl FnMut(DVec3)) -> Option<LensRay> {
+        let mut ray = *ray;
+        let n = self.surfaces.len();
+        for k in 0..n {
+            let surface = &self.surfaces[if direction == Direction::ToSensor { k } else { n - 1 - k }];
+            let (t, normal) = if surface.radius == 0.0 {
+                let t = (surface.z - ray.origin.z) / ray.direction.z;
+                (t, DVec3::Z)
+            } else {
+                intersect_sphere(&ray, surface.z, surface.radius, direction)?
+            };
+            // Also rejects NaN (a tangent ray).
+            if t.is_nan() || t <= 0.0 {
+                return None;
+            }
+            let p = ray.origin + ray.direction * t;
+            visit(p);
+            if p.x * p.x + p.y * p.y > surface.aperture_radius * surface.aperture_radius {
+                return None;
+            }
+            let (n1, n2) = match direction {
+                Direction::ToSensor => (surface.ior_front, surface.ior_back),
+                Direction::ToScene => (surface.ior_back, surface.ior_front),
+            };
+            let direction = if n1 == n2 {
+                ray.direction
+            } else {
+                refract(ray.direction, normal, n1 / n2)?
+            };
+            ray = LensRay { origin: p, direction };
+        }
+        Some(ray)
+    }
+
+    /// Surfaces in travel order as (position along travel, signed radius in
+    /// travel coordinates, index before, index after). Travelling toward the
+    /// scene mirrors the axis, which flips the radii.
+    fn travel_sequence(&self, direction: Direction, range: std::ops::Range<usize>) -> Vec<(f64, f64, f64, f64)> {
+        let mut seq: Vec<_> = self.surfaces[range]
+            .iter()
+            .map(|s| match direction {
+                Direction::ToSensor => (s.z, s.radius, s.ior_front, s.ior_back),
+                Direction::ToScene => (-s.z, -s.radius, s.ior_back, s.ior_front),
+            })
+            .collect();
+        if direction == Direction::ToScene {
+            seq.reverse();
+        }
+        seq
+    }
+
+    /// The paraxial (y–nu) trace: transfer `y += d·u`, refraction
+    /// `n′u′ = n·u − y·(n′ − n)/R` (Smith, *Modern Optical Engineering*, ch. 2).
+    fn paraxial_trace(seq: &[(f64, f64, f64, f64)], mut ray: ParaxialRay) -> ParaxialRay {
+        for &(z, radius, n1, n2) in seq {
+            ray.y += (z - ray.z) * ray.u;
+            ray.z = z;
+            if radius != 0.0 {
+                ray.u = (n1 * ray.u - ray.y * (n2 - n1) / radius) / n2;
+            }
+        }
+        ray
+    }
+
+    /// First-order data from paraxial traces.
+    pub fn paraxial(&self) -> Result<ParaxialData> {
+        let all = 0..self.surfaces.len();
+        // A ray parallel to the axis at unit height, each way.
+        let focal = |direction: Direction| -> Result<(f64, f64)> {
+            let seq = self.travel_sequence(direction, all.clone());
+            let start = ParaxialRay {
+                z: seq[0].0,
+                y: 1.0,
+                u: 0.0,
+            };
+            let out = Self::paraxial_trace(&seq, start);
+            if out.u == 0.0 {
+                return Err(Error::InvalidArgument(format!(
+                    "{} is afocal (parallel light leaves parallel)",
+                    self.prescription.name
+                )));
+            }
+            // Focal point: where the exit ray meets the axis; principal plane: where it is at height 1.
+            Ok((out.z - out.y / out.u, out.z + (1.0 - out.y) / out.u))
+        };
+        let (rear_focal, rear_principal) = focal(Direction::ToSensor)?;
+        let (front_focal, front_principal) = focal(Direction::ToScene)?;
+        // Pupils: images of the stop through the elements on either side.
+        let pupil = |direction: Direction| {
+            let range = match direction {
+                Direction::ToSensor => self.stop + 1..self.surfaces.len(),
+                Direction::ToScene => 0..self.stop,
+            };
+            let seq = self.travel_sequence(direction, range);
+            let r = self.stop_radius();
+            let chief = Self::paraxial_trace(&seq, ParaxialRay { z: 0.0, y: 0.0, u: 1.0 });
+            let edge = Self::paraxial_trace(&seq, ParaxialRay { z: 0.0, y: r, u: 0.0 });
+            let z = chief.z - chief.y / chief.u;
+            let radius = (edge.y + (z - edge.z) * edge.u).abs();
+            (z, 2.0 * radius)
+        };
+        let (exit_z, exit_d) = pupil(Direction::ToSensor);
+        let (entrance_z, entrance_d) = pupil(Direction::ToScene);
+        let efl = rear_focal - rear_principal;
+        Ok(ParaxialData {
+            effective_focal_length_mm: efl,
+            back_focal_distance_mm: rear_focal - self.rear_z(),
+            front_focal_distance_mm: self.front_z() + front_focal,
+            rear_focal_point_z_mm: rear_focal,
+            front_focal_point_z_mm: -front_focal,
+            rear_principal_plane_z_mm: rear_principal,
+            front_principal_plane_z_mm: -front_principal,
+            entrance_pupil_z_mm: -entrance_z,
+            entrance_pupil_diameter_mm: entrance_d,
+            exit_pupil_z_mm: exit_z,
+            exit_pupil_diameter_mm: exit_d,
+            f_number: efl / entrance_d,
+        })
+    }
+
+    /// The real-ray image of a scene ray: where it crosses the axis behind the lens.
+    fn image_of(&self, ray: &LensRay, what: &str) -> Result<(LensRay, f64)> {
+        let out = self.trace(ray, Direction::ToSensor).ok_or_else(|| self.blocked(what))?;
+        // A real image only when the ray leaves heading toward the axis.
+        match out.axis_crossing_z() {
+            Some(z) if out.origin.x * out.direction.x < 0.0 => Ok((out, z)),
+            _ => Err(Error::InvalidArgument(format!(
+                "{}: the {what} ray leaves the lens diverging, so it forms no real image",
+                self.prescription.name
+            ))),
+        }
+    }
+
+    fn blocked(&self, what: &str) -> Error {
+        Error::InvalidArgument(format!(
+            "{}: the {what} ray is blocked inside the lens; try a smaller --ray-height-mm",
+            self.prescription.name
+        ))
+    }
+
+    /// Real-ray rear focal point and principal plane from a ray parallel to
+    /// the axis at `height_mm` (the CS184 lens simulator's choice is 0.1 mm).
+    pub fn real_focus_at_infinity(&self, height_mm: f64) -> Result<(f64, f64)> {
+        let start = DVec3::new(height_mm, 0.0, self.front_z() - 1.0);
+        let ray = LensRay {
+            origin: start,
+            direction: DVec3::Z,
+        };
+        let (out, focal_z) = self.image_of(&ray, "parallel")?;
+        let principal_z = out.origin.z + (height_mm - out.origin.x) * out.direction.z / out.direction.x;
+        Ok((focal_z, principal_z))
+    }
+
+    /// Sensor position focusing an on-axis object point at `object_z` (in
+    /// front of the lens), by a real ray meeting the front vertex plane at `height_mm`.
+    pub fn real_image_z(&self, object_z: f64, height_mm: f64) -> Result<f64> {
+        if object_z >= self.front_z() {
+            return Err(Error::InvalidArgument(format!(
+                "{}: the object must be in front of the lens",
+                self.prescription.name
+            )));
+        }
+        let ray = LensRay::between(
+            DVec3::new(0.0, 0.0, object_z),
+            DVec3::new(height_mm, 0.0, self.front_z()),
+        );
+        Ok(self.image_of(&ray, "object")?.1)
+    }
+
+    /// The object distance (mm, from the sensor plane to the object, as a
+    /// focus-distance scale reads) that a sensor at `sensor_z` focuses, by a
+    /// real ray from the sensor's centre meeting the rear vertex plane at
+    /// `height_mm`. `None` when nothing in front of the lens is in focus there
+    /// (the sensor is nearer than the infinity focus).
+    pub fn focus_distance_mm(&self, sensor_z: f64, height_mm: f64) -> Option<f64> {
+        let ray = LensRay::between(
+            DVec3::new(0.0, 0.0, sensor_z),
+            DVec3::new(height_mm, 0.0, self.rear_z()),
+        );
+        let out = self.trace(&ray, Direction::ToScene)?;
+        // In focus only if the ray leaves heading toward the axis.
+        if out.origin.x * out.direction.x >= 0.0 {
+            return None;
+        }
+        let object_z = out.axis_crossing_z()?;
+        (object_z < self.front_z()).then_some(sensor_z - object_z)
+    }
+
+    /// The sensor position whose real-ray conjugate is `distance_mm` from the
+    /// sensor plane: the inverse of [`LensSystem::focus_distance_mm`], by bisection.
+    pub fn sensor_z_for_focus_distance(&self, distance_mm: f64, height_mm: f64) -> Result<f64> {
+        let (infinity_z, _) = self.real_focus_at_infinity(height_mm)?;
+        if !(distance_mm.is_finite() && distance_mm > 0.0) {
+            return Err(Error::InvalidArgument(format!(
+                "focus distance must be positive and finite, got {distance_mm} mm"
+            )));
+        }
+        // Bracket: just behind the infinity focus the conjugate is very far;
+        // moving the sensor back brings it closer.
+        let focal = self.paraxial()?.effective_focal_length_mm.abs();
+        let mut lo = infinity_z;
+        let mut hi = infinity_z + 1e-3 * focal;
+        let too_close = || {
+            Error::InvalidArgument(format!(
+                "{} cannot focus at {:.4} m",
+                self.prescription.name,
+                distance_mm * 1e-3
+            ))
+        };
+        loop {
+            match self.focus_distance_mm(hi, height_mm) {
+                Some(d) if d <= distance_mm => break,
+                Some(_) => {
+                    lo = hi;
+                    hi = infinity_z + 2.0 * (hi - infinity_z);
+                    if hi - infinity_z > 100.0 * focal {
+                        return Err(too_close());
+                    }
+                }
+                None if hi > infinity_z + focal => return Err(too_close()),
+                None => {
+                    lo = hi;
+                    hi = infinity_z + 2.0 * (hi - infinity_z);
+                }
+            }
+        }
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if mid <= lo || mid >= hi {
+                break;
+            }
+            match self.focus_distance_mm(mid, height_mm) {
+                Some(d) if d <= distance_mm => hi = mid,
+                _ => lo = mid,
+            }
+        }
+        Ok(0.5 * (lo + hi))
+    }
+}
+
+/// The hit of `ray` on the sphere with vertex at `vertex_z` and signed
+/// `radius`, on the cap around the vertex, with the unit normal there
+/// (pointing away from the centre), for a ray travelling `travel`.
+/// After pbrt-v4 `RealisticCamera::IntersectSphericalElement`.
+fn intersect_sphere(ray: &LensRay, vertex_z: f64, radius: f64, travel: Direction) -> Option<(f64, DVec3)> {
+    let center = DVec3::new(0.0, 0.0, vertex_z + radius);
+    let oc = ray.origin - center;
+    let b = oc.dot(ray.direction);
+    let c = oc.length_squared() - radius * radius;
+    let discriminant = b * b - c;
+    if discriminant < 0.0 {
+        return None;
+    }
+    // Stable roots (Numerical Recipes §5.6): q and c/q; q is the one of the
+    // sign of -b. Divide only when the other root is the one wanted.
+    let q = -b - discriminant.sqrt().copysign(b);
+    // The vertex side is hit first when travel goes from the vertex toward
+    // the centre. Decided by the travel direction, not by the sign of the
+    // ray's z, so rays far off axis (even past 90°) take the right cap.
+    let want_near = (travel == Direction::ToSensor) == (radius > 0.0);
+    // q < 0 (b > 0): q is the nearer root; q > 0: c/q is.
+    let q_is_wanted = (q <= 0.0) == want_near;
+    let t = if q_is_wanted { q } else { c / q };
+    let p = ray.origin + ray.direction * t;
+    Some((t, (p - center) * (1.0 / radius).abs()))
+}
+
+/// Snell's law in vector form (pbrt-v4 `Refract`), `eta = n1 / n2`; `None`
+/// on total internal reflection.
+fn refract(d: DVec3, normal: DVec3, eta: f64) -> Option<DVec3> {
+    let n = if normal.dot(d) > 0.0 { -normal } else { normal };
+    let cos_i = -n.dot(d);
+    let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
+    if sin2_t >= 1.0 {
+        return None;
+    }
+    let cos_t = (1.0 - sin2_t).sqrt();
+    // Unit length is preserved exactly in exact arithmetic; f64 keeps it to ~1e-16 per surface.
+    Some(eta * d + (eta * cos_i - cos_t) * n)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lens::prescription::{TableConvention, BUILTIN_LENSES};
+
+    fn builtin(name: &str) -> LensSystem {
+        LensSystem::new(&LensPrescription::load(name).unwrap())
+    }
+
+    fn relative(a: f64, b: f64) -> f64 {
+        ((a - b) / b).abs()
+    }
+
+    /// A stop, then one biconvex element: radii ±100 mm, n = 1.5, 0.01 mm thick.
+    fn thin_lens() -> LensSystem {
+        let table = "0 0 0 20\n100 0.01 1.5 20\n-100 0 1 20\n";
+        LensSystem::new(&LensPrescription::parse(table, "thin", TableConvention::ThicknessToNext).unwrap())
+    }
+
+    #[test]
+    fn a_thin_element_follows_the_lensmaker_and_thin_lens_equations() {
+        let lens = thin_lens();
+        let (n, r1, r2, t) = (1.5, 100.0, -100.0, 0.01);
+        // Thick-lens lensmaker's equation (Hecht, Optics, eq. 6.2): exact paraxially.
+        let f = 1.0 / ((n - 1.0) * (1.0 / r1 - 1.0 / r2 + (n - 1.0) * t / (n * r1 * r2)));
+        let p = lens.paraxial().unwrap();
+        assert!(
+            relative(p.effective_focal_length_mm, f) < 1e-12,
+            "{} vs {f}",
+            p.effective_focal_length_mm
+        );
+        // Gaussian lens equation 1/s + 1/s' = 1/f with real rays near the axis.
+        for image_distance in [110.0, 150.0, 200.0, 400.0] {
+            let sensor_z = lens.rear_z() + image_distance;
+            let to_object = lens.focus_distance_mm(sensor_z, 0.1).unwrap();
+            let object_distance = to_object - image_distance - t;
+            let lhs = 1.0 / object_distance + 1.0 / image_distance;
+            assert!(
+                relative(lhs, 1.0 / f) < 1e-4,
+                "s' {image_distance}: 1/s + 1/s' = {lhs}, 1/f = {}",
+                1.0 / f
+            );
+        }
+    }
+
+    #[test]
+    fn builtin_focal_lengths_are_as_named() {
+        for (name, focal) in [
+            ("dgauss50", 50.0),
+            ("wide22", 22.0),
+            ("tele250", 250.0),
+            ("fisheye10", 10.0),
+        ] {
+            let efl = builtin(name).paraxial().unwrap().effective_focal_length_mm;
+            assert!(relative(efl, focal) < 0.02, "{name}: {efl} mm");
+        }
+    }
+
+    /// The system matrix as a product of 2×2 refraction and transfer
+    /// matrices on (y, n·u) (Gerrard & Burch, *Introduction to Matrix Methods in Optics*).
+    fn abcd(lens: &LensPrescription) -> [[f64; 2]; 2] {
+        let mul = |a: [[f64; 2]; 2], b: [[f64; 2]; 2]| {
+            [
+                [
+                    a[0][0] * b[0][0] + a[0][1] * b[1][0],
+                    a[0][0] * b[0][1] + a[0][1] * b[1][1],
+                ],
+                [
+                    a[1][0] * b[0][0] + a[1][1] * b[1][0],
+                    a[1][0] * b[0][1] + a[1][1] * b[1][1],
+                ],
+            ]
+        };
+        let mut m = [[1.0, 0.0], [0.0, 1.0]];
+        let mut n_before = 1.0;
+        let last = lens.surfaces.len() - 1;
+        for (i, s) in lens.surfaces.iter().enumerate() {
+            let power = if s.is_stop() {
+                0.0
+            } else {
+                (s.ior - n_before) / s.radius_mm
+            };
+            m = mul([[1.0, 0.0], [-power, 1.0]], m);
+            if i < last {
+                m = mul([[1.0, s.thickness_mm / s.ior], [0.0, 1.0]], m);
+            }
+            n_before = s.ior;
+        }
+        m
+    }
+
+    #[test]
+    fn paraxial_data_match_an_abcd_product() {
+        for (name, _) in BUILTIN_LENSES {
+            let prescription = LensPrescription::load(name).unwrap();
+            let [[a, _], [c, d]] = abcd(&prescription);
+            let p = LensSystem::new(&prescription).paraxial().unwrap();
+            let checks = [
+                ("EFL", p.effective_focal_length_mm, -1.0 / c),
+                ("BFD", p.back_focal_distance_mm, -a / c),
+                ("FFD", p.front_focal_distance_mm, -d / c),
+            ];
+            for (what, ours, matrix) in checks {
+                assert!(relative(ours, matrix) < 1e-9, "{name} {what}: {ours} vs {matrix}");
+            }
+        }
+    }
+
+    #[test]
+    fn focusing_round_trips() {
+        for (name, _) in BUILTIN_LENSES {
+            let lens = builtin(name);
+            let (infinity, _) = lens.real_focus_at_infinity(0.1).unwrap();
+            let focal = lens.paraxial().unwrap().effective_focal_length_mm;
+            // Objects from 6 f in front of the lens (a telephoto's closest
+            // real focus is about 4 f from the sensor) to far away.
+            for multiple in [6.0, 10.0, 40.0, 400.0, 4000.0] {
+                let metres = (infinity - lens.front_z() + multiple * focal) * 1e-3;
+                let z = lens.sensor_z_for_focus_distance(metres * 1e3, 0.1).unwrap();
+                assert!(z > infinity, "{name} at {metres} m");
+                let back = lens.focus_distance_mm(z, 0.1).unwrap();
+                assert!(relative(back, metres * 1e3) < 1e-6, "{name} at {metres} m: {back} mm");
+            }
+            assert_eq!(
+                lens.focus_distance_mm(infinity - 0.01, 0.1),
+                None,
+                "{name}: beyond infinity"
+            );
+        }
+    }
+
+    #[test]
+    fn tracing_to_the_scene_and_back_returns_the_ray() {
+        for (name, _) in BUILTIN_LENSES {
+            let lens = builtin(name);
+            let sensor_z = lens.real_focus_at_infinity(0.1).unwrap().0;
+            let film = DVec3::new(1.3, -0.7, sensor_z);
+            let mut checked = 0;
+            for k in 0..400 {
+                let a = k as f64 * 2.399;
+                let r = lens.rear_aperture_radius() * 0.9 * ((k as f64 + 0.5) / 400.0).sqrt();
+                let ray = LensRay::between(film, DVec3::new(r * a.cos(), r * a.sin(), lens.rear_z()));
+                let Some(out) = lens.trace(&ray, Direction::ToScene) else {
+                    continue;
+                };
+                let back = LensRay {
+                    origin: out.origin + out.direction * 25.0,
+                    direction: -out.direction,
+                };
+                let returned = lens.trace(&back, Direction::ToSensor).expect("reversible");
+                let hit = returned.at_z(sensor_z).unwrap();
+                assert!(
+                    (hit - film).length() < 1e-9,
+                    "{name}: returned to {hit:?}, not {film:?}"
+                );
+                assert!((returned.direction + ray.direction).length() < 1e-12);
+                checked += 1;
+            }
+            assert!(checked > 10, "{name}: only {checked} rays passed");
+        }
+    }
+
+    #[test]
+    fn the_fisheye_covers_its_design_field() {
+        // Muller's fisheye is specified for a 155.9° field (Smith, Modern Lens Design, p. 164).
+        let lens = builtin("fisheye10");
+        let sensor_z = lens.real_focus_at_infinity(0.1).unwrap().0;
+        let rear = lens.rear_aperture_radius();
+        let widest = (0..600)
+            .flat_map(|k| (0..400).map(move |j| (k, j)))
+            .filter_map(|(k, j)| {
+                let film = DVec3::new(0.05 * k as f64, 0.0, sensor_z);
+                let x = -rear + 2.0 * rear * j as f64 / 400.0;
+                lens.trace(
+                    &LensRay::between(film, DVec3::new(x, 0.0, lens.rear_z())),
+                    Direction::ToScene,
+                )
+            })
+            .map(|out| (-out.direction.z).acos().to_degrees())
+            .fold(0.0, f64::max);
+        assert!(
+            (widest - 155.9 / 2.0).abs() < 2.0,
+            "widest ray leaves {widest}° off axis"
+        );
+    }
+
+    #[test]
+    fn stopping_down_scales_the_pupils() {
+        let lens = builtin("dgauss50");
+        let open = lens.paraxial().unwrap();
+        let f8 = lens.with_f_number(8.0).unwrap().paraxial().unwrap();
+        assert!(relative(f8.f_number, 8.0) < 1e-12);
+        assert!(
+            relative(
+                f8.exit_pupil_diameter_mm / open.exit_pupil_diameter_mm,
+                open.f_number / 8.0
+            ) < 1e-12
+        );
+        let err = lens.with_f_number(1.4).unwrap_err().to_string();
+        assert!(err.contains("f/1.4 is faster than dgauss50"), "{err}");
+    }
+}

@@ -1,0 +1,310 @@
+//! The realistic camera against first-order optics: exposure of a uniform
+//! scene, the image of a point in and out of focus, stopping down, and how
+//! many generated rays get through.
+
+use std::sync::atomic::AtomicBool;
+
+use glam::{Vec2, Vec3};
+use lenspath::accel::BvhSettings;
+use lenspath::camera::{CameraPose, LensFocus, Radiometry, RealisticCamera, RealisticCameraSettings};
+use lenspath::film::{Filter, Image};
+use lenspath::integrator::PathSettings;
+use lenspath::lens::{LensPrescription, LensSystem, BUILTIN_LENSES};
+use lenspath::lights::Light;
+use lenspath::materials::Material;
+use lenspath::math::Rgb;
+use lenspath::render::{render, RenderSettings};
+use lenspath::scene::Scene;
+use lenspath::shapes::Sphere;
+
+struct Shot {
+    lens: &'static str,
+    sensor_mm: (f64, f64),
+    pixels: (u32, u32),
+    focus: LensFocus,
+    f_number: Option<f64>,
+    radiometry: Radiometry,
+    spp: u32,
+}
+
+fn camera(shot: &Shot) -> RealisticCamera {
+    RealisticCamera::new(
+        CameraPose::look_at(Vec3::ZERO, Vec3::Z, Vec3::Y),
+        shot.pixels.0,
+        shot.pixels.1,
+        &RealisticCameraSettings {
+            lens: LensPrescription::load(shot.lens).unwrap(),
+            sensor_mm: shot.sensor_mm,
+            focus: shot.focus,
+            f_number: shot.f_number,
+            scene_unit_m: 1.0,
+            radiometry: shot.radiometry,
+        },
+    )
+    .unwrap()
+}
+
+fn shoot(scene: Scene, shot: &Shot) -> Image {
+    let settings = RenderSettings {
+        width: shot.pixels.0,
+        height: shot.pixels.1,
+        spp: shot.spp,
+        path: PathSettings {
+            max_depth: 1,
+            light_samples: 1,
+        },
+        seed: 7,
+        filter: Filter::Box,
+        threads: None,
+        tile_size: 16,
+    };
+    let compiled = scene.compile(&BvhSettings::default()).unwrap();
+    let out = render(&compiled, &camera(shot), &settings, &|_, _| {}, &AtomicBool::new(false)).unwrap();
+    assert_eq!(
+        out.stats.invalid_samples, 0,
+        "NaN or infinite samples through {}",
+        shot.lens
+    );
+    out.image
+}
+
+fn uniform_environment() -> Scene {
+    Scene {
+        lights: vec![Light::Environment { radiance: Rgb::ONE }],
+        ..Default::default()
+    }
+}
+
+/// Mean green value over a block of pixels.
+fn block_mean(image: &Image, xs: std::ops::Range<u32>, ys: std::ops::Range<u32>) -> f64 {
+    let n = (xs.len() * ys.len()) as f64;
+    ys.flat_map(|y| xs.clone().map(move |x| (x, y)))
+        .map(|(x, y)| f64::from(image.pixel(x, y)[1]))
+        .sum::<f64>()
+        / n
+}
+
+#[test]
+fn a_uniform_scene_reads_its_radiance_at_the_centre_and_vignettes_symmetrically() {
+    for (lens, _) in BUILTIN_LENSES {
+        let shot = Shot {
+            lens,
+            sensor_mm: (36.0, 24.0),
+            pixels: (48, 32),
+            focus: LensFocus::Distance(5.0),
+            f_number: None,
+            radiometry: Radiometry::Normalized,
+            spp: 256,
+        };
+        let image = shoot(uniform_environment(), &shot);
+        assert!(image.rgb.iter().all(|v| v.is_finite() && *v >= 0.0), "{lens}");
+        // The very centre: a 0.36 × 0.24 mm crop of the sensor.
+        let crop = Shot {
+            sensor_mm: (0.36, 0.24),
+            pixels: (6, 4),
+            spp: 1024,
+            ..shot
+        };
+        let very_centre = shoot(uniform_environment(), &crop).mean()[1];
+        assert!((very_centre - 1.0).abs() < 0.01, "{lens}: centre reads {very_centre}");
+        let centre = block_mean(&image, 22..26, 14..18);
+        let corner = block_mean(&image, 0..4, 0..4);
+        let edge = block_mean(&image, 0..4, 14..18);
+        // Falling toward the corners (the fisheye's image circle ends before the edges: both 0).
+        assert!(
+            corner <= edge && edge < centre && corner < 0.99 * centre,
+            "{lens}: corner {corner}, edge {edge}, centre {centre}"
+        );
+        // Symmetric about the centre: each half against its mirror image.
+        let (left, right) = (block_mean(&image, 0..24, 0..32), block_mean(&image, 24..48, 0..32));
+        let (top, bottom) = (block_mean(&image, 0..48, 0..16), block_mean(&image, 0..48, 16..32));
+        assert!(
+            (left - right).abs() < 0.01 * centre,
+            "{lens}: left {left}, right {right}"
+        );
+        assert!(
+            (top - bottom).abs() < 0.01 * centre,
+            "{lens}: top {top}, bottom {bottom}"
+        );
+    }
+}
+
+#[test]
+fn physical_exposure_darkens_with_the_square_of_the_f_number() {
+    let shot = |f_number| Shot {
+        lens: "dgauss50",
+        sensor_mm: (3.6, 2.4),
+        pixels: (12, 8),
+        focus: LensFocus::Distance(5.0),
+        f_number,
+        radiometry: Radiometry::Physical,
+        spp: 256,
+    };
+    let open = shoot(uniform_environment(), &shot(None)).mean()[1];
+    let f8 = shoot(uniform_environment(), &shot(Some(8.0))).mean()[1];
+    let wide_open = LensSystem::new(&LensPrescription::load("dgauss50").unwrap())
+        .paraxial()
+        .unwrap()
+        .f_number;
+    let expected = (wide_open / 8.0).powi(2);
+    assert!(
+        (f8 / open / expected - 1.0).abs() < 0.03,
+        "f/8 over wide open {}, expected {expected}",
+        f8 / open
+    );
+}
+
+/// An emitting sphere of `radius_m` on the axis at `distance_m` in the dark.
+fn point_source(distance_m: f32, radius_m: f32) -> Scene {
+    Scene {
+        spheres: vec![Sphere {
+            center: Vec3::new(0.0, 0.0, distance_m),
+            radius: radius_m,
+            material: 0,
+            emission: Some(Rgb::ONE),
+        }],
+        materials: vec![Material::Diffuse { reflectance: Rgb::ZERO }],
+        ..Default::default()
+    }
+}
+
+/// Diameter of the image of a point from the second moment of the
+/// brightness about its centroid: a uniform disc of diameter c has ⟨r²⟩ = c²/8.
+fn spot_diameter_mm(image: &Image, pitch_mm: f64) -> f64 {
+    let mut sum = 0.0;
+    let mut first = [0.0; 2];
+    let mut second = 0.0;
+    for y in 0..image.height {
+        for x in 0..image.width {
+            let v = f64::from(image.pixel(x, y)[1]);
+            let (px, py) = (f64::from(x) + 0.5, f64::from(y) + 0.5);
+            sum += v;
+            first[0] += v * px;
+            first[1] += v * py;
+            second += v * (px * px + py * py);
+        }
+    }
+    let (cx, cy) = (first[0] / sum, first[1] / sum);
+    let r2 = second / sum - cx * cx - cy * cy;
+    (8.0 * r2).sqrt() * pitch_mm
+}
+
+/// First-order optics of a point at `distance_mm` from the sensor: the
+/// blur disc diameter (the image by the Gaussian lens equation about the
+/// principal planes, the cone to it through the exit pupil, cut by the
+/// sensor) and the lateral magnification.
+fn first_order(system: &LensSystem, sensor_z: f64, distance_mm: f64) -> (f64, f64) {
+    let p = system.paraxial().unwrap();
+    let f = p.effective_focal_length_mm;
+    let object = (sensor_z - distance_mm - p.front_principal_plane_z_mm).abs();
+    let image = 1.0 / (1.0 / f - 1.0 / object);
+    let image_z = p.rear_principal_plane_z_mm + image;
+    let blur = p.exit_pupil_diameter_mm * (sensor_z - image_z).abs() / (image_z - p.exit_pupil_z_mm);
+    (blur, image / object)
+}
+
+/// The source's own image is a uniform disc of diameter 2·r·m; second
+/// moments of independent discs add, so the defocus disc is what remains.
+fn defocus_diameter_mm(image: &Image, source_radius_mm: f64, magnification: f64) -> f64 {
+    let measured = spot_diameter_mm(image, PITCH_MM);
+    let source = 2.0 * source_radius_mm * magnification;
+    (measured * measured - source * source).sqrt()
+}
+
+/// Sensor pixel pitch of the point shots.
+const PITCH_MM: f64 = 0.03;
+
+/// A source whose image is 2 pixels across wherever it is: large enough
+/// that a fair share of the camera rays in its blur disc hit it.
+fn source_radius_m(distance_m: f32) -> f32 {
+    // m ≈ f / distance for f = 50 mm: radius = pitch · distance / f.
+    (PITCH_MM / 50.0) as f32 * distance_m
+}
+
+fn point_shot(f_number: Option<f64>) -> Shot {
+    Shot {
+        lens: "dgauss50",
+        // A 2.88 mm crop of the sensor with 30 µm pixels.
+        sensor_mm: (2.88, 2.88),
+        pixels: (96, 96),
+        focus: LensFocus::Distance(2.0),
+        f_number,
+        radiometry: Radiometry::Normalized,
+        spp: 128,
+    }
+}
+
+#[test]
+fn a_point_in_focus_images_into_about_a_pixel() {
+    let shot = point_shot(Some(4.0));
+    let image = shoot(point_source(2.0, 0.0004), &shot);
+    // Energy within the 2×2 pixels around the image centre (60 µm square).
+    let total = block_mean(&image, 0..96, 0..96) * 96.0 * 96.0;
+    let core = block_mean(&image, 47..49, 47..49) * 4.0;
+    assert!(
+        core > 0.8 * total,
+        "only {:.0}% of the light in the central 2x2 pixels",
+        100.0 * core / total
+    );
+}
+
+#[test]
+fn defocus_blur_matches_first_order_optics() {
+    let shot = point_shot(Some(4.0));
+    let cam = camera(&shot);
+    for distance_m in [1.2f32, 4.0] {
+        let (predicted, magnification) = first_order(cam.system(), cam.sensor_z_mm(), f64::from(distance_m) * 1e3);
+        let radius = source_radius_m(distance_m);
+        let image = shoot(point_source(distance_m, radius), &shot);
+        let measured = defocus_diameter_mm(&image, f64::from(radius) * 1e3, magnification);
+        assert!(
+            (measured / predicted - 1.0).abs() < 0.1,
+            "point at {distance_m} m: blur {measured:.4} mm, first-order optics {predicted:.4} mm"
+        );
+    }
+}
+
+#[test]
+fn stopping_down_from_f2_to_f8_shrinks_the_blur_fourfold() {
+    let (distance_m, radius) = (1.2, source_radius_m(1.2));
+    let blur = |f_number| {
+        let shot = point_shot(f_number);
+        let cam = camera(&shot);
+        let (_, magnification) = first_order(cam.system(), cam.sensor_z_mm(), f64::from(distance_m) * 1e3);
+        defocus_diameter_mm(
+            &shoot(point_source(distance_m, radius), &shot),
+            f64::from(radius) * 1e3,
+            magnification,
+        )
+    };
+    let (open, f8) = (blur(None), blur(Some(8.0)));
+    assert!(
+        (open / f8 / 4.0 - 1.0).abs() < 0.1,
+        "blur wide open {open:.4} mm, at f/8 {f8:.4} mm"
+    );
+}
+
+#[test]
+fn most_generated_rays_get_through_at_the_centre() {
+    for (lens, _) in BUILTIN_LENSES {
+        for f_number in [None, Some(8.0)] {
+            let system = LensSystem::new(&LensPrescription::load(lens).unwrap());
+            let infinity = system.real_focus_at_infinity(0.1).unwrap().0;
+            let cam = camera(&Shot {
+                lens,
+                sensor_mm: (36.0, 24.0),
+                pixels: (360, 240),
+                focus: LensFocus::SensorPositionMm(infinity),
+                f_number,
+                radiometry: Radiometry::Normalized,
+                spp: 1,
+            });
+            let centre = cam.passing_fraction(Vec2::new(180.0, 120.0), 20_000);
+            assert!(
+                centre >= 0.9,
+                "{lens} at {f_number:?}: {:.1}% pass at the centre",
+                100.0 * centre
+            );
+        }
+    }
+}
