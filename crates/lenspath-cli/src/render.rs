@@ -188,6 +188,12 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
     let view = scene
         .view
         .ok_or_else(|| Error::InvalidArgument(format!("scene '{}' has no camera", args.scene)))?;
+    if args.fov.is_some() && matches!(args.camera, CameraKind::Realistic) {
+        return Err(Error::InvalidArgument(
+            "--fov is for --camera pinhole or thin-lens; through a real lens the field of view comes from --lens and --sensor"
+                .into(),
+        ));
+    }
     let fov = args.fov.unwrap_or(view.fov_y_deg);
     if !(fov > 0.0 && fov < 180.0) {
         return Err(Error::InvalidArgument(format!(

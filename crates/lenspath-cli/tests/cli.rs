@@ -104,7 +104,14 @@ fn bad_input_gives_one_error_line_and_exit_code_2() {
             vec!["render", "--threads", "0", "--out", ok],
             "threads must be at least 1",
         ),
-        (vec!["render", "--fov", "200", "--out", ok], "--fov"),
+        (
+            vec!["render", "--camera", "pinhole", "--fov", "200", "--out", ok],
+            "--fov",
+        ),
+        (
+            vec!["render", "--fov", "40", "--out", ok],
+            "--fov is for --camera pinhole or thin-lens",
+        ),
         (vec!["render", "--camera", "fisheye", "--out", ok], "fisheye"),
         (vec!["render", "--no-such-flag"], "--no-such-flag"),
         (vec!["bench", "bvh", "missing.ply"], "missing.ply"),

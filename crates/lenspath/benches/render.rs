@@ -1,13 +1,15 @@
 //! Full renders of the built-in Cornell box with spheres, on all cores:
-//! 480×360, max depth 16, at 4 spp × 4 light samples and 16 × 16.
+//! 480×360, max depth 16, at 4 spp × 4 light samples and 16 × 16 through a
+//! pinhole, and at 4 × 4 through the dgauss50 lens (camera set-up included).
 
 use std::sync::atomic::AtomicBool;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use lenspath::accel::BvhSettings;
 use lenspath::builtin::builtin_scene;
-use lenspath::camera::PerspectiveCamera;
+use lenspath::camera::{LensFocus, PerspectiveCamera, Radiometry, RealisticCamera, RealisticCameraSettings};
 use lenspath::integrator::PathSettings;
+use lenspath::lens::LensPrescription;
 use lenspath::render::{render, RenderSettings};
 
 fn cornell(c: &mut Criterion) {
@@ -33,6 +35,30 @@ fn cornell(c: &mut Criterion) {
             b.iter(|| render(&compiled, &camera, &settings, &|_, _| {}, &AtomicBool::new(false)).unwrap())
         });
     }
+    let settings = RenderSettings {
+        width: 480,
+        height: 360,
+        spp: 4,
+        path: PathSettings {
+            max_depth: 16,
+            light_samples: 4,
+        },
+        ..Default::default()
+    };
+    let lens = RealisticCameraSettings {
+        lens: LensPrescription::load("dgauss50").unwrap(),
+        sensor_mm: (36.0, 27.0),
+        focus: LensFocus::Distance(f64::from(view.focus_distance)),
+        f_number: None,
+        scene_unit_m: 1.0,
+        radiometry: Radiometry::Normalized,
+    };
+    group.bench_function("4spp_4ls_dgauss50", |b| {
+        b.iter(|| {
+            let camera = RealisticCamera::new(view.pose, 480, 360, &lens).unwrap();
+            render(&compiled, &camera, &settings, &|_, _| {}, &AtomicBool::new(false)).unwrap()
+        })
+    });
     group.finish();
 }
 

@@ -203,35 +203,55 @@ fn render_in_pool(
             let mut tile_invalid = 0u64;
             for ty in 0..tile.height {
                 for tx in 0..tile.width {
-                    let (px, py) = (tile.x0 + tx, tile.y0 + ty);
-                    let i = (ty * tile.width + tx) as usize;
-                    let centre = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
                     if pass_start == 0 {
                         // Depth along the first lens position the optics let through.
-                        let ray = depth_lens_samples()
-                            .find_map(|lens| camera.generate_ray(CameraSample { film: centre, lens }));
+                        let (px, py) = (tile.x0 + tx, tile.y0 + ty);
+                        let film = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
+                        let ray =
+                            depth_lens_samples().find_map(|lens| camera.generate_ray(CameraSample { film, lens }));
                         tile_rays += u64::from(ray.is_some());
                         if let Some(hit) = ray.and_then(|cr| scene.intersect(&cr.ray)) {
-                            tile.depth[i] = (hit.p - axis_origin).dot(axis_dir);
+                            tile.depth[(ty * tile.width + tx) as usize] = (hit.p - axis_origin).dot(axis_dir);
                         }
                     }
-                    let mut sum = tile.sum[i];
+                }
+                // Pixels in pairs, so a camera can trace two rays at once
+                // (the realistic camera does); every pixel keeps its own
+                // samplers and its sum's order, so the image does not change.
+                for tx in (0..tile.width).step_by(2) {
+                    let pixels = if tx + 1 < tile.width { 2 } else { 1 };
+                    let pair = [tx, (tx + 1).min(tile.width - 1)].map(|x| (tile.x0 + x, tile.y0 + ty));
+                    let slots = [tx, tx + 1].map(|x| (ty * tile.width + x) as usize);
                     for index in pass_start..pass_end {
-                        let mut sampler = Sampler::new(px, py, index, settings.seed);
-                        let film = centre + settings.filter.sample_offset(sampler.get_2d());
-                        let lens = sampler.get_2d();
-                        let mut l = Rgb::ZERO;
-                        if let Some(cr) = camera.generate_ray(CameraSample { film, lens }) {
-                            l = cr.weight * radiance(scene, cr.ray, &mut sampler, &settings.path, &mut tile_rays);
-                        }
-                        if l.is_finite() {
-                            sum += l.as_dvec3();
+                        let mut samplers = pair.map(|(px, py)| Sampler::new(px, py, index, settings.seed));
+                        let samples: [CameraSample; 2] = std::array::from_fn(|k| {
+                            let (px, py) = pair[k];
+                            let centre = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
+                            let film = centre + settings.filter.sample_offset(samplers[k].get_2d());
+                            CameraSample {
+                                film,
+                                lens: samplers[k].get_2d(),
+                            }
+                        });
+                        let rays = if pixels == 2 {
+                            camera.generate_ray_pair(samples)
                         } else {
-                            tile_invalid += 1;
+                            [camera.generate_ray(samples[0]), None]
+                        };
+                        for ((ray, sampler), &slot) in rays.into_iter().zip(&mut samplers).zip(&slots).take(pixels) {
+                            let l = ray.map_or(Rgb::ZERO, |cr| {
+                                cr.weight * radiance(scene, cr.ray, sampler, &settings.path, &mut tile_rays)
+                            });
+                            if l.is_finite() {
+                                tile.sum[slot] += l.as_dvec3();
+                            } else {
+                                tile_invalid += 1;
+                            }
                         }
                     }
-                    tile.sum[i] = sum;
-                    tile.count[i] = pass_end;
+                    for &slot in slots.iter().take(pixels) {
+                        tile.count[slot] = pass_end;
+                    }
                 }
             }
             rays.fetch_add(tile_rays, Ordering::Relaxed);

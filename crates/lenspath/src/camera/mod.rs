@@ -37,6 +37,11 @@ pub trait Camera: Send + Sync {
     /// The ray for `sample`, or `None` when the optics block it.
     fn generate_ray(&self, sample: CameraSample) -> Option<CameraRay>;
 
+    /// Rays for two samples at once, for cameras that trace faster in pairs.
+    fn generate_ray_pair(&self, samples: [CameraSample; 2]) -> [Option<CameraRay>; 2] {
+        samples.map(|s| self.generate_ray(s))
+    }
+
     /// Camera position and unit viewing direction in scene space, which
     /// define the depth (Z) output: the distance along this axis.
     fn view_axis(&self) -> (Vec3, Vec3);

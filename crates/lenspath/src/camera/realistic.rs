@@ -19,7 +19,7 @@ use crate::ray::Ray;
 use crate::sampling::Rng;
 
 /// Radial bands of the sensor, each with its own pupil grid.
-const PUPIL_BANDS: usize = 32;
+const PUPIL_BANDS: usize = 16;
 /// Cells per side of a band's pupil grid.
 const PUPIL_GRID: usize = 48;
 /// Film positions traced per band (its two edges and between).
@@ -311,18 +311,39 @@ fn bound_pupil(system: &LensSystem, sensor_z: f64, r0: f64, width: f64) -> Pupil
     // the rear aperture (pbrt's margin): the centroids of passing points.
     let reach = 1.5 * system.rear_aperture_radius();
     let coarse = 2.0 * reach / (BOUNDING_GRID - 1) as f64;
-    let passing_at = |r: f64| {
+    let scan = |r: f64, lo: DVec2, step: DVec2| {
         let mut points = Vec::new();
         for i in 0..BOUNDING_GRID {
             for j in 0..BOUNDING_GRID {
-                let q = DVec2::new(-reach + coarse * j as f64, -reach + coarse * i as f64);
+                let q = lo + DVec2::new(j as f64, i as f64) * step;
                 if passes_from(r, q) {
                     points.push(q);
                 }
             }
         }
+        points
+    };
+    // The pupil of one film position: found on the coarse grid, then its
+    // centroid and extent measured on a grid over just the pupil.
+    let passing_at = |r: f64| {
+        let coarse_points = scan(r, DVec2::splat(-reach), DVec2::splat(coarse));
+        let (lo, hi) = coarse_points.iter().fold(
+            (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
+            |(a, b), &q| (a.min(q), b.max(q)),
+        );
+        if coarse_points.is_empty() {
+            return None;
+        }
+        let (lo, hi) = (lo - coarse, hi + coarse);
+        let step = (hi - lo) / (BOUNDING_GRID - 1) as f64;
+        let fine = scan(r, lo, step);
+        let (points, step) = if fine.is_empty() {
+            (coarse_points, DVec2::splat(coarse))
+        } else {
+            (fine, step)
+        };
         let centroid = points.iter().sum::<DVec2>() / points.len() as f64;
-        (!points.is_empty()).then_some((centroid, points))
+        Some((centroid, points, step))
     };
     let (first, last) = (passing_at(films[0]), passing_at(films[films.len() - 1]));
     let (centre, centre_slope) = match (&first, &last) {
@@ -336,28 +357,15 @@ fn bound_pupil(system: &LensSystem, sensor_z: f64, r0: f64, width: f64) -> Pupil
             .iter()
             .any(|&r| passes_from(r, centre + centre_slope * (r - r0) + q))
     };
-    // 3. Bound it: the coarse points around their centroids, widened by a
-    // coarse step, then again on a finer grid over those bounds.
+    // 3. Bound it: both ends' pupils about their centroids, widened by two
+    // of their scan steps (the middle position's pupil lies between them).
     let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
-    for (c, points) in first.iter().chain(last.iter()) {
+    for (c, points, step) in first.iter().chain(last.iter()) {
         for &q in points {
-            lo = lo.min(q - c);
-            hi = hi.max(q - c);
+            lo = lo.min(q - *c - 2.0 * *step);
+            hi = hi.max(q - *c + 2.0 * *step);
         }
     }
-    let (lo, hi) = (lo - 2.0 * coarse, hi + 2.0 * coarse);
-    let step = (hi - lo) / (BOUNDING_GRID - 1) as f64;
-    let (mut a, mut b) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
-    for i in 0..BOUNDING_GRID {
-        for j in 0..BOUNDING_GRID {
-            let q = lo + DVec2::new(j as f64, i as f64) * step;
-            if passes(q) {
-                a = a.min(q);
-                b = b.max(q);
-            }
-        }
-    }
-    let (lo, hi) = if a.x <= b.x { (a - step, b + step) } else { (lo, hi) };
     // 4. Keep the cells any of whose corners or centre passes.
     let cell = (hi - lo) / PUPIL_GRID as f64;
     let corner_passes: Vec<bool> = (0..=PUPIL_GRID)
@@ -386,11 +394,9 @@ fn bound_pupil(system: &LensSystem, sensor_z: f64, r0: f64, width: f64) -> Pupil
     }
 }
 
-impl Camera for RealisticCamera {
-    fn generate_ray(&self, sample: CameraSample) -> Option<CameraRay> {
-        let p_film = self.film_point(sample.film);
-        let (ray, weight) = self.lens_ray(p_film, sample.lens)?;
-        let out = self.system.trace(&ray, Direction::ToScene)?;
+impl RealisticCamera {
+    /// The scene ray of a ray leaving the lens, with its weight.
+    fn scene_ray(&self, out: &LensRay, weight: f64) -> CameraRay {
         // Lens coordinates → camera space: the sensor centre is the origin,
         // +z looks into the scene (lens z runs the other way), mm → scene units.
         let origin = Vec3::new(
@@ -400,10 +406,30 @@ impl Camera for RealisticCamera {
         ) * self.scene_per_mm as f32;
         let direction = Vec3::new(out.direction.x as f32, out.direction.y as f32, -out.direction.z as f32);
         let m = &self.pose.render_from_camera;
-        Some(CameraRay {
+        CameraRay {
             ray: Ray::new(m.transform_point3(origin), m.transform_vector3(direction).normalize()),
             weight: (weight * self.weight_scale) as f32,
-        })
+        }
+    }
+}
+
+impl Camera for RealisticCamera {
+    fn generate_ray(&self, sample: CameraSample) -> Option<CameraRay> {
+        let (ray, weight) = self.lens_ray(self.film_point(sample.film), sample.lens)?;
+        let out = self.system.trace(&ray, Direction::ToScene)?;
+        Some(self.scene_ray(&out, weight))
+    }
+
+    fn generate_ray_pair(&self, samples: [CameraSample; 2]) -> [Option<CameraRay>; 2] {
+        let [a, b] = samples.map(|s| self.lens_ray(self.film_point(s.film), s.lens));
+        let (Some((ray_a, weight_a)), Some((ray_b, weight_b))) = (a, b) else {
+            return samples.map(|s| self.generate_ray(s));
+        };
+        let [out_a, out_b] = self.system.trace_many(&[ray_a, ray_b], Direction::ToScene);
+        [
+            out_a.map(|o| self.scene_ray(&o, weight_a)),
+            out_b.map(|o| self.scene_ray(&o, weight_b)),
+        ]
     }
 
     fn view_axis(&self) -> (Vec3, Vec3) {

@@ -190,6 +190,16 @@ impl LensPrescription {
                 aperture_diameter_mm,
             });
         }
+        let (last_line, last) = (rows[rows.len() - 1].0, surfaces[surfaces.len() - 1]);
+        if last.ior != 1.0 {
+            return Err(fail(
+                last_line,
+                format!(
+                    "the last surface must leave the light in air (index 1) for the sensor, not {}",
+                    last.ior
+                ),
+            ));
+        }
         if stop_line.is_none() {
             return Err(Error::Parse {
                 path: source.into(),
@@ -281,6 +291,10 @@ mod tests {
             ),
             ("10 2 0.5 8\n0 1 0 4\n", "line 1: index of refraction 0.5 is below 1"),
             ("10 -2 1.5 8\n0 1 0 4\n", "line 1: thickness -2 mm is negative"),
+            (
+                "0 1 0 4\n10 2 1.5 8\n",
+                "line 2: the last surface must leave the light in air",
+            ),
             ("# nothing\n", "no surfaces"),
         ];
         for (text, expected) in cases {
