@@ -6,6 +6,9 @@
 //! [`camera::Camera`] for rays, and the [`integrator`] estimates the radiance
 //! along each; the [`film::Image`] is written by [`io::image`].
 //!
+//! The default camera, [`camera::RealisticCamera`], traces every ray through
+//! a real lens prescription ([`lens::LensSystem`]).
+//!
 //! The library never prints or exits; every failure is an [`Error`].
 //!
 //! ```
