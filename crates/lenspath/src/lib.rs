@@ -30,6 +30,7 @@
 #![warn(missing_docs)]
 
 pub mod accel;
+pub mod autofocus;
 pub mod builtin;
 pub mod camera;
 pub mod error;
