@@ -118,7 +118,7 @@ pub fn run(args: LensArgs) -> Result<Outcome> {
     if args.json {
         let mut json = serde_json::to_value(analysis).map_err(|e| Error::InvalidArgument(e.to_string()))?;
         let object = json.as_object_mut().expect("a struct serialises to an object");
-        object.insert("lens".into(), prescription.name.clone().into());
+        object.insert("lens".into(), prescription.name().into());
         object.insert("sensor_width_mm".into(), sensor_mm.0.into());
         object.insert("sensor_height_mm".into(), sensor_mm.1.into());
         object.insert("passing_fraction_centre".into(), centre.into());
@@ -136,7 +136,7 @@ pub fn run(args: LensArgs) -> Result<Outcome> {
     }
 
     let a = &analysis;
-    println!("lens                      {}", prescription.name);
+    println!("lens                      {}", prescription.name());
     println!("                          positions in mm along the axis from the aperture stop, + toward the sensor");
     println!("paraxial");
     println!("  effective focal length  {:.4} mm", a.effective_focal_length_mm);

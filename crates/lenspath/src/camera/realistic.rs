@@ -179,7 +179,7 @@ impl RealisticCamera {
         if pupils[0].cells.is_empty() {
             return Err(Error::InvalidArgument(format!(
                 "no light reaches the sensor centre through {} with the sensor {sensor_z_mm:.3} mm behind the stop",
-                settings.lens.name
+                settings.lens.name()
             )));
         }
         let mut camera = RealisticCamera {
@@ -422,11 +422,15 @@ impl Camera for RealisticCamera {
     }
 
     fn generate_ray_pair(&self, samples: [CameraSample; 2]) -> [Option<CameraRay>; 2] {
-        let [a, b] = samples.map(|s| self.lens_ray(self.film_point(s.film), s.lens));
-        let (Some((ray_a, weight_a)), Some((ray_b, weight_b))) = (a, b) else {
-            return samples.map(|s| self.generate_ray(s));
+        let starts = samples.map(|s| self.lens_ray(self.film_point(s.film), s.lens));
+        let [Some((a, weight_a)), Some((b, weight_b))] = starts else {
+            // A film point with no open pupil: trace whichever ray there is on its own.
+            return starts.map(|start| {
+                let (ray, weight) = start?;
+                Some(self.scene_ray(&self.system.trace(&ray, Direction::ToScene)?, weight))
+            });
         };
-        let [out_a, out_b] = self.system.trace_many(&[ray_a, ray_b], Direction::ToScene);
+        let [out_a, out_b] = self.system.trace_many(&[a, b], Direction::ToScene);
         [
             out_a.map(|o| self.scene_ray(&o, weight_a)),
             out_b.map(|o| self.scene_ray(&o, weight_b)),

@@ -45,7 +45,7 @@ pub fn layout_svg(system: &LensSystem, analysis: &LensAnalysis, sensor_diagonal_
     let _ = writeln!(
         svg,
         r##"<text x="8" y="18" font-family="sans-serif" font-size="14">{} — EFL {:.2} mm, f/{:.2}, {:.1}° diagonal field ({:.0} mm sensor diagonal), focused at infinity</text>"##,
-        system.prescription().name,
+        system.prescription().name(),
         analysis.effective_focal_length_mm,
         analysis.f_number,
         analysis.diagonal_fov_deg,

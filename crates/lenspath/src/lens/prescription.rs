@@ -45,13 +45,15 @@ pub enum TableConvention {
     DistanceFromPrevious,
 }
 
-/// A lens: its surfaces from front to back.
+/// A lens: its surfaces from front to back. Only [`LensPrescription::parse`]
+/// and [`LensPrescription::load`] make one, so every prescription has been
+/// validated (one stop, sane numbers, air behind the last surface).
 #[derive(Clone, Debug, PartialEq)]
 pub struct LensPrescription {
     /// Where it came from (a built-in name or a file path).
-    pub name: String,
+    pub(crate) name: String,
     /// Surfaces from the scene side to the sensor side.
-    pub surfaces: Vec<LensSurface>,
+    pub(crate) surfaces: Vec<LensSurface>,
 }
 
 /// Built-in lenses: name, table (the published prescriptions scaled as pbrt ships them).
@@ -227,6 +229,16 @@ impl LensPrescription {
                 })
                 .collect(),
         }
+    }
+
+    /// Where it came from (a built-in name or a file path).
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Surfaces from the scene side to the sensor side.
+    pub fn surfaces(&self) -> &[LensSurface] {
+        &self.surfaces
     }
 
     /// Index of the aperture stop.

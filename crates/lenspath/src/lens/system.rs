@@ -793,8 +793,8 @@ mod tests {
     /// numbers used to search for its bracket forever. It must end, with an
     /// answer or an error, and nothing may panic. The found table
     /// (`0 37 0 8.` / `-9.58584 22.E88 51 3.1`) now fails validation (it
-    /// leaves the sensor in glass), so its surfaces are built directly, as
-    /// a library user may.
+    /// leaves the sensor in glass), so its surfaces are built directly here;
+    /// the bound on the search stays as a second line of defence.
     #[test]
     fn extreme_lenses_end_in_an_answer_or_an_error() {
         let surface = |radius_mm, thickness_mm, ior, aperture_diameter_mm| LensSurface {
