@@ -202,17 +202,14 @@ fn render_in_pool(
             let mut tile_rays = 0u64;
             let mut tile_invalid = 0u64;
             for ty in 0..tile.height {
-                for tx in 0..tile.width {
-                    if pass_start == 0 {
-                        // Depth along the first lens position the optics let through.
-                        let (px, py) = (tile.x0 + tx, tile.y0 + ty);
-                        let film = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
-                        let ray =
-                            depth_lens_samples().find_map(|lens| camera.generate_ray(CameraSample { film, lens }));
-                        tile_rays += u64::from(ray.is_some());
-                        if let Some(hit) = ray.and_then(|cr| scene.intersect(&cr.ray)) {
-                            tile.depth[(ty * tile.width + tx) as usize] = (hit.p - axis_origin).dot(axis_dir);
-                        }
+                // Depth, in the first pass: along the first lens position the optics let through.
+                for tx in (0..tile.width).filter(|_| pass_start == 0) {
+                    let (px, py) = (tile.x0 + tx, tile.y0 + ty);
+                    let film = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
+                    let ray = depth_lens_samples().find_map(|lens| camera.generate_ray(CameraSample { film, lens }));
+                    tile_rays += u64::from(ray.is_some());
+                    if let Some(hit) = ray.and_then(|cr| scene.intersect(&cr.ray)) {
+                        tile.depth[(ty * tile.width + tx) as usize] = (hit.p - axis_origin).dot(axis_dir);
                     }
                 }
                 // Pixels in pairs, so a camera can trace two rays at once
