@@ -12,7 +12,7 @@ use lenspath::film::Filter;
 use lenspath::integrator::PathSettings;
 use lenspath::io::image::{check_output_path, write_image};
 use lenspath::lens::LensPrescription;
-use lenspath::render::{render, RenderSettings};
+use lenspath::render::{render, PixelRect, RenderSettings};
 use lenspath::{Error, Result};
 
 use crate::progress::Progress;
@@ -91,6 +91,17 @@ fn parse_resolution(s: &str) -> std::result::Result<Resolution, String> {
     Ok(Resolution { width, height })
 }
 
+fn parse_crop(s: &str) -> std::result::Result<PixelRect, String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let numbers: Vec<u32> = parts.iter().filter_map(|p| p.parse().ok()).collect();
+    match numbers[..] {
+        [x0, y0, width, height] if parts.len() == 4 => Ok(PixelRect { x0, y0, width, height }),
+        _ => Err(format!(
+            "expected X,Y,WIDTH,HEIGHT in pixels such as 100,80,64,48, got '{s}'"
+        )),
+    }
+}
+
 /// Options of `lenspath render`.
 #[derive(Args, Debug)]
 #[command(allow_negative_numbers = true)]
@@ -158,6 +169,10 @@ pub struct RenderArgs {
     /// Pixel reconstruction filter.
     #[arg(long, value_enum, default_value = "box")]
     filter: FilterKind,
+    /// Render only this rectangle of the image, X,Y,WIDTH,HEIGHT in pixels; its pixels are exactly
+    /// those of the full render.
+    #[arg(long, value_name = "X,Y,W,H", value_parser = parse_crop)]
+    crop: Option<PixelRect>,
 }
 
 /// Runs `lenspath render`.
@@ -178,6 +193,7 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
         },
         threads: args.threads,
         tile_size: 16,
+        crop: args.crop,
     };
     settings.validate()?;
     if !args.exposure.is_finite() {
@@ -297,10 +313,14 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
         );
     }
     eprintln!(
-        "rendered {} {}x{} at {} spp in {:.3} s: {:.2} M samples/s, {:.2} M rays/s -> {}",
+        "rendered {} {}x{}{} at {} spp in {:.3} s: {:.2} M samples/s, {:.2} M rays/s -> {}",
         args.scene,
-        settings.width,
-        settings.height,
+        output.image.width,
+        output.image.height,
+        args.crop.map_or(String::new(), |_| format!(
+            " (crop of {}x{})",
+            settings.width, settings.height
+        )),
         output.image.spp_min,
         s.seconds,
         s.samples as f64 / s.seconds / 1e6,

@@ -81,6 +81,11 @@ fn bad_input_gives_one_error_line_and_exit_code_2() {
         ),
         (vec!["lens", "nosuch"], "unknown lens 'nosuch'"),
         (
+            vec!["render", "--crop", "600,0,64,48", "--out", ok],
+            "leaves the 640x480 image",
+        ),
+        (vec!["render", "--crop", "1,2,3", "--out", ok], "X,Y,WIDTH,HEIGHT"),
+        (
             vec!["lens", "dgauss50", "--ray-height-mm", "-1"],
             "--ray-height-mm must be positive",
         ),

@@ -41,6 +41,23 @@ pub struct RenderSettings {
     pub threads: Option<usize>,
     /// Edge of the square tiles, in pixels.
     pub tile_size: u32,
+    /// Render only this rectangle of the image (pbrt's crop window): the
+    /// output is the rectangle, each pixel exactly as in the full render.
+    /// For patches rendered many times, as autofocus does.
+    pub crop: Option<PixelRect>,
+}
+
+/// A rectangle of pixels: columns `x0..x0 + width`, rows `y0..y0 + height`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PixelRect {
+    /// First column.
+    pub x0: u32,
+    /// First row.
+    pub y0: u32,
+    /// Columns.
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
 }
 
 impl Default for RenderSettings {
@@ -57,6 +74,7 @@ impl Default for RenderSettings {
             filter: Filter::Box,
             threads: None,
             tile_size: 16,
+            crop: None,
         }
     }
 }
@@ -94,6 +112,16 @@ impl RenderSettings {
         }
         if self.tile_size == 0 {
             return fail("tile size must be positive".into());
+        }
+        if let Some(c) = self.crop {
+            let inside =
+                |start: u32, len: u32, size: u32| len > 0 && start.checked_add(len).is_some_and(|end| end <= size);
+            if !inside(c.x0, c.width, self.width) || !inside(c.y0, c.height, self.height) {
+                return fail(format!(
+                    "crop {}x{} at ({}, {}) is empty or leaves the {}x{} image",
+                    c.width, c.height, c.x0, c.y0, self.width, self.height
+                ));
+            }
         }
         if let Filter::Gaussian { sigma, radius } = self.filter {
             if !(sigma > 0.0 && radius > 0.0 && sigma.is_finite() && radius.is_finite()) {
@@ -168,10 +196,17 @@ fn render_in_pool(
 ) -> RenderOutput {
     let started = Instant::now();
     let ts = settings.tile_size;
+    let region = settings.crop.unwrap_or(PixelRect {
+        x0: 0,
+        y0: 0,
+        width: settings.width,
+        height: settings.height,
+    });
+    let (region_x1, region_y1) = (region.x0 + region.width, region.y0 + region.height);
     let mut tiles: Vec<Tile> = Vec::new();
-    for y0 in (0..settings.height).step_by(ts as usize) {
-        for x0 in (0..settings.width).step_by(ts as usize) {
-            let (width, height) = (ts.min(settings.width - x0), ts.min(settings.height - y0));
+    for y0 in (region.y0..region_y1).step_by(ts as usize) {
+        for x0 in (region.x0..region_x1).step_by(ts as usize) {
+            let (width, height) = (ts.min(region_x1 - x0), ts.min(region_y1 - y0));
             let n = (width * height) as usize;
             tiles.push(Tile {
                 x0,
@@ -185,7 +220,7 @@ fn render_in_pool(
         }
     }
     let (axis_origin, axis_dir) = camera.view_axis();
-    let total = u64::from(settings.width) * u64::from(settings.height) * u64::from(settings.spp);
+    let total = u64::from(region.width) * u64::from(region.height) * u64::from(settings.spp);
     let done = AtomicU64::new(0);
     let rays = AtomicU64::new(0);
     let invalid = AtomicU64::new(0);
@@ -261,7 +296,7 @@ fn render_in_pool(
     }
 
     // Resolve: each pixel is the mean of its samples.
-    let (w, h) = (settings.width as usize, settings.height as usize);
+    let (w, h) = (region.width as usize, region.height as usize);
     let mut rgb = vec![0f32; 3 * w * h];
     let mut depth = vec![f32::INFINITY; w * h];
     let mut spp_min = u32::MAX;
@@ -270,7 +305,7 @@ fn render_in_pool(
         for ty in 0..tile.height {
             for tx in 0..tile.width {
                 let i = (ty * tile.width + tx) as usize;
-                let o = (tile.y0 + ty) as usize * w + (tile.x0 + tx) as usize;
+                let o = (tile.y0 + ty - region.y0) as usize * w + (tile.x0 + tx - region.x0) as usize;
                 let n = tile.count[i];
                 spp_min = spp_min.min(n);
                 samples += u64::from(n);
@@ -283,8 +318,8 @@ fn render_in_pool(
     let cancelled = samples < total;
     RenderOutput {
         image: Image {
-            width: settings.width,
-            height: settings.height,
+            width: region.width,
+            height: region.height,
             rgb,
             depth,
             spp_min: if spp_min == u32::MAX { 0 } else { spp_min },
