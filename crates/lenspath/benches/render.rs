@@ -10,7 +10,7 @@ use lenspath::builtin::builtin_scene;
 use lenspath::camera::{LensFocus, PerspectiveCamera, Radiometry, RealisticCamera, RealisticCameraSettings};
 use lenspath::integrator::PathSettings;
 use lenspath::lens::LensPrescription;
-use lenspath::render::{render, RenderSettings};
+use lenspath::render::{render, PixelRect, RenderSettings};
 
 fn cornell(c: &mut Criterion) {
     let scene = builtin_scene("cornell-spheres", 0).unwrap();
@@ -62,5 +62,36 @@ fn cornell(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, cornell);
+/// Setting up the realistic camera (focusing, bounding the exit pupil): for
+/// the whole image, and for a 64×64 patch as autofocus renders many times.
+fn camera_setup(c: &mut Criterion) {
+    let view = builtin_scene("cornell-spheres", 0).unwrap().view.unwrap();
+    let lens = RealisticCameraSettings {
+        lens: LensPrescription::load("dgauss50").unwrap(),
+        sensor_mm: (36.0, 27.0),
+        focus: LensFocus::Distance(f64::from(view.focus_distance)),
+        f_number: None,
+        scene_unit_m: 1.0,
+        radiometry: Radiometry::Normalized,
+    };
+    let mut group = c.benchmark_group("realistic_camera_setup_640x480");
+    group.sample_size(20);
+    group.bench_function("full", |b| {
+        b.iter(|| RealisticCamera::new(view.pose, 640, 480, &lens).unwrap())
+    });
+    for (name, x0, y0) in [("patch_64_centre", 288, 208), ("patch_64_off_centre", 500, 60)] {
+        let region = PixelRect {
+            x0,
+            y0,
+            width: 64,
+            height: 64,
+        };
+        group.bench_function(name, |b| {
+            b.iter(|| RealisticCamera::for_region(view.pose, 640, 480, &lens, region).unwrap())
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, cornell, camera_setup);
 criterion_main!(benches);

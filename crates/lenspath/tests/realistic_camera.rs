@@ -477,6 +477,27 @@ fn a_crop_is_the_same_pixels_as_the_full_render() {
             );
         }
     }
+    // A camera bounding only the region's pupil bands gives the same pixels.
+    let settings = RenderSettings {
+        width: w,
+        height: h,
+        spp: 5,
+        crop: Some(rect),
+        ..Default::default()
+    };
+    let lens = RealisticCameraSettings {
+        lens: LensPrescription::load("dgauss50").unwrap(),
+        sensor_mm: (36.0, 36.0 * f64::from(h) / f64::from(w)),
+        focus: LensFocus::Distance(f64::from(view.focus_distance)),
+        f_number: None,
+        scene_unit_m: 1.0,
+        radiometry: Radiometry::Normalized,
+    };
+    let patch_camera = RealisticCamera::for_region(view.pose, w, h, &lens, rect).unwrap();
+    let patch = render(&compiled, &patch_camera, &settings, &|_, _| {}, &AtomicBool::new(false))
+        .unwrap()
+        .image;
+    assert_eq!(patch.rgb, part.rgb);
     let outside = RenderSettings {
         width: w,
         height: h,
