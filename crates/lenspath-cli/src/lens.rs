@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 use glam::{Vec2, Vec3};
-use lenspath::camera::{CameraPose, LensFocus, Radiometry, RealisticCamera, RealisticCameraSettings};
+use lenspath::camera::{CameraPose, LensFocus, RealisticCamera, RealisticCameraSettings};
 use lenspath::io::write_text;
 use lenspath::lens::plot::layout_svg;
 use lenspath::lens::{AnalysisSettings, LensAnalysis, LensPrescription, LensSystem};
@@ -99,12 +99,12 @@ pub fn run(args: LensArgs) -> Result<Outcome> {
         width_px,
         height_px,
         &RealisticCameraSettings {
-            lens: prescription.clone(),
-            sensor_mm,
-            focus: LensFocus::SensorPositionMm(analysis.infinity_focus_mm),
             f_number: args.fstop,
-            scene_unit_m: 1.0,
-            radiometry: Radiometry::Normalized,
+            ..RealisticCameraSettings::new(
+                prescription.clone(),
+                sensor_mm,
+                LensFocus::SensorPositionMm(analysis.infinity_focus_mm),
+            )
         },
     )?;
     let centre = camera.passing_fraction(Vec2::new(width_px as f32, height_px as f32) * 0.5, PASSING_SAMPLES);

@@ -7,7 +7,7 @@ use std::sync::atomic::AtomicBool;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use lenspath::accel::BvhSettings;
 use lenspath::builtin::builtin_scene;
-use lenspath::camera::{LensFocus, PerspectiveCamera, Radiometry, RealisticCamera, RealisticCameraSettings};
+use lenspath::camera::{LensFocus, PerspectiveCamera, RealisticCamera, RealisticCameraSettings};
 use lenspath::integrator::PathSettings;
 use lenspath::lens::LensPrescription;
 use lenspath::render::{render, PixelRect, RenderSettings};
@@ -45,14 +45,11 @@ fn cornell(c: &mut Criterion) {
         },
         ..Default::default()
     };
-    let lens = RealisticCameraSettings {
-        lens: LensPrescription::load("dgauss50").unwrap(),
-        sensor_mm: (36.0, 27.0),
-        focus: LensFocus::Distance(f64::from(view.focus_distance)),
-        f_number: None,
-        scene_unit_m: 1.0,
-        radiometry: Radiometry::Normalized,
-    };
+    let lens = RealisticCameraSettings::new(
+        LensPrescription::load("dgauss50").unwrap(),
+        (36.0, 27.0),
+        LensFocus::Distance(f64::from(view.focus_distance)),
+    );
     group.bench_function("4spp_4ls_dgauss50", |b| {
         b.iter(|| {
             let camera = RealisticCamera::new(view.pose, 480, 360, &lens).unwrap();
@@ -66,14 +63,11 @@ fn cornell(c: &mut Criterion) {
 /// the whole image, and for a 64×64 patch as autofocus renders many times.
 fn camera_setup(c: &mut Criterion) {
     let view = builtin_scene("cornell-spheres", 0).unwrap().view.unwrap();
-    let lens = RealisticCameraSettings {
-        lens: LensPrescription::load("dgauss50").unwrap(),
-        sensor_mm: (36.0, 27.0),
-        focus: LensFocus::Distance(f64::from(view.focus_distance)),
-        f_number: None,
-        scene_unit_m: 1.0,
-        radiometry: Radiometry::Normalized,
-    };
+    let lens = RealisticCameraSettings::new(
+        LensPrescription::load("dgauss50").unwrap(),
+        (36.0, 27.0),
+        LensFocus::Distance(f64::from(view.focus_distance)),
+    );
     let mut group = c.benchmark_group("realistic_camera_setup_640x480");
     group.sample_size(20);
     group.bench_function("full", |b| {

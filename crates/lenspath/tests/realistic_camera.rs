@@ -33,12 +33,9 @@ fn camera(shot: &Shot) -> RealisticCamera {
         shot.pixels.0,
         shot.pixels.1,
         &RealisticCameraSettings {
-            lens: LensPrescription::load(shot.lens).unwrap(),
-            sensor_mm: shot.sensor_mm,
-            focus: shot.focus,
             f_number: shot.f_number,
-            scene_unit_m: 1.0,
             radiometry: shot.radiometry,
+            ..RealisticCameraSettings::new(LensPrescription::load(shot.lens).unwrap(), shot.sensor_mm, shot.focus)
         },
     )
     .unwrap()
@@ -394,14 +391,11 @@ fn the_image_through_a_lens_is_identical_for_any_thread_count() {
         view.pose,
         33,
         25,
-        &RealisticCameraSettings {
-            lens: LensPrescription::load("dgauss50").unwrap(),
-            sensor_mm: (36.0, 36.0 * 25.0 / 33.0),
-            focus: LensFocus::Distance(f64::from(view.focus_distance)),
-            f_number: None,
-            scene_unit_m: 1.0,
-            radiometry: Radiometry::Normalized,
-        },
+        &RealisticCameraSettings::new(
+            LensPrescription::load("dgauss50").unwrap(),
+            (36.0, 36.0 * 25.0 / 33.0),
+            LensFocus::Distance(f64::from(view.focus_distance)),
+        ),
     )
     .unwrap();
     let compiled = scene().compile(&BvhSettings::default()).unwrap();
@@ -432,22 +426,14 @@ fn a_crop_is_the_same_pixels_as_the_full_render() {
     let scene = lenspath::builtin::builtin_scene("cornell-spheres", 0).unwrap();
     let view = scene.view.unwrap();
     let (w, h) = (37u32, 29u32);
-    let cam = RealisticCamera::new(
-        view.pose,
-        w,
-        h,
-        &RealisticCameraSettings {
-            lens: LensPrescription::load("dgauss50").unwrap(),
-            sensor_mm: (36.0, 36.0 * f64::from(h) / f64::from(w)),
-            focus: LensFocus::Distance(f64::from(view.focus_distance)),
-            f_number: None,
-            scene_unit_m: 1.0,
-            radiometry: Radiometry::Normalized,
-        },
-    )
-    .unwrap();
+    let lens = RealisticCameraSettings::new(
+        LensPrescription::load("dgauss50").unwrap(),
+        (36.0, 36.0 * f64::from(h) / f64::from(w)),
+        LensFocus::Distance(f64::from(view.focus_distance)),
+    );
+    let cam = RealisticCamera::new(view.pose, w, h, &lens).unwrap();
     let compiled = scene.compile(&BvhSettings::default()).unwrap();
-    let run = |crop| {
+    let run = |camera: &RealisticCamera, crop| {
         let settings = RenderSettings {
             width: w,
             height: h,
@@ -455,18 +441,18 @@ fn a_crop_is_the_same_pixels_as_the_full_render() {
             crop,
             ..Default::default()
         };
-        render(&compiled, &cam, &settings, &|_, _| {}, &AtomicBool::new(false))
+        render(&compiled, camera, &settings, &|_, _| {}, &AtomicBool::new(false))
             .unwrap()
             .image
     };
-    let full = run(None);
+    let full = run(&cam, None);
     let rect = PixelRect {
         x0: 7,
         y0: 11,
         width: 13,
         height: 9,
     };
-    let part = run(Some(rect));
+    let part = run(&cam, Some(rect));
     assert_eq!((part.width, part.height), (13, 9));
     for y in 0..rect.height {
         for x in 0..rect.width {
@@ -478,26 +464,8 @@ fn a_crop_is_the_same_pixels_as_the_full_render() {
         }
     }
     // A camera bounding only the region's pupil bands gives the same pixels.
-    let settings = RenderSettings {
-        width: w,
-        height: h,
-        spp: 5,
-        crop: Some(rect),
-        ..Default::default()
-    };
-    let lens = RealisticCameraSettings {
-        lens: LensPrescription::load("dgauss50").unwrap(),
-        sensor_mm: (36.0, 36.0 * f64::from(h) / f64::from(w)),
-        focus: LensFocus::Distance(f64::from(view.focus_distance)),
-        f_number: None,
-        scene_unit_m: 1.0,
-        radiometry: Radiometry::Normalized,
-    };
     let patch_camera = RealisticCamera::for_region(view.pose, w, h, &lens, rect).unwrap();
-    let patch = render(&compiled, &patch_camera, &settings, &|_, _| {}, &AtomicBool::new(false))
-        .unwrap()
-        .image;
-    assert_eq!(patch.rgb, part.rgb);
+    assert_eq!(run(&patch_camera, Some(rect)).rgb, part.rgb);
     let outside = RenderSettings {
         width: w,
         height: h,

@@ -69,6 +69,21 @@ pub struct RealisticCameraSettings {
     pub radiometry: Radiometry,
 }
 
+impl RealisticCameraSettings {
+    /// `lens` with a `sensor_mm` sensor, focused by `focus`: wide open, one
+    /// metre per scene unit, normalised exposure.
+    pub fn new(lens: LensPrescription, sensor_mm: (f64, f64), focus: LensFocus) -> Self {
+        RealisticCameraSettings {
+            lens,
+            sensor_mm,
+            focus,
+            f_number: None,
+            scene_unit_m: 1.0,
+            radiometry: Radiometry::Normalized,
+        }
+    }
+}
+
 /// The cells of the rear plane that rays from one sensor band get through,
 /// relative to the pupil's centre, which moves linearly across the band.
 #[derive(Clone, Debug)]
