@@ -4,6 +4,7 @@
 //! render writes what it has and exits with 130.
 
 mod bench;
+mod info;
 mod lens;
 mod progress;
 mod render;
@@ -24,6 +25,8 @@ struct Cli {
 enum Command {
     /// Render a scene to an image (PNG or EXR by extension).
     Render(render::RenderArgs),
+    /// Show what a scene file holds: meshes, triangles, materials, lights, cameras, bounds, warnings.
+    Info(info::InfoArgs),
     /// Analyse a lens: focal lengths, pupils, focus, a layout plot.
     Lens(lens::LensArgs),
     /// Measure performance.
@@ -70,6 +73,7 @@ fn main() -> ExitCode {
     };
     let outcome = match cli.command {
         Command::Render(args) => render::run(args),
+        Command::Info(args) => info::run(args),
         Command::Lens(args) => lens::run(args),
         Command::Bench(BenchArgs {
             what: BenchCommand::Bvh(args),

@@ -11,6 +11,7 @@ use lenspath::camera::{Camera, LensFocus, PerspectiveCamera, Radiometry, Realist
 use lenspath::film::Filter;
 use lenspath::integrator::PathSettings;
 use lenspath::io::image::{check_output_path, write_image};
+use lenspath::io::{load_scene, SceneOptions};
 use lenspath::lens::LensPrescription;
 use lenspath::render::{render, PixelRect, RenderSettings};
 use lenspath::{Error, Result};
@@ -106,30 +107,33 @@ fn parse_crop(s: &str) -> std::result::Result<PixelRect, String> {
 #[derive(Args, Debug)]
 #[command(allow_negative_numbers = true)]
 pub struct RenderArgs {
+    /// Scene file: .dae (COLLADA, CS184), .obj, .ply, .gltf/.glb or .toml (lenspath). Default: the
+    /// built-in scene named by --scene.
+    file: Option<PathBuf>,
     /// Built-in scene: cornell-spheres, cornell-empty or cornell-mesh.
-    #[arg(long, default_value = "cornell-spheres")]
+    #[arg(long, default_value = "cornell-spheres", conflicts_with = "file")]
     scene: String,
     /// Triangles of the procedural mesh in cornell-mesh.
     #[arg(long, default_value_t = DEFAULT_MESH_TRIANGLES)]
     mesh_triangles: usize,
-    /// Samples per pixel.
-    #[arg(long, default_value_t = 64)]
-    spp: u32,
-    /// Shadow rays per light at every non-specular hit.
-    #[arg(long, default_value_t = 1)]
-    light_samples: u32,
-    /// Maximum path depth (1 = direct lighting only).
-    #[arg(long, default_value_t = 16)]
-    max_depth: u32,
-    /// Image size, WIDTHxHEIGHT.
-    #[arg(long, default_value = "640x480", value_parser = parse_resolution)]
-    res: Resolution,
+    /// Samples per pixel [default: the scene file's, else 64].
+    #[arg(long)]
+    spp: Option<u32>,
+    /// Shadow rays per light at every non-specular hit [default: the scene file's, else 1].
+    #[arg(long)]
+    light_samples: Option<u32>,
+    /// Maximum path depth, 1 = direct lighting only [default: the scene file's, else 16].
+    #[arg(long)]
+    max_depth: Option<u32>,
+    /// Image size, WIDTHxHEIGHT [default: the scene file's, else 640x480].
+    #[arg(long, value_parser = parse_resolution)]
+    res: Option<Resolution>,
     /// Worker threads (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
-    /// Seed of the sample sequences; the same seed gives the same image.
-    #[arg(long, default_value_t = 0)]
-    seed: u32,
+    /// Seed of the sample sequences; the same seed gives the same image [default: the scene file's, else 0].
+    #[arg(long)]
+    seed: Option<u32>,
     /// Output image: .png (sRGB) or .exr (linear RGB + Z).
     #[arg(long, default_value = "render.png")]
     out: PathBuf,
@@ -139,21 +143,23 @@ pub struct RenderArgs {
     /// Camera model.
     #[arg(long, value_enum, default_value = "realistic")]
     camera: CameraKind,
-    /// Realistic camera: built-in lens (dgauss50, wide22, tele250, fisheye10) or a lens table file.
-    #[arg(long, default_value = "dgauss50")]
-    lens: String,
-    /// Realistic camera: sensor WIDTHxHEIGHT in mm; its width is kept and its height follows the --res aspect.
-    #[arg(long, default_value = "36x24", value_parser = parse_sensor)]
-    sensor: SensorSize,
+    /// Realistic camera: built-in lens (dgauss50, wide22, tele250, fisheye10) or a lens table file
+    /// [default: the scene file's, else dgauss50].
+    #[arg(long)]
+    lens: Option<String>,
+    /// Realistic camera: sensor WIDTHxHEIGHT in mm; its width is kept and its height follows the
+    /// image aspect [default: the scene file's, else 36x24].
+    #[arg(long, value_parser = parse_sensor)]
+    sensor: Option<SensorSize>,
     /// Realistic camera: put the sensor this many mm behind the aperture stop instead of focusing by distance.
     #[arg(long, value_name = "MM", conflicts_with = "focus_distance")]
     sensor_depth: Option<f64>,
     /// Realistic camera: stop down to this f-number (default: wide open).
     #[arg(long, value_name = "N")]
     fstop: Option<f64>,
-    /// Realistic camera: metres per scene unit (lenses are in mm).
-    #[arg(long, value_name = "M", default_value_t = 1.0)]
-    scene_unit: f64,
+    /// Realistic camera: metres per scene unit, since lenses are in mm [default: the scene file's, else 1].
+    #[arg(long, value_name = "M")]
+    scene_unit: Option<f64>,
     /// Realistic camera: exposure normalisation.
     #[arg(long, value_enum, default_value = "normalized")]
     radiometry: RadiometryKind,
@@ -177,16 +183,40 @@ pub struct RenderArgs {
 
 /// Runs `lenspath render`.
 pub fn run(args: RenderArgs) -> Result<Outcome> {
-    // Check everything cheap before any slow work.
+    check_output_path(&args.out)?;
+    if !args.exposure.is_finite() {
+        return Err(Error::InvalidArgument("--exposure must be a finite number".into()));
+    }
+    let (scene_name, scene, options) = match &args.file {
+        Some(path) => {
+            let loaded = load_scene(path)?;
+            for (what, n) in loaded.warnings.iter() {
+                eprintln!("warning: {what}{}", if n > 1 { format!(" (×{n})") } else { String::new() });
+            }
+            (path.display().to_string(), loaded.scene, loaded.options)
+        }
+        None => (
+            args.scene.clone(),
+            builtin_scene(&args.scene, args.mesh_triangles)?,
+            SceneOptions::default(),
+        ),
+    };
+    // Flags win over the scene file, which wins over the defaults.
+    let (width, height) = args
+        .res
+        .map(|r| (r.width, r.height))
+        .or(options.resolution)
+        .unwrap_or((640, 480));
+    let file_lens = options.lens.clone().unwrap_or_default();
     let settings = RenderSettings {
-        width: args.res.width,
-        height: args.res.height,
-        spp: args.spp,
+        width,
+        height,
+        spp: args.spp.or(options.spp).unwrap_or(64),
         path: PathSettings {
-            max_depth: args.max_depth,
-            light_samples: args.light_samples,
+            max_depth: args.max_depth.or(options.max_depth).unwrap_or(16),
+            light_samples: args.light_samples.or(options.light_samples).unwrap_or(1),
         },
-        seed: args.seed,
+        seed: args.seed.or(options.seed).unwrap_or(0),
         filter: match args.filter {
             FilterKind::Box => Filter::Box,
             FilterKind::Gaussian => Filter::GAUSSIAN,
@@ -196,14 +226,9 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
         crop: args.crop,
     };
     settings.validate()?;
-    if !args.exposure.is_finite() {
-        return Err(Error::InvalidArgument("--exposure must be a finite number".into()));
-    }
-    check_output_path(&args.out)?;
-    let scene = builtin_scene(&args.scene, args.mesh_triangles)?;
     let view = scene
         .view
-        .ok_or_else(|| Error::InvalidArgument(format!("scene '{}' has no camera", args.scene)))?;
+        .ok_or_else(|| Error::InvalidArgument(format!("scene '{scene_name}' has no camera")))?;
     if args.fov.is_some() && matches!(args.camera, CameraKind::Realistic) {
         return Err(Error::InvalidArgument(
             "--fov is for --camera pinhole or thin-lens; through a real lens the field of view comes from --lens and --sensor"
@@ -246,12 +271,21 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
             ))
         }
         CameraKind::Realistic => {
-            let lens = LensPrescription::load(&args.lens)?;
+            let lens = LensPrescription::load(args.lens.as_deref().or(file_lens.lens.as_deref()).unwrap_or("dgauss50"))?;
             let focus = match args.sensor_depth {
                 Some(mm) => LensFocus::SensorPositionMm(mm),
-                None => LensFocus::Distance(f64::from(args.focus_distance.unwrap_or(view.focus_distance))),
+                None => LensFocus::Distance(
+                    args.focus_distance
+                        .map(f64::from)
+                        .or(file_lens.focus_distance)
+                        .unwrap_or(f64::from(view.focus_distance)),
+                ),
             };
-            let width_mm = args.sensor.width_mm;
+            let width_mm = args
+                .sensor
+                .map(|s| s.width_mm)
+                .or(file_lens.sensor_mm.map(|(w, _)| w))
+                .unwrap_or(36.0);
             let height_mm = width_mm * f64::from(settings.height) / f64::from(settings.width);
             let camera = RealisticCamera::new(
                 view.pose,
@@ -261,8 +295,8 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
                     lens,
                     sensor_mm: (width_mm, height_mm),
                     focus,
-                    f_number: args.fstop,
-                    scene_unit_m: args.scene_unit,
+                    f_number: args.fstop.or(file_lens.f_number),
+                    scene_unit_m: args.scene_unit.or(options.scene_unit_m).unwrap_or(1.0),
                     radiometry: match args.radiometry {
                         RadiometryKind::Normalized => Radiometry::Normalized,
                         RadiometryKind::Physical => Radiometry::Physical,
@@ -285,7 +319,7 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
         });
     }
     let total = u64::from(settings.width) * u64::from(settings.height) * u64::from(settings.spp);
-    let progress = Progress::new(&format!("render {}", args.scene), total);
+    let progress = Progress::new(&format!("render {scene_name}"), total);
     let output = render(
         &compiled,
         camera.as_ref(),
@@ -314,7 +348,7 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
     }
     eprintln!(
         "rendered {} {}x{}{} at {} spp in {:.3} s: {:.2} M samples/s, {:.2} M rays/s -> {}",
-        args.scene,
+        scene_name,
         output.image.width,
         output.image.height,
         args.crop.map_or(String::new(), |_| format!(

@@ -7,7 +7,7 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Through
 use glam::Vec3;
 use lenspath::accel::{Bvh, BvhSettings, PrimGeometry};
 use lenspath::builtin::torus_knot;
-use lenspath::io::mesh::load_mesh;
+use lenspath::io::load_mesh;
 use lenspath::raysets::{coherent_rays, incoherent_rays};
 use lenspath::shapes::TriangleMesh;
 

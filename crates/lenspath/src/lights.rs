@@ -1,4 +1,4 @@
-//! Light sources: point, directional, constant environment, and area lights
+//! Light sources: point, spot, directional, constant environment, and area lights
 //! (emissive triangle meshes and spheres) with their sampling routines.
 
 use glam::{Vec2, Vec3};
@@ -15,6 +15,21 @@ pub enum Light {
         position: Vec3,
         /// Radiant intensity (W/sr per channel).
         intensity: Rgb,
+    },
+    /// Spot light: a point light whose intensity falls off as cos^exponent of the
+    /// angle from its axis and is zero outside the cone (the OpenGL / COLLADA 1.4
+    /// spot model, COLLADA spec §light "spot").
+    Spot {
+        /// Position.
+        position: Vec3,
+        /// Axis the light points along (unit).
+        direction: Vec3,
+        /// Radiant intensity on the axis (W/sr per channel).
+        intensity: Rgb,
+        /// Cosine of the cone's half angle.
+        cos_cutoff: f32,
+        /// Falloff exponent (0: uniform inside the cone).
+        exponent: f32,
     },
     /// Distant light, such as the sun.
     Directional {
@@ -169,6 +184,28 @@ impl Light {
                     delta: true,
                 })
             }
+            Light::Spot {
+                position,
+                direction,
+                intensity,
+                cos_cutoff,
+                exponent,
+            } => {
+                let to_light = position - p;
+                let dist2 = to_light.length_squared();
+                if dist2 <= 0.0 {
+                    return None;
+                }
+                let wi = to_light / dist2.sqrt();
+                let cos_axis = -wi.dot(direction);
+                (cos_axis >= cos_cutoff && cos_axis > 0.0).then(|| LightSample {
+                    wi,
+                    radiance: intensity * (cos_axis.powf(exponent) / dist2),
+                    pdf: 1.0,
+                    distance: dist2.sqrt(),
+                    delta: true,
+                })
+            }
             Light::Directional { direction, irradiance } => Some(LightSample {
                 wi: -direction,
                 radiance: irradiance,
@@ -231,6 +268,26 @@ mod tests {
         let f_corner = (2.0 * x / s * (x / s).atan()) / (2.0 * std::f64::consts::PI);
         let expected = std::f64::consts::PI * 4.0 * f_corner; // E = π L F
         assert!((e - expected).abs() / expected < 0.01, "irradiance {e} vs {expected}");
+    }
+
+    /// A spot light: inverse-square on its axis, cos^e falloff inside the cone, dark outside.
+    #[test]
+    fn spot_light_falls_off_inside_its_cone() {
+        let spot = Light::Spot {
+            position: Vec3::new(0.0, 0.0, 2.0),
+            direction: Vec3::NEG_Z,
+            intensity: Rgb::splat(8.0),
+            cos_cutoff: 30f32.to_radians().cos(),
+            exponent: 2.0,
+        };
+        let on_axis = spot.sample(Vec3::ZERO, Vec2::ZERO).unwrap();
+        assert!((on_axis.radiance.x - 2.0).abs() < 1e-6);
+        // 20° off axis at the same distance: 8·cos²20°/4.
+        let p = Vec3::new(2.0 * 20f32.to_radians().sin(), 0.0, 2.0 - 2.0 * 20f32.to_radians().cos());
+        let off = spot.sample(p, Vec2::ZERO).unwrap();
+        assert!((off.radiance.x - 2.0 * 20f32.to_radians().cos().powi(2)).abs() < 1e-5);
+        let outside = Vec3::new(2.0 * 40f32.to_radians().sin(), 0.0, 2.0 - 2.0 * 40f32.to_radians().cos());
+        assert!(spot.sample(outside, Vec2::ZERO).is_none());
     }
 
     #[test]

@@ -30,9 +30,15 @@ pub enum Material {
         reflectance: Rgb,
     },
     /// Smooth dielectric interface (glass, water): Fresnel reflection and refraction.
+    /// The two tints scale the lobes as Mitsuba 3's `specular_reflectance` and
+    /// `specular_transmittance` do (1 for clear glass).
     Dielectric {
         /// Index of refraction inside over outside (1.5 for glass).
         eta: f32,
+        /// Tint of the reflected lobe in [0, 1].
+        reflectance: Rgb,
+        /// Tint of the transmitted lobe in [0, 1].
+        transmittance: Rgb,
     },
     /// Metal: microfacet conductor with a complex index of refraction per channel.
     Conductor {
@@ -61,6 +67,15 @@ pub struct BsdfSample {
 }
 
 impl Material {
+    /// Clear glass-like dielectric of relative index `eta`, untinted.
+    pub fn clear_dielectric(eta: f32) -> Self {
+        Material::Dielectric {
+            eta,
+            reflectance: Rgb::ONE,
+            transmittance: Rgb::ONE,
+        }
+    }
+
     /// True when the BSDF is made only of delta lobes, so light sampling cannot help.
     pub fn is_specular(&self) -> bool {
         match self {
@@ -165,31 +180,48 @@ impl Material {
                     eta: 1.0,
                 })
             }
-            Material::Dielectric { eta } => {
-                let reflectance = fresnel_dielectric(wo.z, eta);
-                if uc < reflectance {
+            Material::Dielectric {
+                eta,
+                reflectance,
+                transmittance,
+            } => {
+                let fresnel = fresnel_dielectric(wo.z, eta);
+                // Pick a lobe in proportion to what it carries, so a tint of zero
+                // (a refraction-only surface) wastes no paths (Mitsuba 3 `dielectric`).
+                let p_reflect = fresnel * mean(reflectance);
+                let p_transmit = (1.0 - fresnel) * mean(transmittance);
+                let p_total = p_reflect + p_transmit;
+                if p_total <= 0.0 {
+                    return None;
+                }
+                if uc * p_total < p_reflect {
                     let wi = Vec3::new(-wo.x, -wo.y, wo.z);
                     return Some(BsdfSample {
                         wi,
-                        f: Rgb::splat(reflectance / wi.z.abs()),
-                        pdf: reflectance,
+                        f: reflectance * (fresnel / wi.z.abs()),
+                        pdf: p_reflect / p_total,
                         specular: true,
                         eta: 1.0,
                     });
                 }
                 let (wi, eta_rel) = refract(wo, Vec3::Z, eta)?;
-                let transmittance = 1.0 - reflectance;
                 // Radiance is compressed into the denser medium: divide by η² (pbrt-v4 §9.5.2).
                 Some(BsdfSample {
                     wi,
-                    f: Rgb::splat(transmittance / wi.z.abs() / (eta_rel * eta_rel)),
-                    pdf: transmittance,
+                    f: transmittance * ((1.0 - fresnel) / wi.z.abs() / (eta_rel * eta_rel)),
+                    pdf: p_transmit / p_total,
                     specular: true,
                     eta: eta_rel,
                 })
             }
         }
     }
+}
+
+/// Mean of the three channels.
+#[inline]
+fn mean(c: Rgb) -> f32 {
+    (c.x + c.y + c.z) / 3.0
 }
 
 /// Both directions mirrored into the +z hemisphere (they share one already).
@@ -532,7 +564,7 @@ mod tests {
     #[test]
     fn dielectric_conserves_energy_and_obeys_snell() {
         let eta = 1.5;
-        let glass = Material::Dielectric { eta };
+        let glass = Material::clear_dielectric(eta);
         for theta in [0.0, 20.0, 40.0, 41.0, 60.0, 89.0, 100.0, 130.0, 150.0, 179.0] {
             let wo = direction(theta, 35.0);
             let mut energy = 0.0;
@@ -567,6 +599,44 @@ mod tests {
         }
         // Normal incidence: R = ((η-1)/(η+1))² = 0.04.
         assert!((fresnel_dielectric(1.0, 1.5) - 0.04).abs() < 1e-6);
+    }
+
+    /// Tinted glass returns F·R + (1 − F)·T/η² per channel (the expected value of
+    /// f·cosθ/pdf over the lobe choice), including the refraction-only case R = 0.
+    #[test]
+    fn tinted_dielectric_weights_each_lobe_by_its_tint() {
+        let eta = 1.45;
+        for (reflectance, transmittance) in [
+            (Rgb::ONE, Rgb::new(1.0, 0.75, 0.75)),
+            (Rgb::ZERO, Rgb::ONE),
+            (Rgb::new(0.5, 1.0, 0.2), Rgb::ZERO),
+        ] {
+            let glass = Material::Dielectric {
+                eta,
+                reflectance,
+                transmittance,
+            };
+            let wo = direction(50.0, 10.0);
+            let fresnel = fresnel_dielectric(wo.z, eta);
+            let expected = reflectance * fresnel + transmittance * ((1.0 - fresnel) / (eta * eta));
+            let n = 4000;
+            let mut sum = Rgb::ZERO;
+            for i in 0..n {
+                let s = glass.sample(wo, (i as f32 + 0.5) / n as f32, Vec2::ZERO).unwrap();
+                sum += s.f * s.wi.z.abs() / s.pdf;
+            }
+            let got = sum / n as f32;
+            assert!(
+                (got - expected).abs().max_element() < 2e-3,
+                "R={reflectance} T={transmittance}: {got} vs {expected}"
+            );
+        }
+        let black = Material::Dielectric {
+            eta,
+            reflectance: Rgb::ZERO,
+            transmittance: Rgb::ZERO,
+        };
+        assert!(black.sample(direction(30.0, 0.0), 0.5, Vec2::ZERO).is_none());
     }
 
     #[test]

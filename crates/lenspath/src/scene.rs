@@ -152,12 +152,18 @@ impl Scene {
                 Material::Diffuse { reflectance } | Material::Mirror { reflectance } => {
                     check_rgb(&format!("material {i} reflectance"), reflectance)?
                 }
-                Material::Dielectric { eta } => {
+                Material::Dielectric {
+                    eta,
+                    reflectance,
+                    transmittance,
+                } => {
                     if !(eta > 0.0 && eta.is_finite()) {
                         return Err(Error::InvalidScene(format!(
                             "material {i}: eta must be positive, got {eta}"
                         )));
                     }
+                    check_rgb(&format!("material {i} reflectance"), reflectance)?;
+                    check_rgb(&format!("material {i} transmittance"), transmittance)?;
                 }
                 Material::Conductor { eta, k, alpha } => {
                     check_rgb(&format!("material {i} eta"), eta)?;
@@ -175,6 +181,25 @@ impl Scene {
                 Light::Point { intensity, position } => {
                     if !position.is_finite() {
                         return Err(Error::InvalidScene(format!("light {i}: position is not finite")));
+                    }
+                    ("intensity", intensity)
+                }
+                Light::Spot {
+                    position,
+                    direction,
+                    intensity,
+                    cos_cutoff,
+                    exponent,
+                } => {
+                    if !position.is_finite() || !direction.is_normalized() {
+                        return Err(Error::InvalidScene(format!(
+                            "light {i}: spot position must be finite and direction unit length"
+                        )));
+                    }
+                    if !((-1.0..=1.0).contains(&cos_cutoff) && exponent >= 0.0 && exponent.is_finite()) {
+                        return Err(Error::InvalidScene(format!(
+                            "light {i}: spot cone cosine must be in [-1, 1] and exponent ≥ 0"
+                        )));
                     }
                     ("intensity", intensity)
                 }

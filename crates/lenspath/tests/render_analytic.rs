@@ -58,7 +58,7 @@ fn white_furnace_sphere_disappears() {
     let materials = [
         Material::Diffuse { reflectance: Rgb::ONE },
         Material::Mirror { reflectance: Rgb::ONE },
-        Material::Dielectric { eta: 1.5 },
+        Material::clear_dielectric(1.5),
     ];
     for material in materials {
         let scene = Scene {

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use glam::Vec3;
 use lenspath::accel::{Bvh, BvhSettings, PrimGeometry};
-use lenspath::io::mesh::load_mesh;
+use lenspath::io::load_mesh;
 use lenspath::raysets::{coherent_rays, incoherent_rays};
 use lenspath::shapes::{intersect_triangle, TriangleRay};
 

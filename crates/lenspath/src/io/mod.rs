@@ -1,14 +1,68 @@
-//! Files in and out: image output (PNG, OpenEXR), mesh input (PLY, OBJ) and
-//! mesh output (PLY). Every output is written to a temporary name beside the
-//! target and renamed, so a reader never sees a half-written file and a failed
-//! write never destroys the old one.
+//! Files in and out. Scenes come in as COLLADA, OBJ + MTL, PLY, glTF 2.0 or
+//! lenspath's TOML scene file ([`load_scene`] picks the loader by extension);
+//! images go out as PNG or OpenEXR, meshes as PLY. Every output is written to a
+//! temporary name beside the target and renamed, so a reader never sees a
+//! half-written file and a failed write never destroys the old one.
 
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
+use crate::shapes::TriangleMesh;
 
+pub mod collada;
+pub mod gltf;
 pub mod image;
-pub mod mesh;
+pub mod import;
+pub mod obj;
+pub mod ply;
+pub mod scene_file;
+
+pub use import::{LensOptions, LoadedScene, SceneOptions, Warnings};
+
+/// Scene file extensions [`load_scene`] reads, lower case.
+pub const SCENE_EXTENSIONS: [&str; 6] = ["dae", "obj", "ply", "gltf", "glb", "toml"];
+
+/// Loads a scene file, choosing the loader by its extension.
+pub fn load_scene(path: &Path) -> Result<LoadedScene> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("dae") => collada::load_collada(path),
+        Some("obj") => obj::load_obj(path),
+        Some("ply") => {
+            let mut warnings = Warnings::default();
+            let mesh = ply::load_ply(path, &mut warnings)?;
+            Ok(import::mesh_scene(mesh, warnings, "PLY"))
+        }
+        Some("gltf" | "glb") => gltf::load_gltf(path),
+        Some("toml") => scene_file::load_scene_file(path),
+        _ => Err(Error::InvalidArgument(format!(
+            "{}: unknown scene format; lenspath reads .{}",
+            path.display(),
+            SCENE_EXTENSIONS.join(", .")
+        ))),
+    }
+}
+
+/// All triangles of a scene file as one mesh (for benchmarks and other renderers).
+pub fn load_mesh(path: &Path) -> Result<TriangleMesh> {
+    let loaded = load_scene(path)?;
+    let mut mesh = TriangleMesh::default();
+    for m in loaded.scene.meshes {
+        let base = mesh.positions.len() as u32;
+        mesh.positions.extend(m.positions);
+        mesh.indices.extend(m.indices.iter().map(|t| t.map(|v| v + base)));
+    }
+    Ok(mesh)
+}
+
+/// The whole of a text file, with a clear error for a missing or non-UTF-8 file.
+fn read_text(path: &Path) -> Result<String> {
+    let bytes = std::fs::read(path).map_err(|e| io_error(path, e))?;
+    String::from_utf8(bytes).map_err(|e| Error::Parse {
+        path: path.to_path_buf(),
+        message: format!("not UTF-8 text (byte {} is invalid)", e.utf8_error().valid_up_to()),
+    })
+}
 
 /// A hidden name beside `path`, unique to this process.
 fn temp_path(path: &Path) -> PathBuf {

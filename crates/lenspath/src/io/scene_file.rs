@@ -1,0 +1,496 @@
+//! lenspath's own scene file (TOML, read with serde): camera and lens, film,
+//! integrator settings, named materials, lights, and shapes that are spheres,
+//! quads or mesh files in any format lenspath reads, each with a transform. A
+//! `base` scene file (say a CS184 Cornell box) can be extended. The schema,
+//! with examples, is docs/scene-format.md; unknown keys are errors, so a typo
+//! never passes silently.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use glam::{Mat4, Vec3};
+use serde::Deserialize;
+
+use super::import::{
+    complete_scene, intern_material, scene_bounds, subject_distance, transform_mesh, LensOptions, LoadedScene,
+    SceneOptions, Warnings, EMITTER_MATERIAL,
+};
+use crate::camera::CameraPose;
+use crate::error::{Error, Result};
+use crate::lights::Light;
+use crate::materials::Material;
+use crate::math::Rgb;
+use crate::scene::{Scene, SceneView};
+use crate::shapes::{Sphere, TriangleMesh};
+
+/// How many `base` files may chain (a cycle fails here).
+const MAX_BASE_DEPTH: usize = 8;
+
+/// A colour: one grey value or `[r, g, b]`.
+#[derive(Clone, Copy, Debug, Deserialize)]
+#[serde(untagged)]
+enum Color {
+    Grey(f32),
+    Rgb([f32; 3]),
+}
+
+impl Color {
+    fn rgb(self) -> Rgb {
+        match self {
+            Color::Grey(v) => Rgb::splat(v),
+            Color::Rgb(c) => Rgb::from_array(c),
+        }
+    }
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    /// Another scene file whose shapes, materials, lights and camera this one starts from.
+    base: Option<PathBuf>,
+    scene_unit_m: Option<f64>,
+    camera: Option<CameraSpec>,
+    film: Option<FilmSpec>,
+    integrator: Option<IntegratorSpec>,
+    #[serde(default)]
+    materials: BTreeMap<String, MaterialSpec>,
+    #[serde(default)]
+    lights: Vec<LightSpec>,
+    #[serde(default)]
+    shapes: Vec<ShapeSpec>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraSpec {
+    eye: [f32; 3],
+    look_at: [f32; 3],
+    #[serde(default = "y_up")]
+    up: [f32; 3],
+    fov_y_deg: Option<f32>,
+    focus_distance: Option<f32>,
+    lens: Option<String>,
+    f_number: Option<f64>,
+    sensor_mm: Option<[f64; 2]>,
+}
+
+fn y_up() -> [f32; 3] {
+    [0.0, 1.0, 0.0]
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FilmSpec {
+    width: u32,
+    height: u32,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct IntegratorSpec {
+    spp: Option<u32>,
+    max_depth: Option<u32>,
+    light_samples: Option<u32>,
+    seed: Option<u32>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
+enum MaterialSpec {
+    Diffuse {
+        reflectance: Color,
+    },
+    Mirror {
+        reflectance: Color,
+    },
+    Dielectric {
+        eta: f32,
+        reflectance: Option<Color>,
+        transmittance: Option<Color>,
+    },
+    Conductor {
+        eta: Color,
+        k: Color,
+        #[serde(default)]
+        alpha: f32,
+    },
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
+enum LightSpec {
+    Point {
+        position: [f32; 3],
+        intensity: Color,
+    },
+    Spot {
+        position: [f32; 3],
+        look_at: [f32; 3],
+        intensity: Color,
+        cone_angle_deg: f32,
+        #[serde(default)]
+        exponent: f32,
+    },
+    Directional {
+        direction: [f32; 3],
+        irradiance: Color,
+    },
+    Environment {
+        radiance: Color,
+    },
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TransformSpec {
+    scale: Option<Color>,
+    #[serde(default)]
+    rotate: Vec<RotationSpec>,
+    translate: Option<[f32; 3]>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RotationSpec {
+    axis: [f32; 3],
+    degrees: f32,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
+enum ShapeSpec {
+    Sphere {
+        center: [f32; 3],
+        radius: f32,
+        material: Option<String>,
+        emission: Option<Color>,
+    },
+    Quad {
+        corner: [f32; 3],
+        edge_u: [f32; 3],
+        edge_v: [f32; 3],
+        material: Option<String>,
+        emission: Option<Color>,
+    },
+    Mesh {
+        file: PathBuf,
+        material: Option<String>,
+        emission: Option<Color>,
+        #[serde(default)]
+        transform: TransformSpec,
+    },
+}
+
+/// Reads a lenspath TOML scene file.
+pub fn load_scene_file(path: &Path) -> Result<LoadedScene> {
+    load_at_depth(path, 0)
+}
+
+fn load_at_depth(path: &Path, depth: usize) -> Result<LoadedScene> {
+    let text = super::read_text(path)?;
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    parse_scene_file(&text, path, &|file: &Path| {
+        let file = dir.join(file);
+        if file.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml")) {
+            if depth + 1 >= MAX_BASE_DEPTH {
+                return Err(Error::Parse {
+                    path: file,
+                    message: format!("scene files include each other more than {MAX_BASE_DEPTH} deep (a cycle?)"),
+                });
+            }
+            load_at_depth(&file, depth + 1)
+        } else {
+            super::load_scene(&file)
+        }
+    })
+    .map(|mut loaded| {
+        // Lens files named in the scene are relative to it.
+        if let Some(lens) = loaded.options.lens.as_mut().and_then(|l| l.lens.as_mut()) {
+            if lens.contains(['/', '\\', '.']) && Path::new(lens).is_relative() {
+                *lens = dir.join(&*lens).display().to_string();
+            }
+        }
+        loaded
+    })
+}
+
+/// Parses scene-file text; `load` reads the `base` and mesh files it names.
+pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<LoadedScene>) -> Result<LoadedScene> {
+    let fail = |m: String| Error::Parse {
+        path: path.to_path_buf(),
+        message: m,
+    };
+    let file: SceneFile = toml::from_str(text).map_err(|e| fail(one_line(&e, text)))?;
+
+    let (mut scene, mut options, mut warnings, mut cameras) = match &file.base {
+        Some(base) => {
+            let b = load(base)?;
+            let mut warnings = Warnings::default();
+            for (w, n) in b.warnings.iter() {
+                warnings.add_n(format!("{}: {w}", base.display()), n);
+            }
+            (b.scene, b.options, warnings, b.cameras)
+        }
+        None => (Scene::default(), SceneOptions::default(), Warnings::default(), 0),
+    };
+    if let Some(unit) = file.scene_unit_m {
+        if !(unit > 0.0 && unit.is_finite()) {
+            return Err(fail(format!("scene_unit_m must be positive, got {unit}")));
+        }
+        options.scene_unit_m = Some(unit);
+    }
+    if let Some(film) = &file.film {
+        if film.width == 0 || film.height == 0 {
+            return Err(fail("[film] width and height must be positive".into()));
+        }
+        options.resolution = Some((film.width, film.height));
+    }
+    if let Some(i) = &file.integrator {
+        options.spp = i.spp.or(options.spp);
+        options.max_depth = i.max_depth.or(options.max_depth);
+        options.light_samples = i.light_samples.or(options.light_samples);
+        options.seed = i.seed.or(options.seed);
+    }
+
+    // Materials, by name.
+    let mut material_ids = BTreeMap::new();
+    for (name, spec) in &file.materials {
+        let m = material(spec).map_err(|e| fail(format!("[materials.{name}]: {e}")))?;
+        material_ids.insert(name.as_str(), intern_material(&mut scene, m));
+    }
+    let material_id = |scene: &mut Scene, what: &str, name: &Option<String>, emission: Option<Rgb>| match name {
+        Some(n) => material_ids
+            .get(n.as_str())
+            .copied()
+            .ok_or_else(|| fail(format!("{what}: material '{n}' is not defined in [materials]"))),
+        None if emission.is_some() => Ok(intern_material(scene, EMITTER_MATERIAL)),
+        None => Err(fail(format!("{what}: needs a material (or an emission)"))),
+    };
+
+    for (i, spec) in file.lights.iter().enumerate() {
+        scene.lights.push(light(spec).map_err(|e| fail(format!("lights[{i}]: {e}")))?);
+    }
+
+    for (i, spec) in file.shapes.iter().enumerate() {
+        let what = format!("shapes[{i}]");
+        match spec {
+            ShapeSpec::Sphere {
+                center,
+                radius,
+                material,
+                emission,
+            } => {
+                let emission = emission.map(Color::rgb);
+                let material = material_id(&mut scene, &what, material, emission)?;
+                scene.spheres.push(Sphere {
+                    center: Vec3::from_array(*center),
+                    radius: *radius,
+                    material,
+                    emission,
+                });
+            }
+            ShapeSpec::Quad {
+                corner,
+                edge_u,
+                edge_v,
+                material,
+                emission,
+            } => {
+                let emission = emission.map(Color::rgb);
+                let material = material_id(&mut scene, &what, material, emission)?;
+                let (p, u, v) = (Vec3::from_array(*corner), Vec3::from_array(*edge_u), Vec3::from_array(*edge_v));
+                if u.cross(v).length_squared() == 0.0 {
+                    return Err(fail(format!("{what}: edge_u and edge_v must span a plane")));
+                }
+                scene.meshes.push(TriangleMesh {
+                    positions: vec![p, p + u, p + u + v, p + v],
+                    indices: vec![[0, 1, 2], [0, 2, 3]],
+                    material,
+                    emission,
+                    ..Default::default()
+                });
+            }
+            ShapeSpec::Mesh {
+                file: mesh_file,
+                material,
+                emission,
+                transform,
+            } => {
+                let m = matrix(transform).map_err(|e| fail(format!("{what}: {e}")))?;
+                let sub = load(mesh_file)?;
+                for (w, n) in sub.warnings.iter() {
+                    // The sub-file's own default camera and light are not wanted here.
+                    if !w.starts_with("no camera") && !w.starts_with("no lights") {
+                        warnings.add_n(format!("{}: {w}", mesh_file.display()), n);
+                    }
+                }
+                let emission = emission.map(Color::rgb);
+                let forced = match material {
+                    Some(_) => Some(material_id(&mut scene, &what, material, emission)?),
+                    None if emission.is_some() => Some(intern_material(&mut scene, EMITTER_MATERIAL)),
+                    None => None,
+                };
+                let sub_scene = sub.scene;
+                for mut mesh in sub_scene.meshes {
+                    transform_mesh(&mut mesh, &m);
+                    mesh.material = match forced {
+                        Some(id) => id,
+                        None => intern_material(&mut scene, sub_scene.materials[mesh.material as usize]),
+                    };
+                    if emission.is_some() {
+                        mesh.emission = emission;
+                    }
+                    scene.meshes.push(mesh);
+                }
+                let scale = m.transform_vector3(Vec3::X).length();
+                for mut s in sub_scene.spheres {
+                    s.center = m.transform_point3(s.center);
+                    s.radius *= scale;
+                    s.material = match forced {
+                        Some(id) => id,
+                        None => intern_material(&mut scene, sub_scene.materials[s.material as usize]),
+                    };
+                    scene.spheres.push(s);
+                }
+            }
+        }
+    }
+
+    if let Some(cam) = &file.camera {
+        cameras += 1;
+        let (eye, target, up) = (
+            Vec3::from_array(cam.eye),
+            Vec3::from_array(cam.look_at),
+            Vec3::from_array(cam.up),
+        );
+        if (target - eye).cross(up).length_squared() == 0.0 || !(eye.is_finite() && target.is_finite()) {
+            return Err(fail("[camera]: eye, look_at and up must be finite and not collinear".into()));
+        }
+        let pose = CameraPose::look_at(eye, target, up);
+        let fov_y_deg = cam.fov_y_deg.unwrap_or(super::import::DEFAULT_FOV_Y_DEG);
+        if !(fov_y_deg > 0.0 && fov_y_deg < 180.0) {
+            return Err(fail(format!("[camera]: fov_y_deg must be between 0 and 180, got {fov_y_deg}")));
+        }
+        let focus_distance = match cam.focus_distance {
+            Some(d) if d > 0.0 && d.is_finite() => d,
+            Some(d) => return Err(fail(format!("[camera]: focus_distance must be positive, got {d}"))),
+            None => subject_distance(&pose, &scene_bounds(&scene)),
+        };
+        scene.view = Some(SceneView {
+            pose,
+            fov_y_deg,
+            focus_distance,
+        });
+        if cam.lens.is_some() || cam.f_number.is_some() || cam.sensor_mm.is_some() || cam.focus_distance.is_some() {
+            options.lens = Some(LensOptions {
+                lens: cam.lens.clone(),
+                f_number: cam.f_number,
+                sensor_mm: cam.sensor_mm.map(|[w, h]| (w, h)),
+                focus_distance: cam.focus_distance.map(f64::from),
+            });
+        }
+    }
+    scene.validate().map_err(|e| fail(e.to_string()))?;
+    complete_scene(&mut scene, &mut warnings);
+    Ok(LoadedScene {
+        scene,
+        options,
+        cameras,
+        warnings,
+        format: "lenspath TOML",
+    })
+}
+
+/// The TOML parser's message on one line ("line L, column C: what").
+fn one_line(e: &toml::de::Error, text: &str) -> String {
+    let message = e.message().trim().replace('\n', " ");
+    match e.span() {
+        Some(span) => {
+            let before = &text.as_bytes()[..span.start.min(text.len())];
+            let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+            let column = before.iter().rev().take_while(|&&b| b != b'\n').count() + 1;
+            format!("line {line}, column {column}: {message}")
+        }
+        None => message,
+    }
+}
+
+fn material(spec: &MaterialSpec) -> std::result::Result<Material, String> {
+    Ok(match *spec {
+        MaterialSpec::Diffuse { reflectance } => Material::Diffuse {
+            reflectance: reflectance.rgb(),
+        },
+        MaterialSpec::Mirror { reflectance } => Material::Mirror {
+            reflectance: reflectance.rgb(),
+        },
+        MaterialSpec::Dielectric {
+            eta,
+            reflectance,
+            transmittance,
+        } => Material::Dielectric {
+            eta,
+            reflectance: reflectance.map_or(Rgb::ONE, Color::rgb),
+            transmittance: transmittance.map_or(Rgb::ONE, Color::rgb),
+        },
+        MaterialSpec::Conductor { eta, k, alpha } => Material::Conductor {
+            eta: eta.rgb(),
+            k: k.rgb(),
+            alpha,
+        },
+    })
+}
+
+fn light(spec: &LightSpec) -> std::result::Result<Light, String> {
+    Ok(match *spec {
+        LightSpec::Point { position, intensity } => Light::Point {
+            position: Vec3::from_array(position),
+            intensity: intensity.rgb(),
+        },
+        LightSpec::Spot {
+            position,
+            look_at,
+            intensity,
+            cone_angle_deg,
+            exponent,
+        } => {
+            let direction = (Vec3::from_array(look_at) - Vec3::from_array(position))
+                .try_normalize()
+                .ok_or("look_at must differ from position")?;
+            if !(cone_angle_deg > 0.0 && cone_angle_deg <= 180.0) {
+                return Err(format!("cone_angle_deg must be in (0, 180], got {cone_angle_deg}"));
+            }
+            Light::Spot {
+                position: Vec3::from_array(position),
+                direction,
+                intensity: intensity.rgb(),
+                cos_cutoff: (0.5 * cone_angle_deg).to_radians().cos(),
+                exponent,
+            }
+        }
+        LightSpec::Directional { direction, irradiance } => Light::Directional {
+            direction: Vec3::from_array(direction).try_normalize().ok_or("direction must be non-zero")?,
+            irradiance: irradiance.rgb(),
+        },
+        LightSpec::Environment { radiance } => Light::Environment {
+            radiance: radiance.rgb(),
+        },
+    })
+}
+
+/// Scale, then the rotations in order, then the translation.
+fn matrix(t: &TransformSpec) -> std::result::Result<Mat4, String> {
+    let scale = t.scale.map_or(Vec3::ONE, Color::rgb);
+    if !(scale.is_finite() && scale.min_element().abs() > 0.0) {
+        return Err(format!("transform scale must be finite and non-zero, got {scale}"));
+    }
+    let mut m = Mat4::from_scale(scale);
+    for r in &t.rotate {
+        let axis = Vec3::from_array(r.axis).try_normalize().ok_or("rotation axis is zero")?;
+        m = Mat4::from_axis_angle(axis, r.degrees.to_radians()) * m;
+    }
+    m = Mat4::from_translation(Vec3::from_array(t.translate.unwrap_or_default())) * m;
+    if !m.is_finite() {
+        return Err("transform is not finite".into());
+    }
+    Ok(m)
+}
