@@ -490,8 +490,10 @@ impl<'a, 'input> Reader<'a, 'input> {
                 radiance: self.color_child(spec, "color")?,
             },
             other => {
-                self.warnings.add(format!("light type <{other}> is not supported; skipped"));
-                return Ok(());
+                return Err(self.error(
+                    spec,
+                    format!("unknown light type <{other}>; expected point, spot, directional, ambient or CGL area"),
+                ))
             }
         };
         self.scene.lights.push(new);

@@ -129,9 +129,10 @@ pub fn parse_ply(bytes: &[u8], path: &Path, warnings: &mut Warnings) -> Result<T
 }
 
 fn read_ply<R: BufRead + Seek>(reader: &mut R, size: u64, path: &Path, warnings: &mut Warnings) -> Result<TriangleMesh> {
+    // ply-rs-bw's messages span lines; keep ours to one.
     let fail = |m: String| Error::Parse {
         path: path.to_path_buf(),
-        message: m,
+        message: m.split_whitespace().collect::<Vec<_>>().join(" "),
     };
     let vertex_parser = Parser::<PlyVertex>::new();
     let face_parser = Parser::<PlyFace>::new();

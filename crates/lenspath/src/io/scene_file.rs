@@ -23,8 +23,6 @@ use crate::math::Rgb;
 use crate::scene::{Scene, SceneView};
 use crate::shapes::{Sphere, TriangleMesh};
 
-/// How many `base` files may chain (a cycle fails here).
-const MAX_BASE_DEPTH: usize = 8;
 
 /// A colour: one grey value or `[r, g, b]`.
 #[derive(Clone, Copy, Debug, Deserialize)]
@@ -183,22 +181,26 @@ enum ShapeSpec {
 
 /// Reads a lenspath TOML scene file.
 pub fn load_scene_file(path: &Path) -> Result<LoadedScene> {
-    load_at_depth(path, 0)
+    load_included(path, &[])
 }
 
-fn load_at_depth(path: &Path, depth: usize) -> Result<LoadedScene> {
+/// Loads `path`, which `including` (outermost first) reached through `base` or mesh files.
+fn load_included(path: &Path, including: &[PathBuf]) -> Result<LoadedScene> {
     let text = super::read_text(path)?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let canonical = path.canonicalize().map_err(|e| super::io_error(path, e))?;
+    let mut chain = including.to_vec();
+    chain.push(canonical);
     parse_scene_file(&text, path, &|file: &Path| {
         let file = dir.join(file);
         if file.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml")) {
-            if depth + 1 >= MAX_BASE_DEPTH {
-                return Err(Error::Parse {
-                    path: file,
-                    message: format!("scene files include each other more than {MAX_BASE_DEPTH} deep (a cycle?)"),
-                });
+            if file.canonicalize().is_ok_and(|c| chain.contains(&c)) {
+                return Err(Error::InvalidArgument(format!(
+                    "{} includes itself (a cycle of base or mesh files)",
+                    file.display()
+                )));
             }
-            load_at_depth(&file, depth + 1)
+            load_included(&file, &chain)
         } else {
             super::load_scene(&file)
         }
@@ -224,7 +226,7 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
 
     let (mut scene, mut options, mut warnings, mut cameras) = match &file.base {
         Some(base) => {
-            let b = load(base)?;
+            let b = load(base).map_err(|e| fail(format!("base: {e}")))?;
             let mut warnings = Warnings::default();
             for (w, n) in b.warnings.iter() {
                 warnings.add_n(format!("{}: {w}", base.display()), n);
@@ -317,7 +319,7 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
                 transform,
             } => {
                 let m = matrix(transform).map_err(|e| fail(format!("{what}: {e}")))?;
-                let sub = load(mesh_file)?;
+                let sub = load(mesh_file).map_err(|e| fail(format!("{what}: {e}")))?;
                 for (w, n) in sub.warnings.iter() {
                     // The sub-file's own default camera and light are not wanted here.
                     if !w.starts_with("no camera") && !w.starts_with("no lights") {

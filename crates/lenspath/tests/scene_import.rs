@@ -1,0 +1,357 @@
+//! Scene files: the CS184 course scenes in ../shared (skipped, saying so, when
+//! ../shared is absent), the shipped scenes/ examples, glTF and TOML files made
+//! here, and the corpus of broken files under tests/data/broken with the message
+//! each must give.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+
+use lenspath::accel::BvhSettings;
+use lenspath::camera::PerspectiveCamera;
+use lenspath::film::Image;
+use lenspath::io::{load_scene, LoadedScene};
+use lenspath::lights::Light;
+use lenspath::materials::Material;
+use lenspath::render::{render, RenderSettings};
+
+fn repo(path: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..").join(path)
+}
+
+fn shared(path: &str) -> Option<PathBuf> {
+    let p = repo("../shared").join(path);
+    if p.exists() {
+        Some(p)
+    } else {
+        eprintln!("skipping: {} not found (../shared is absent)", p.display());
+        None
+    }
+}
+
+/// A small pinhole render of a loaded scene through its own view.
+fn quick_render(loaded: LoadedScene, width: u32, height: u32, spp: u32) -> Image {
+    let view = loaded.scene.view.expect("loaders always set a view");
+    let camera = PerspectiveCamera::pinhole(view.pose, view.fov_y_deg, width, height);
+    let settings = RenderSettings {
+        width,
+        height,
+        spp,
+        ..Default::default()
+    };
+    let compiled = loaded.scene.compile(&BvhSettings::default()).unwrap();
+    render(&compiled, &camera, &settings, &|_, _| {}, &AtomicBool::new(false))
+        .unwrap()
+        .image
+}
+
+/// Mean RGB over a block of pixels given in fractions of the image.
+fn block(image: &Image, x: (f32, f32), y: (f32, f32)) -> [f64; 3] {
+    let (w, h) = (image.width as f32, image.height as f32);
+    let mut sum = [0.0f64; 3];
+    let mut n = 0.0;
+    for py in (y.0 * h) as u32..(y.1 * h) as u32 {
+        for px in (x.0 * w) as u32..(x.1 * w) as u32 {
+            let p = image.pixel(px, py);
+            for c in 0..3 {
+                sum[c] += f64::from(p[c]);
+            }
+            n += 1.0;
+        }
+    }
+    sum.map(|s| s / n)
+}
+
+/// Every CS184 scene loads with the triangle and sphere counts of ASSETS.md
+/// (the p3-2 versions, whose lamp quad is commented out, get their area light
+/// as a 2-triangle emitter), and renders as the course shows it: the camera
+/// in front of the box, red wall on the left, blue on the right, the lamp the
+/// brightest thing at the top, the meshedit models in the middle of a black frame.
+#[test]
+fn cs184_scenes_load_and_render_as_the_course_shows_them() {
+    let table: [(&str, usize, usize); 22] = [
+        ("sky/CBempty.dae", 12, 0),
+        ("sky/CBspheres_lambertian.dae", 12, 2),
+        ("sky/CBspheres.dae", 12, 2),
+        ("sky/CBspheres_microfacet_al_ag.dae", 12, 2),
+        ("sky/CBspheres_refract.dae", 10 + 2, 2),
+        ("sky/CBgems.dae", 252, 0),
+        ("sky/CBcoil.dae", 7_884, 0),
+        ("sky/CBbunny.dae", 28_588, 0),
+        ("sky/CBbunny_microfacet_cu.dae", 28_588, 0),
+        ("sky/bunny.dae", 33_696, 0),
+        ("meshedit/teapot.dae", 2_464, 0),
+        ("meshedit/cow.dae", 5_856, 0),
+        ("meshedit/beetle.dae", 7_558, 0),
+        ("meshedit/maxplanck.dae", 50_801, 0),
+        ("sky_p3-2_sp23/CBempty.dae", 10, 0),
+        ("sky_p3-2_sp23/CBspheres_lambertian.dae", 10 + 2, 2),
+        ("sky_p3-2_sp23/CBspheres.dae", 10 + 2, 2),
+        ("sky_p3-2_sp23/CBspheres_microfacet_al_ag.dae", 10 + 2, 2),
+        ("sky_p3-2_sp23/CBgems.dae", 250 + 2, 0),
+        ("sky_p3-2_sp23/CBcoil.dae", 7_882 + 2, 0),
+        ("sky_p3-2_sp23/CBbunny.dae", 28_586 + 2, 0),
+        ("sky_p3-2_sp23/CBbunny_microfacet_cu.dae", 28_586 + 2, 0),
+    ];
+    for (path, triangles, spheres) in table {
+        let Some(file) = shared(&format!("scenes/cs184/{path}")) else {
+            return;
+        };
+        let loaded = load_scene(&file).unwrap_or_else(|e| panic!("{e}"));
+        let s = &loaded.scene;
+        assert_eq!((s.triangle_count(), s.spheres.len()), (triangles, spheres), "{path}");
+        assert_eq!(loaded.cameras, 1, "{path}");
+        let boxed = path.contains("/CB") && !path.ends_with("CBempty.dae");
+        let image = quick_render(loaded, 64, 48, 8);
+        if boxed {
+            let left = block(&image, (0.22, 0.28), (0.4, 0.6));
+            let right = block(&image, (0.72, 0.78), (0.4, 0.6));
+            assert!(left[0] > 1.3 * left[2], "{path}: left wall is not red: {left:?}");
+            assert!(right[2] > 1.3 * right[0], "{path}: right wall is not blue: {right:?}");
+            // The lamp (radiance 10) is the brightest pixel, in the top middle of the image.
+            let (mut best, mut at) = (0.0f32, (0, 0));
+            for y in 0..image.height {
+                for x in 0..image.width {
+                    let g = image.pixel(x, y)[1];
+                    if g > best {
+                        (best, at) = (g, (x, y));
+                    }
+                }
+            }
+            assert!(best >= 5.0, "{path}: no lamp pixel (radiance 10), brightest {best}");
+            let (fx, fy) = (at.0 as f32 / 64.0, at.1 as f32 / 48.0);
+            assert!((0.3..0.7).contains(&fx) && fy < 0.4, "{path}: brightest pixel at {at:?}");
+        }
+        if path.starts_with("meshedit/") {
+            let centre = block(&image, (0.4, 0.6), (0.4, 0.6));
+            let corner = block(&image, (0.0, 0.1), (0.0, 0.1));
+            assert!(centre.iter().sum::<f64>() > 0.05, "{path}: model not in view {centre:?}");
+            assert_eq!(corner, [0.0; 3], "{path}: background is not black");
+        }
+    }
+}
+
+/// The materials of the CS184 BSDFs arrive with their parameters.
+#[test]
+fn cs184_bsdfs_map_to_lenspath_materials() {
+    let Some(file) = shared("scenes/cs184/sky/CBspheres_microfacet_al_ag.dae") else {
+        return;
+    };
+    let s = load_scene(&file).unwrap().scene;
+    let alphas: Vec<f32> = s
+        .materials
+        .iter()
+        .filter_map(|m| match m {
+            Material::Conductor { alpha, .. } => Some(*alpha),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(alphas.len(), 2);
+    assert!(alphas.contains(&0.25) && alphas.contains(&0.025), "{alphas:?}");
+    let Some(file) = shared("scenes/cs184/sky/CBgems.dae") else {
+        return;
+    };
+    let s = load_scene(&file).unwrap().scene;
+    assert!(s.materials.iter().any(|m| matches!(m,
+        Material::Dielectric { eta, transmittance, .. } if *eta == 1.45 && transmittance.to_array() == [1.0, 0.75, 0.75])));
+    let Some(file) = shared("scenes/cs184/meshedit/teapot.dae") else {
+        return;
+    };
+    let s = load_scene(&file).unwrap().scene;
+    assert!(matches!(s.lights[..], [Light::Directional { .. }]));
+}
+
+/// The scenes/ examples load; those that need ../shared say so in a comment and skip here without it.
+#[test]
+fn shipped_example_scenes_load() {
+    let dir = repo("scenes");
+    let mut seen = 0;
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "toml") {
+            continue;
+        }
+        let text = std::fs::read_to_string(&path).unwrap();
+        if text.contains("../shared") && shared("ASSETS.md").is_none() {
+            continue;
+        }
+        let loaded = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+        assert!(loaded.scene.triangle_count() + loaded.scene.spheres.len() > 0, "{}", path.display());
+        assert!(loaded.cameras >= 1, "{}: examples set their camera", path.display());
+        seen += 1;
+    }
+    assert!(seen >= 1, "no example scenes in {}", dir.display());
+}
+
+/// A glTF file with a camera, a punctual light, an emissive and a metallic
+/// material, buffers embedded as a data URI; the same as .glb.
+#[test]
+fn gltf_nodes_cameras_lights_and_materials() {
+    use base64::Engine;
+    // One triangle in the z = -2 plane, facing +z (toward the camera at the origin).
+    let mut bin = Vec::new();
+    for v in [-1.0f32, -1.0, 0.0, 1.0, -1.0, 0.0, 0.0, 1.0, 0.0] {
+        bin.extend(v.to_le_bytes());
+    }
+    let uri = format!(
+        "data:application/octet-stream;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(&bin)
+    );
+    let json = |uri: &str| {
+        format!(
+            r#"{{
+  "asset": {{"version": "2.0"}},
+  "extensionsUsed": ["KHR_lights_punctual"],
+  "extensions": {{"KHR_lights_punctual": {{"lights": [{{"type": "point", "color": [1, 0.5, 0.25], "intensity": 4}}]}}}},
+  "scene": 0,
+  "scenes": [{{"nodes": [0, 1, 2, 3]}}],
+  "nodes": [
+    {{"mesh": 0, "translation": [0, 0, -2]}},
+    {{"mesh": 1, "translation": [0, 0, -3], "scale": [2, 2, 2]}},
+    {{"camera": 0}},
+    {{"extensions": {{"KHR_lights_punctual": {{"light": 0}}}}, "translation": [0, 3, 0]}}
+  ],
+  "cameras": [{{"type": "perspective", "perspective": {{"yfov": 0.7, "znear": 0.1}}}}],
+  "meshes": [
+    {{"primitives": [{{"attributes": {{"POSITION": 0}}, "material": 0}}]}},
+    {{"primitives": [{{"attributes": {{"POSITION": 0}}, "material": 1}}]}}
+  ],
+  "materials": [
+    {{"pbrMetallicRoughness": {{"baseColorFactor": [0.9, 0.6, 0.2, 1], "metallicFactor": 1, "roughnessFactor": 0.5}}}},
+    {{"pbrMetallicRoughness": {{"baseColorFactor": [0.5, 0.5, 0.5, 1], "metallicFactor": 0}}, "emissiveFactor": [1, 1, 1]}}
+  ],
+  "buffers": [{{"byteLength": 36, "uri": "{uri}"}}],
+  "bufferViews": [{{"buffer": 0, "byteLength": 36}}],
+  "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
+                  "min": [-1, -1, 0], "max": [1, 1, 0]}}]
+}}"#
+        )
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let gltf_path = dir.path().join("scene.gltf");
+    std::fs::write(&gltf_path, json(&uri)).unwrap();
+    // The same scene with its buffer in a .bin beside it.
+    let bin_path = dir.path().join("scene with spaces.gltf");
+    std::fs::write(dir.path().join("tri angle.bin"), &bin).unwrap();
+    std::fs::write(&bin_path, json("tri%20angle.bin")).unwrap();
+    for path in [&gltf_path, &bin_path] {
+        let loaded = load_scene(path).unwrap_or_else(|e| panic!("{e}"));
+        let s = &loaded.scene;
+        assert_eq!(loaded.cameras, 1);
+        assert_eq!(s.meshes.len(), 2);
+        assert_eq!(s.meshes[0].positions[2].to_array(), [0.0, 1.0, -2.0]);
+        assert_eq!(s.meshes[1].positions[1].to_array(), [2.0, -2.0, -3.0]);
+        let Material::Conductor { alpha, .. } = s.materials[s.meshes[0].material as usize] else {
+            panic!("metallic base colour should give a conductor");
+        };
+        assert_eq!(alpha, 0.25);
+        assert_eq!(s.meshes[1].emission.map(|e| e.to_array()), Some([1.0; 3]));
+        assert!(matches!(s.lights[..], [Light::Point { intensity, position }]
+            if intensity.to_array() == [4.0, 2.0, 1.0] && position.to_array() == [0.0, 3.0, 0.0]));
+        let view = s.view.unwrap();
+        assert!((view.fov_y_deg - 0.7f32.to_degrees()).abs() < 1e-4);
+    }
+}
+
+/// A TOML scene that extends the CS184 empty box with a mesh gets the box,
+/// its camera placement and lamp, and the mesh where the transform puts it.
+#[test]
+fn toml_scene_extends_a_base_and_places_a_mesh() {
+    let dir = tempfile::tempdir().unwrap();
+    let ply = dir.path().join("tri.ply");
+    std::fs::write(
+        &ply,
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+    )
+    .unwrap();
+    let toml = r#"
+scene_unit_m = 0.5
+[film]
+width = 32
+height = 24
+[integrator]
+spp = 2
+[materials.gold]
+type = "conductor"
+eta = [0.143, 0.374, 1.442]
+k = [3.983, 2.385, 1.603]
+alpha = 0.1
+[[lights]]
+type = "spot"
+position = [0, 0, 5]
+look_at = [0, 0, 0]
+intensity = 3
+cone_angle_deg = 60
+[[shapes]]
+type = "mesh"
+file = "tri.ply"
+material = "gold"
+transform = { scale = 2, rotate = [{ axis = [0, 0, 1], degrees = 90 }], translate = [1, 0, 0] }
+[[shapes]]
+type = "sphere"
+center = [0, 0, -1]
+radius = 0.5
+emission = [2, 2, 2]
+[camera]
+eye = [0, 0, 10]
+look_at = [0, 0, 0]
+lens = "wide22"
+f_number = 4
+"#;
+    let path = dir.path().join("scene.toml");
+    std::fs::write(&path, toml).unwrap();
+    let loaded = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+    let s = &loaded.scene;
+    let p = &s.meshes[0].positions;
+    // (1,0,0) scaled by 2 → (2,0,0), turned 90° about z → (0,2,0), moved → (1,2,0).
+    assert!((p[1] - glam::Vec3::new(1.0, 2.0, 0.0)).length() < 1e-5, "{p:?}");
+    assert!(matches!(s.materials[s.meshes[0].material as usize], Material::Conductor { alpha, .. } if alpha == 0.1));
+    assert_eq!(s.spheres[0].emission.map(|e| e.x), Some(2.0));
+    assert!(matches!(s.lights[..], [Light::Spot { .. }]));
+    assert_eq!(loaded.options.resolution, Some((32, 24)));
+    assert_eq!(loaded.options.spp, Some(2));
+    assert_eq!(loaded.options.scene_unit_m, Some(0.5));
+    let lens = loaded.options.lens.unwrap();
+    assert_eq!((lens.lens.as_deref(), lens.f_number), (Some("wide22"), Some(4.0)));
+}
+
+/// Hand-made broken files under tests/data/broken, each with the message it must give:
+/// the file name, the line or element, and what is wrong; never a panic.
+#[test]
+fn broken_files_give_clear_errors() {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/broken");
+    let expected = std::fs::read_to_string(dir.join("EXPECTED.txt")).unwrap();
+    let mut checked = 0;
+    for line in expected.lines().filter(|l| !l.trim().is_empty() && !l.starts_with('#')) {
+        let (file, message) = line.split_once(" => ").expect("lines are 'file => message'");
+        let path = dir.join(file.trim());
+        assert!(path.exists(), "{} is listed but missing", path.display());
+        let err = match load_scene(&path) {
+            Ok(_) => panic!("{file}: loaded, but should fail with '{message}'"),
+            Err(e) => e.to_string(),
+        };
+        assert!(err.contains(file.trim()), "{file}: the message does not name the file: {err}");
+        assert!(err.contains(message.trim()), "{file}: expected '{message}', got: {err}");
+        checked += 1;
+    }
+    let on_disk = std::fs::read_dir(&dir).unwrap().count() - 1;
+    assert_eq!(checked, on_disk, "every broken file needs a line in EXPECTED.txt");
+}
+
+/// Recoverable oddities load, each counted in a warning.
+#[test]
+fn oddities_are_skipped_with_counted_warnings() {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/odd");
+    let loaded = load_scene(&dir.join("degenerate.obj")).unwrap();
+    let text = loaded.warnings.to_string();
+    assert!(text.contains("skipped degenerate triangles (×2)"), "{text}");
+    let loaded = load_scene(&dir.join("unknown_elements.dae")).unwrap();
+    let text = loaded.warnings.to_string();
+    assert!(text.contains("<lines> primitives are not supported; skipped"), "{text}");
+    assert!(loaded.scene.triangle_count() == 1, "{text}");
+}
+
+#[test]
+fn unknown_extension_is_a_clear_error() {
+    let err = load_scene(Path::new("scene.blend")).unwrap_err().to_string();
+    assert!(err.contains("scene.blend: unknown scene format"), "{err}");
+}
