@@ -27,7 +27,10 @@ pub fn run(args: InfoArgs) -> Result<Outcome> {
     let loaded = load_scene(&args.file)?;
     let summary = summarize(&loaded);
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&summary).expect("a JSON value serializes"));
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&summary).expect("a JSON value serializes")
+        );
         return Ok(Outcome::Done);
     }
     let s = &loaded.scene;
@@ -46,7 +49,11 @@ pub fn run(args: InfoArgs) -> Result<Outcome> {
             })
             .unwrap_or_default()
     };
-    println!("  materials   {} ({})", s.materials.len(), by_kind(&summary["materials"]));
+    println!(
+        "  materials   {} ({})",
+        s.materials.len(),
+        by_kind(&summary["materials"])
+    );
     println!("  emitters    {} (area lights)", summary["emitters"]);
     println!("  lights      {} ({})", s.lights.len(), by_kind(&summary["lights"]));
     println!("  cameras     {}", loaded.cameras);

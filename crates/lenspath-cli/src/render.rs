@@ -191,7 +191,10 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
         Some(path) => {
             let loaded = load_scene(path)?;
             for (what, n) in loaded.warnings.iter() {
-                eprintln!("warning: {what}{}", if n > 1 { format!(" (×{n})") } else { String::new() });
+                eprintln!(
+                    "warning: {what}{}",
+                    if n > 1 { format!(" (×{n})") } else { String::new() }
+                );
             }
             (path.display().to_string(), loaded.scene, loaded.options)
         }
@@ -271,7 +274,8 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
             ))
         }
         CameraKind::Realistic => {
-            let lens = LensPrescription::load(args.lens.as_deref().or(file_lens.lens.as_deref()).unwrap_or("dgauss50"))?;
+            let lens =
+                LensPrescription::load(args.lens.as_deref().or(file_lens.lens.as_deref()).unwrap_or("dgauss50"))?;
             let focus = match args.sensor_depth {
                 Some(mm) => LensFocus::SensorPositionMm(mm),
                 None => LensFocus::Distance(

@@ -255,3 +255,56 @@ fn lens_reports_json_and_plots_the_layout() {
     );
     assert!(drawing.matches("<polyline").count() >= 15, "three ray fans");
 }
+
+/// `render FILE` takes the file's film and integrator settings (a flag wins),
+/// and `info` reports what was loaded; a broken file is one line and exit 2,
+/// with nothing written.
+#[test]
+fn scene_files_render_and_describe_themselves() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("scene.toml");
+    std::fs::write(
+        &scene,
+        "[film]\nwidth = 24\nheight = 16\n[integrator]\nspp = 2\n\
+         [camera]\neye = [0, 0, 5]\nlook_at = [0, 0, 0]\nfov_y_deg = 30\n\
+         [materials.white]\ntype = \"diffuse\"\nreflectance = 0.8\n\
+         [[shapes]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"white\"\n\
+         [[lights]]\ntype = \"environment\"\nradiance = 1\n",
+    )
+    .unwrap();
+    let out = dir.path().join("out.png");
+    let o = lenspath(&["render", scene.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("24x16 at 2 spp"), "{}", stderr(&o));
+    let o = lenspath(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--spp",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(stderr(&o).contains("24x16 at 1 spp"), "{}", stderr(&o));
+
+    let o = lenspath(&["info", scene.to_str().unwrap(), "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let info: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(info["spheres"], 1);
+    assert_eq!(info["materials"]["diffuse"], 1);
+    assert_eq!(info["lights"]["environment"], 1);
+    assert_eq!(info["cameras"], 1);
+    assert_eq!(info["bounds"]["min"], serde_json::json!([-1.0, -1.0, -1.0]));
+
+    let broken = dir.path().join("broken.obj");
+    std::fs::write(&broken, "v 0 0 0\nv 1 0 0\nf 1 2 3\n").unwrap();
+    let never = dir.path().join("never.png");
+    let o = lenspath(&["render", broken.to_str().unwrap(), "--out", never.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = stderr(&o);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("broken.obj: line 3: face refers to vertex 3, but 2 are defined"),
+        "{err}"
+    );
+    assert!(!never.exists());
+}

@@ -283,10 +283,18 @@ mod tests {
         let on_axis = spot.sample(Vec3::ZERO, Vec2::ZERO).unwrap();
         assert!((on_axis.radiance.x - 2.0).abs() < 1e-6);
         // 20° off axis at the same distance: 8·cos²20°/4.
-        let p = Vec3::new(2.0 * 20f32.to_radians().sin(), 0.0, 2.0 - 2.0 * 20f32.to_radians().cos());
+        let p = Vec3::new(
+            2.0 * 20f32.to_radians().sin(),
+            0.0,
+            2.0 - 2.0 * 20f32.to_radians().cos(),
+        );
         let off = spot.sample(p, Vec2::ZERO).unwrap();
         assert!((off.radiance.x - 2.0 * 20f32.to_radians().cos().powi(2)).abs() < 1e-5);
-        let outside = Vec3::new(2.0 * 40f32.to_radians().sin(), 0.0, 2.0 - 2.0 * 40f32.to_radians().cos());
+        let outside = Vec3::new(
+            2.0 * 40f32.to_radians().sin(),
+            0.0,
+            2.0 - 2.0 * 40f32.to_radians().cos(),
+        );
         assert!(spot.sample(outside, Vec2::ZERO).is_none());
     }
 

@@ -119,12 +119,18 @@ fn cs184_scenes_load_and_render_as_the_course_shows_them() {
             }
             assert!(best >= 5.0, "{path}: no lamp pixel (radiance 10), brightest {best}");
             let (fx, fy) = (at.0 as f32 / 64.0, at.1 as f32 / 48.0);
-            assert!((0.3..0.7).contains(&fx) && fy < 0.4, "{path}: brightest pixel at {at:?}");
+            assert!(
+                (0.3..0.7).contains(&fx) && fy < 0.4,
+                "{path}: brightest pixel at {at:?}"
+            );
         }
         if path.starts_with("meshedit/") {
             let centre = block(&image, (0.4, 0.6), (0.4, 0.6));
             let corner = block(&image, (0.0, 0.1), (0.0, 0.1));
-            assert!(centre.iter().sum::<f64>() > 0.05, "{path}: model not in view {centre:?}");
+            assert!(
+                centre.iter().sum::<f64>() > 0.05,
+                "{path}: model not in view {centre:?}"
+            );
             assert_eq!(corner, [0.0; 3], "{path}: background is not black");
         }
     }
@@ -175,7 +181,11 @@ fn shipped_example_scenes_load() {
             continue;
         }
         let loaded = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
-        assert!(loaded.scene.triangle_count() + loaded.scene.spheres.len() > 0, "{}", path.display());
+        assert!(
+            loaded.scene.triangle_count() + loaded.scene.spheres.len() > 0,
+            "{}",
+            path.display()
+        );
         assert!(loaded.cameras >= 1, "{}: examples set their camera", path.display());
         seen += 1;
     }
@@ -329,7 +339,10 @@ fn broken_files_give_clear_errors() {
             Ok(_) => panic!("{file}: loaded, but should fail with '{message}'"),
             Err(e) => e.to_string(),
         };
-        assert!(err.contains(file.trim()), "{file}: the message does not name the file: {err}");
+        assert!(
+            err.contains(file.trim()),
+            "{file}: the message does not name the file: {err}"
+        );
         assert!(err.contains(message.trim()), "{file}: expected '{message}', got: {err}");
         checked += 1;
     }

@@ -109,7 +109,9 @@ pub fn parse_collada(text: &str, path: &Path) -> Result<LoadedScene> {
         if let Some(meter) = unit.attribute("meter") {
             match meter.trim().parse::<f64>() {
                 Ok(m) if m > 0.0 && m.is_finite() => options.scene_unit_m = Some(m),
-                _ => reader.warnings.add(format!("<unit meter=\"{meter}\"> is not a positive number; ignored")),
+                _ => reader
+                    .warnings
+                    .add(format!("<unit meter=\"{meter}\"> is not a positive number; ignored")),
             }
         }
     }
@@ -334,7 +336,12 @@ impl<'a, 'input> Reader<'a, 'input> {
                     let forward = (target - eye).normalize();
                     let right = forward.cross(up).normalize();
                     let true_up = right.cross(forward);
-                    Mat4::from_cols(right.extend(0.0), true_up.extend(0.0), (-forward).extend(0.0), eye.extend(1.0))
+                    Mat4::from_cols(
+                        right.extend(0.0),
+                        true_up.extend(0.0),
+                        (-forward).extend(0.0),
+                        eye.extend(1.0),
+                    )
                 }
                 "skew" => {
                     self.warnings.add("<skew> transforms are not supported; ignored");
@@ -399,9 +406,7 @@ impl<'a, 'input> Reader<'a, 'input> {
         let (xfov, yfov, aspect) = (optional("xfov")?, optional("yfov")?, optional("aspect_ratio")?);
         let fov_y_deg = match (xfov, yfov, aspect) {
             (_, Some(y), _) => y,
-            (Some(x), None, Some(a)) if a > 0.0 => {
-                2.0 * ((0.5 * x.to_radians()).tan() / a).atan().to_degrees()
-            }
+            (Some(x), None, Some(a)) if a > 0.0 => 2.0 * ((0.5 * x.to_radians()).tan() / a).atan().to_degrees(),
             (Some(x), None, None) => x,
             _ => return Err(self.error(perspective, "needs <yfov>, or <xfov> with <aspect_ratio>")),
         };
@@ -413,7 +418,10 @@ impl<'a, 'input> Reader<'a, 'input> {
         }
         if self.cs184 {
             let toward = world.transform_point3(Vec3::NEG_Z).try_normalize();
-            self.cs184_camera = Some((toward.ok_or_else(|| self.error(item, "camera view direction is zero"))?, fov_y_deg));
+            self.cs184_camera = Some((
+                toward.ok_or_else(|| self.error(item, "camera view direction is zero"))?,
+                fov_y_deg,
+            ));
             return Ok(());
         }
         // COLLADA cameras look down their −z with +y up.
@@ -434,7 +442,11 @@ impl<'a, 'input> Reader<'a, 'input> {
 
     fn instance_light(&mut self, item: Node, world: &Mat4) -> Result<()> {
         let light = self.resolve(item, item.attribute("url"), "light")?;
-        let name = light.attribute("name").or(light.attribute("id")).unwrap_or("light").to_string();
+        let name = light
+            .attribute("name")
+            .or(light.attribute("id"))
+            .unwrap_or("light")
+            .to_string();
         let position = world.transform_point3(Vec3::ZERO);
         let axis = world.transform_vector3(Vec3::NEG_Z).try_normalize();
         // The CGL profile wins over technique_common, as in the CS184 renderer.
@@ -449,7 +461,12 @@ impl<'a, 'input> Reader<'a, 'input> {
                 let dx = world.transform_vector3(Vec3::X) * 0.5;
                 let dy = world.transform_vector3(Vec3::Y) * 0.5;
                 let normal = axis_or_err(self)?;
-                let corners = [position - dx - dy, position + dx - dy, position + dx + dy, position - dx + dy];
+                let corners = [
+                    position - dx - dy,
+                    position + dx - dy,
+                    position + dx + dy,
+                    position - dx + dy,
+                ];
                 self.area_lights.push(AreaLightQuad {
                     name,
                     corners,
@@ -515,7 +532,10 @@ impl<'a, 'input> Reader<'a, 'input> {
         let mut bindings = HashMap::new();
         for im in item.descendants().filter(|n| n.has_tag_name("instance_material")) {
             if let Some(symbol) = im.attribute("symbol") {
-                bindings.insert(symbol.to_string(), self.resolve(im, im.attribute("target"), "material")?);
+                bindings.insert(
+                    symbol.to_string(),
+                    self.resolve(im, im.attribute("target"), "material")?,
+                );
             }
         }
         let surface_for = |r: &mut Self, symbol: Option<&str>| -> Result<SurfaceMaterial> {
@@ -576,7 +596,7 @@ impl<'a, 'input> Reader<'a, 'input> {
     fn geometry(&mut self, geometry: Node<'a, 'input>) -> Result<Geometry> {
         if let Some(sphere) = cgl_technique(geometry).and_then(|t| child(t, "sphere")) {
             let radius = self.scalar(sphere, "radius")?;
-            if !(radius > 0.0) {
+            if radius <= 0.0 {
                 return Err(self.error(sphere, format!("radius must be positive, got {radius}")));
             }
             return Ok(Geometry::Sphere { radius });
@@ -592,7 +612,8 @@ impl<'a, 'input> Reader<'a, 'input> {
             let kind = prim.tag_name().name();
             if !matches!(kind, "triangles" | "polylist" | "polygons") {
                 if matches!(kind, "lines" | "linestrips" | "trifans" | "tristrips") {
-                    self.warnings.add(format!("<{kind}> primitives are not supported; skipped"));
+                    self.warnings
+                        .add(format!("<{kind}> primitives are not supported; skipped"));
                 }
                 continue;
             }
@@ -608,8 +629,7 @@ impl<'a, 'input> Reader<'a, 'input> {
     /// The float array of a `<source>`, with the accessor's stride.
     fn source(&self, from: Node, url: Option<&str>, width: usize) -> Result<Vec<f32>> {
         let source = self.resolve(from, url, "source")?;
-        let array = child(source, "float_array")
-            .ok_or_else(|| self.error(source, "has no <float_array>"))?;
+        let array = child(source, "float_array").ok_or_else(|| self.error(source, "has no <float_array>"))?;
         let values = self.numbers(array)?;
         if let Some(count) = array.attribute("count") {
             if count.parse::<usize>().ok() != Some(values.len()) {
@@ -661,8 +681,12 @@ impl<'a, 'input> Reader<'a, 'input> {
                     let vertices = self.resolve(input, input.attribute("source"), "vertices")?;
                     for vi in vertices.children().filter(|n| n.has_tag_name("input")) {
                         match vi.attribute("semantic") {
-                            Some("POSITION") => position_input = Some((offset, self.source(vi, vi.attribute("source"), 3)?)),
-                            Some("NORMAL") => normal_input = Some((offset, self.source(vi, vi.attribute("source"), 3)?)),
+                            Some("POSITION") => {
+                                position_input = Some((offset, self.source(vi, vi.attribute("source"), 3)?))
+                            }
+                            Some("NORMAL") => {
+                                normal_input = Some((offset, self.source(vi, vi.attribute("source"), 3)?))
+                            }
                             _ => {}
                         }
                     }
@@ -686,7 +710,8 @@ impl<'a, 'input> Reader<'a, 'input> {
                     polygons.push((p, vec![usize::MAX])); // one polygon: every index in <p>
                 }
                 if prim.children().any(|n| n.has_tag_name("ph")) {
-                    self.warnings.add("<ph> polygons with holes: holes ignored, outer loop kept");
+                    self.warnings
+                        .add("<ph> polygons with holes: holes ignored, outer loop kept");
                 }
             }
             _ => {
@@ -697,11 +722,17 @@ impl<'a, 'input> Reader<'a, 'input> {
                         .text()
                         .unwrap_or("")
                         .split_ascii_whitespace()
-                        .map(|t| t.parse::<usize>().map_err(|_| self.error(vcount, format!("'{t}' is not a whole number"))))
+                        .map(|t| {
+                            t.parse::<usize>()
+                                .map_err(|_| self.error(vcount, format!("'{t}' is not a whole number")))
+                        })
                         .collect::<Result<Vec<_>>>()?;
                     if let Some(d) = declared {
                         if d != sizes.len() {
-                            return Err(self.error(prim, format!("count=\"{d}\" but <vcount> lists {} polygons", sizes.len())));
+                            return Err(self.error(
+                                prim,
+                                format!("count=\"{d}\" but <vcount> lists {} polygons", sizes.len()),
+                            ));
                         }
                     }
                     sizes
@@ -724,15 +755,28 @@ impl<'a, 'input> Reader<'a, 'input> {
                 .text()
                 .unwrap_or("")
                 .split_ascii_whitespace()
-                .map(|t| t.parse::<u32>().map_err(|_| self.error(p, format!("'{t}' is not a vertex index"))))
+                .map(|t| {
+                    t.parse::<u32>()
+                        .map_err(|_| self.error(p, format!("'{t}' is not a vertex index")))
+                })
                 .collect::<Result<Vec<_>>>()?;
-            let sizes = if sizes == [usize::MAX] { vec![indices.len() / stride] } else { sizes };
-            let needed: usize = sizes.iter().try_fold(0usize, |acc, &s| acc.checked_add(s.checked_mul(stride)?))
+            let sizes = if sizes == [usize::MAX] {
+                vec![indices.len() / stride]
+            } else {
+                sizes
+            };
+            let needed: usize = sizes
+                .iter()
+                .try_fold(0usize, |acc, &s| acc.checked_add(s.checked_mul(stride)?))
                 .ok_or_else(|| self.error(p, "polygon sizes overflow"))?;
             if indices.len() != needed {
                 return Err(self.error(
                     p,
-                    format!("holds {} indices, but {} polygons of these sizes with {stride} inputs need {needed}", indices.len(), sizes.len()),
+                    format!(
+                        "holds {} indices, but {} polygons of these sizes with {stride} inputs need {needed}",
+                        indices.len(),
+                        sizes.len()
+                    ),
                 ));
             }
             let mut corner = 0;
@@ -744,13 +788,19 @@ impl<'a, 'input> Reader<'a, 'input> {
                     corner += 1;
                     let pi = indices[at + position_offset];
                     if pi as usize >= position_count {
-                        return Err(self.error(p, format!("position index {pi} is out of range (the source has {position_count})")));
+                        return Err(self.error(
+                            p,
+                            format!("position index {pi} is out of range (the source has {position_count})"),
+                        ));
                     }
                     let ni = match &normal_input {
                         Some((off, _)) => {
                             let ni = indices[at + off];
                             if ni as usize >= normal_count {
-                                return Err(self.error(p, format!("normal index {ni} is out of range (the source has {normal_count})")));
+                                return Err(self.error(
+                                    p,
+                                    format!("normal index {ni} is out of range (the source has {normal_count})"),
+                                ));
                             }
                             ni
                         }
@@ -758,7 +808,10 @@ impl<'a, 'input> Reader<'a, 'input> {
                     };
                     let v = *vertex_of.entry((pi, ni)).or_insert_with(|| {
                         let i = pi as usize * 3;
-                        builder.mesh.positions.push(Vec3::new(positions[i], positions[i + 1], positions[i + 2]));
+                        builder
+                            .mesh
+                            .positions
+                            .push(Vec3::new(positions[i], positions[i + 1], positions[i + 2]));
                         if let Some((_, ns)) = &normal_input {
                             let j = ni as usize * 3;
                             normals.push(Vec3::new(ns[j], ns[j + 1], ns[j + 2]));
@@ -791,7 +844,10 @@ impl<'a, 'input> Reader<'a, 'input> {
 
     /// An effect's BSDF: the CGL one when present, else the common profile's colours.
     fn effect(&mut self, effect: Node) -> Result<SurfaceMaterial> {
-        let plain = |material| SurfaceMaterial { material, emission: None };
+        let plain = |material| SurfaceMaterial {
+            material,
+            emission: None,
+        };
         if let Some(bsdf) = cgl_technique(effect).and_then(first_element) {
             return Ok(match bsdf.tag_name().name() {
                 "diffuse" => plain(Material::Diffuse {
@@ -803,7 +859,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 "glass" | "refraction" => {
                     let glass = bsdf.has_tag_name("glass");
                     let eta = self.scalar(bsdf, "ior")?;
-                    if !(eta > 0.0) {
+                    if eta <= 0.0 {
                         return Err(self.error(bsdf, format!("ior must be positive, got {eta}")));
                     }
                     if child(bsdf, "roughness").is_some() && self.scalar(bsdf, "roughness")? > 0.0 {
@@ -818,7 +874,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 }
                 "microfacet" => {
                     let alpha = self.scalar(bsdf, "alpha")?;
-                    if !(alpha >= 0.0) {
+                    if alpha < 0.0 {
                         return Err(self.error(bsdf, format!("alpha must be ≥ 0, got {alpha}")));
                     }
                     plain(Material::Conductor {
@@ -838,10 +894,13 @@ impl<'a, 'input> Reader<'a, 'input> {
                 }
             });
         }
-        let shading = path_child(effect, "profile_COMMON/technique")
-            .and_then(|t| t.children().find(|n| matches!(n.tag_name().name(), "phong" | "lambert" | "blinn" | "constant")));
+        let shading = path_child(effect, "profile_COMMON/technique").and_then(|t| {
+            t.children()
+                .find(|n| matches!(n.tag_name().name(), "phong" | "lambert" | "blinn" | "constant"))
+        });
         let Some(shading) = shading else {
-            self.warnings.add("an effect without a common-profile shading model: used grey diffuse");
+            self.warnings
+                .add("an effect without a common-profile shading model: used grey diffuse");
             return Ok(plain(DEFAULT_MATERIAL));
         };
         let mut reflectance = DEFAULT_REFLECTANCE;
@@ -849,7 +908,8 @@ impl<'a, 'input> Reader<'a, 'input> {
             if let Some(color) = child(diffuse, "color") {
                 reflectance = self.color(color)?;
             } else if child(diffuse, "texture").is_some() {
-                self.warnings.add("diffuse textures are not supported: used grey diffuse");
+                self.warnings
+                    .add("diffuse textures are not supported: used grey diffuse");
             }
         }
         let emission = match path_child(shading, "emission/color") {

@@ -23,8 +23,8 @@ use gltf::khr_lights_punctual::Kind;
 use gltf::mesh::Mode;
 
 use super::import::{
-    complete_scene, conductor_from_reflectance, focus_on_subject, intern_material, transform_mesh,
-    LoadedScene, MeshBuilder, SceneOptions, Warnings, MAX_TRIANGLES,
+    complete_scene, conductor_from_reflectance, focus_on_subject, intern_material, transform_mesh, LoadedScene,
+    MeshBuilder, SceneOptions, Warnings, MAX_TRIANGLES,
 };
 use crate::camera::CameraPose;
 use crate::error::{Error, Result};
@@ -61,10 +61,12 @@ pub fn parse_gltf(
     let mut buffers = Vec::new();
     for buffer in gltf.buffers() {
         let data = match buffer.source() {
-            gltf::buffer::Source::Bin => gltf
-                .blob
-                .clone()
-                .ok_or_else(|| fail(format!("buffer {} refers to the GLB binary chunk, which is missing", buffer.index())))?,
+            gltf::buffer::Source::Bin => gltf.blob.clone().ok_or_else(|| {
+                fail(format!(
+                    "buffer {} refers to the GLB binary chunk, which is missing",
+                    buffer.index()
+                ))
+            })?,
             gltf::buffer::Source::Uri(uri) => {
                 if let Some(rest) = uri.strip_prefix("data:") {
                     let (_, payload) = rest
@@ -74,8 +76,10 @@ pub fn parse_gltf(
                         .decode(payload)
                         .map_err(|e| fail(format!("buffer {}: bad base64 data: {e}", buffer.index())))?
                 } else {
-                    let decoded = urlencoding::decode(uri).map_err(|e| fail(format!("buffer {}: bad URI: {e}", buffer.index())))?;
-                    read_uri(&decoded).map_err(|e| fail(format!("buffer {}: cannot read '{uri}': {e}", buffer.index())))?
+                    let decoded = urlencoding::decode(uri)
+                        .map_err(|e| fail(format!("buffer {}: bad URI: {e}", buffer.index())))?;
+                    read_uri(&decoded)
+                        .map_err(|e| fail(format!("buffer {}: cannot read '{uri}': {e}", buffer.index())))?
                 }
             }
         };
@@ -142,7 +146,10 @@ struct Loader<'a> {
 impl Loader<'_> {
     fn node(&mut self, node: &gltf::Node, parent: Mat4, stack: &mut Vec<usize>) -> Result<()> {
         if stack.contains(&node.index()) {
-            return Err((self.fail)(format!("node {} is its own ancestor (a cycle)", node.index())));
+            return Err((self.fail)(format!(
+                "node {} is its own ancestor (a cycle)",
+                node.index()
+            )));
         }
         if stack.len() >= MAX_NODE_DEPTH {
             return Err((self.fail)(format!("nodes nest deeper than {MAX_NODE_DEPTH} levels")));
@@ -195,7 +202,10 @@ impl Loader<'_> {
                 None => (0..positions.len() as u32).collect(),
             };
             if indices.len() % 3 != 0 {
-                return Err((self.fail)(format!("{what}: {} indices is not a whole number of triangles", indices.len())));
+                return Err((self.fail)(format!(
+                    "{what}: {} indices is not a whole number of triangles",
+                    indices.len()
+                )));
             }
             if let Some(&bad) = indices.iter().find(|&&i| i as usize >= positions.len()) {
                 return Err((self.fail)(format!(
@@ -239,7 +249,8 @@ impl Loader<'_> {
         let [r, g, b, _] = pbr.base_color_factor();
         let base = Rgb::new(r, g, b).clamp(Rgb::ZERO, Rgb::ONE);
         if pbr.base_color_texture().is_some() {
-            self.warnings.add("textures are not supported: used the base colour factor");
+            self.warnings
+                .add("textures are not supported: used the base colour factor");
         }
         let transmission = m.transmission().map_or(0.0, |t| t.transmission_factor());
         let material = if transmission >= 0.5 {
@@ -266,19 +277,25 @@ impl Loader<'_> {
             return Ok(());
         }
         let gltf::camera::Projection::Perspective(p) = camera.projection() else {
-            self.warnings
-                .add("an orthographic camera is not supported; skipped");
+            self.warnings.add("an orthographic camera is not supported; skipped");
             return Ok(());
         };
         let fov_y_deg = p.yfov().to_degrees();
         if !(fov_y_deg > 0.0 && fov_y_deg < 180.0) {
-            return Err((self.fail)(format!("camera {}: yfov {} rad is not between 0 and π", camera.index(), p.yfov())));
+            return Err((self.fail)(format!(
+                "camera {}: yfov {} rad is not between 0 and π",
+                camera.index(),
+                p.yfov()
+            )));
         }
         let eye = world.transform_point3(Vec3::ZERO);
         let forward = world.transform_vector3(Vec3::NEG_Z);
         let up = world.transform_vector3(Vec3::Y);
         if forward.cross(up).length_squared() == 0.0 {
-            return Err((self.fail)(format!("node {}: camera transform is degenerate", node.index())));
+            return Err((self.fail)(format!(
+                "node {}: camera transform is degenerate",
+                node.index()
+            )));
         }
         self.scene.view = Some(SceneView {
             pose: CameraPose::look_at(eye, eye + forward, up),
@@ -291,7 +308,10 @@ impl Loader<'_> {
     fn light(&mut self, node: &gltf::Node, light: &gltf::khr_lights_punctual::Light, world: &Mat4) -> Result<()> {
         let color = Rgb::from_array(light.color()) * light.intensity();
         if !color.is_finite() || color.min_element() < 0.0 {
-            return Err((self.fail)(format!("light {}: colour × intensity must be finite and ≥ 0", light.index())));
+            return Err((self.fail)(format!(
+                "light {}: colour × intensity must be finite and ≥ 0",
+                light.index()
+            )));
         }
         let position = world.transform_point3(Vec3::ZERO);
         let direction = world

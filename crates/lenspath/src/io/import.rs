@@ -243,8 +243,14 @@ pub fn complete_scene(scene: &mut Scene, warnings: &mut Warnings) {
         });
         warnings.add("no camera: added one on the +z side that frames the whole scene");
     }
-    let emits = scene.meshes.iter().any(|m| m.emission.is_some_and(|e| e.max_element() > 0.0))
-        || scene.spheres.iter().any(|s| s.emission.is_some_and(|e| e.max_element() > 0.0));
+    let emits = scene
+        .meshes
+        .iter()
+        .any(|m| m.emission.is_some_and(|e| e.max_element() > 0.0))
+        || scene
+            .spheres
+            .iter()
+            .any(|s| s.emission.is_some_and(|e| e.max_element() > 0.0));
     if scene.lights.is_empty() && !emits {
         scene.lights.push(Light::Environment { radiance: Rgb::ONE });
         warnings.add("no lights: added a white environment light (radiance 1)");

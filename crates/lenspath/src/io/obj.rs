@@ -20,8 +20,8 @@ use std::path::Path;
 use glam::Vec3;
 
 use super::import::{
-    complete_scene, conductor_from_reflectance, intern_material, LoadedScene, MeshBuilder, SceneOptions, Warnings, DEFAULT_MATERIAL,
-    DEFAULT_REFLECTANCE, EMITTER_MATERIAL,
+    complete_scene, conductor_from_reflectance, intern_material, LoadedScene, MeshBuilder, SceneOptions, Warnings,
+    DEFAULT_MATERIAL, DEFAULT_REFLECTANCE, EMITTER_MATERIAL,
 };
 use crate::error::{Error, Result};
 use crate::materials::Material;
@@ -47,10 +47,9 @@ pub fn parse_obj(text: &str, path: &Path, load_mtl: &dyn Fn(&Path) -> tobj::MTLL
         single_index: true,
         ignore_points: true,
         ignore_lines: true,
-        ..Default::default()
     };
-    let (models, materials) = tobj::load_obj_buf(&mut BufReader::new(text.as_bytes()), &options, load_mtl)
-        .map_err(|e| Error::Parse {
+    let (models, materials) =
+        tobj::load_obj_buf(&mut BufReader::new(text.as_bytes()), &options, load_mtl).map_err(|e| Error::Parse {
             path: path.to_path_buf(),
             message: e.to_string(),
         })?;
@@ -60,12 +59,17 @@ pub fn parse_obj(text: &str, path: &Path, load_mtl: &dyn Fn(&Path) -> tobj::MTLL
         Vec::new()
     });
     let mut scene = Scene::default();
-    let converted: Vec<(Material, Option<Rgb>)> = materials.iter().map(|m| convert_material(m, &mut warnings)).collect();
+    let converted: Vec<(Material, Option<Rgb>)> =
+        materials.iter().map(|m| convert_material(m, &mut warnings)).collect();
     for model in models {
         let m = model.mesh;
         let mut builder = MeshBuilder {
             mesh: TriangleMesh {
-                positions: m.positions.chunks_exact(3).map(|p| Vec3::new(p[0], p[1], p[2])).collect(),
+                positions: m
+                    .positions
+                    .chunks_exact(3)
+                    .map(|p| Vec3::new(p[0], p[1], p[2]))
+                    .collect(),
                 normals: (!m.normals.is_empty() && m.normals.len() == m.positions.len()).then(|| {
                     m.normals
                         .chunks_exact(3)
@@ -87,7 +91,11 @@ pub fn parse_obj(text: &str, path: &Path, load_mtl: &dyn Fn(&Path) -> tobj::MTLL
             builder.polygon(&m.indices[start..end]);
             start = end;
         }
-        let name = if model.name.is_empty() { "unnamed group".to_string() } else { model.name.clone() };
+        let name = if model.name.is_empty() {
+            "unnamed group".to_string()
+        } else {
+            model.name.clone()
+        };
         let mut mesh = builder.finish(&format!("{}: {name}", path.display()), &mut warnings);
         if mesh.indices.is_empty() {
             continue;
@@ -124,7 +132,12 @@ pub fn parse_obj(text: &str, path: &Path, load_mtl: &dyn Fn(&Path) -> tobj::MTLL
 fn convert_material(m: &tobj::Material, warnings: &mut Warnings) -> (Material, Option<Rgb>) {
     let rgb = |c: Option<[f32; 3]>| c.map(Rgb::from_array).filter(|c| c.is_finite());
     let param = |key: &str| {
-        let v: Vec<f32> = m.unknown_param.get(key)?.split_whitespace().filter_map(|t| t.parse().ok()).collect();
+        let v: Vec<f32> = m
+            .unknown_param
+            .get(key)?
+            .split_whitespace()
+            .filter_map(|t| t.parse().ok())
+            .collect();
         match v[..] {
             [x] => Some(Rgb::splat(x)),
             [r, g, b, ..] => Some(Rgb::new(r, g, b)),
@@ -133,11 +146,17 @@ fn convert_material(m: &tobj::Material, warnings: &mut Warnings) -> (Material, O
     };
     let kd = rgb(m.diffuse).unwrap_or(DEFAULT_REFLECTANCE).clamp(Rgb::ZERO, Rgb::ONE);
     let ks = rgb(m.specular).unwrap_or(Rgb::ZERO).clamp(Rgb::ZERO, Rgb::ONE);
-    let ke = rgb(m.emissive).or_else(|| param("Ke")).unwrap_or(Rgb::ZERO).max(Rgb::ZERO);
+    let ke = rgb(m.emissive)
+        .or_else(|| param("Ke"))
+        .unwrap_or(Rgb::ZERO)
+        .max(Rgb::ZERO);
     let illum = m.illumination_model.unwrap_or(2);
     let ns = m.shininess.filter(|n| n.is_finite() && *n >= 0.0).unwrap_or(0.0);
     if m.diffuse_texture.is_some() {
-        warnings.add(format!("material '{}': textures are not supported; used its Kd colour", m.name));
+        warnings.add(format!(
+            "material '{}': textures are not supported; used its Kd colour",
+            m.name
+        ));
     }
     if ke.max_element() > 0.0 {
         return (EMITTER_MATERIAL, Some(ke));
@@ -177,7 +196,10 @@ fn check_lines(text: &str) -> std::result::Result<(), (usize, String)> {
                 let needed = if keyword == "vt" { 1 } else { 3 };
                 let values: Vec<&str> = words.collect();
                 if values.len() < needed {
-                    return Err((line_no, format!("'{keyword}' needs at least {needed} numbers, found {}", values.len())));
+                    return Err((
+                        line_no,
+                        format!("'{keyword}' needs at least {needed} numbers, found {}", values.len()),
+                    ));
                 }
                 for v in values.iter().take(if keyword == "v" { 3 } else { values.len() }) {
                     match v.parse::<f32>() {
@@ -194,7 +216,10 @@ fn check_lines(text: &str) -> std::result::Result<(), (usize, String)> {
             "f" => {
                 let corners: Vec<&str> = words.collect();
                 if corners.len() < 3 {
-                    return Err((line_no, format!("a face needs at least 3 vertices, found {}", corners.len())));
+                    return Err((
+                        line_no,
+                        format!("a face needs at least 3 vertices, found {}", corners.len()),
+                    ));
                 }
                 for corner in corners {
                     for (k, part) in corner.split('/').enumerate() {
@@ -207,9 +232,12 @@ fn check_lines(text: &str) -> std::result::Result<(), (usize, String)> {
                             2 => ("normal", normals),
                             _ => return Err((line_no, format!("'{corner}' has more than three indices"))),
                         };
-                        let index: i64 = part
-                            .parse()
-                            .map_err(|_| (line_no, format!("'{corner}' is not a face vertex (v, v/vt, v//vn or v/vt/vn)")))?;
+                        let index: i64 = part.parse().map_err(|_| {
+                            (
+                                line_no,
+                                format!("'{corner}' is not a face vertex (v, v/vt, v//vn or v/vt/vn)"),
+                            )
+                        })?;
                         let resolved = if index < 0 { count + index + 1 } else { index };
                         if index == 0 || resolved < 1 || resolved > count {
                             return Err((
@@ -231,7 +259,9 @@ mod tests {
     use super::*;
 
     fn parse(text: &str, mtl: &'static str) -> Result<LoadedScene> {
-        parse_obj(text, Path::new("test.obj"), &move |_| tobj::load_mtl_buf(&mut mtl.as_bytes()))
+        parse_obj(text, Path::new("test.obj"), &move |_| {
+            tobj::load_mtl_buf(&mut mtl.as_bytes())
+        })
     }
 
     #[test]
@@ -250,10 +280,17 @@ mod tests {
         let loaded = parse(text, mtl).unwrap();
         let s = &loaded.scene;
         let mat = |i: usize| s.materials[s.meshes[i].material as usize];
-        assert_eq!(mat(0), Material::Diffuse { reflectance: Rgb::new(0.8, 0.1, 0.1) });
+        assert_eq!(
+            mat(0),
+            Material::Diffuse {
+                reflectance: Rgb::new(0.8, 0.1, 0.1)
+            }
+        );
         assert_eq!(s.meshes[1].emission, Some(Rgb::new(5.0, 5.0, 4.0)));
         assert!(matches!(mat(2), Material::Dielectric { eta, .. } if (eta - 1.33).abs() < 1e-6));
-        let Material::Conductor { eta, k, alpha } = mat(3) else { panic!("{:?}", mat(3)) };
+        let Material::Conductor { eta, k, alpha } = mat(3) else {
+            panic!("{:?}", mat(3))
+        };
         // Normal-incidence reflectance of the conductor equals Ks.
         let f0 = crate::materials::fresnel_complex(1.0, eta.x, k.x);
         assert!((f0 - 0.9).abs() < 1e-3, "{f0}");
@@ -264,8 +301,13 @@ mod tests {
     fn bad_lines_are_reported_with_their_number() {
         let err = parse("v 0 0 0\nv 1 0 0\nv 1 nan 0\n", "").unwrap_err().to_string();
         assert!(err.contains("line 3") && err.contains("'nan'"), "{err}");
-        let err = parse("v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 4\n", "").unwrap_err().to_string();
-        assert!(err.contains("line 4: face refers to vertex 4, but 3 are defined"), "{err}");
+        let err = parse("v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 4\n", "")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("line 4: face refers to vertex 4, but 3 are defined"),
+            "{err}"
+        );
         let err = parse("v 0 0 0\nf 1 -2 1\n", "").unwrap_err().to_string();
         assert!(err.contains("vertex -2"), "{err}");
     }

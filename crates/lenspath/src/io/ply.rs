@@ -128,7 +128,12 @@ pub fn parse_ply(bytes: &[u8], path: &Path, warnings: &mut Warnings) -> Result<T
     read_ply(&mut std::io::Cursor::new(bytes), bytes.len() as u64, path, warnings)
 }
 
-fn read_ply<R: BufRead + Seek>(reader: &mut R, size: u64, path: &Path, warnings: &mut Warnings) -> Result<TriangleMesh> {
+fn read_ply<R: BufRead + Seek>(
+    reader: &mut R,
+    size: u64,
+    path: &Path,
+    warnings: &mut Warnings,
+) -> Result<TriangleMesh> {
     // ply-rs-bw's messages span lines; keep ours to one.
     let fail = |m: String| Error::Parse {
         path: path.to_path_buf(),
@@ -277,7 +282,12 @@ mod tests {
         }
         ascii += "4 0 1 2 3\n";
         let binary = |big: bool| {
-            let mut b = header(if big { "binary_big_endian" } else { "binary_little_endian" }).into_bytes();
+            let mut b = header(if big {
+                "binary_big_endian"
+            } else {
+                "binary_little_endian"
+            })
+            .into_bytes();
             let mut put = |x: f32| b.extend(if big { x.to_be_bytes() } else { x.to_le_bytes() });
             for v in verts {
                 for c in v.into_iter().chain([0.0, 0.0, 1.0]) {

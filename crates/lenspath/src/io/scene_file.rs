@@ -23,7 +23,6 @@ use crate::math::Rgb;
 use crate::scene::{Scene, SceneView};
 use crate::shapes::{Sphere, TriangleMesh};
 
-
 /// A colour: one grey value or `[r, g, b]`.
 #[derive(Clone, Copy, Debug, Deserialize)]
 #[serde(untagged)]
@@ -270,7 +269,9 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
     };
 
     for (i, spec) in file.lights.iter().enumerate() {
-        scene.lights.push(light(spec).map_err(|e| fail(format!("lights[{i}]: {e}")))?);
+        scene
+            .lights
+            .push(light(spec).map_err(|e| fail(format!("lights[{i}]: {e}")))?);
     }
 
     for (i, spec) in file.shapes.iter().enumerate() {
@@ -300,7 +301,11 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
             } => {
                 let emission = emission.map(Color::rgb);
                 let material = material_id(&mut scene, &what, material, emission)?;
-                let (p, u, v) = (Vec3::from_array(*corner), Vec3::from_array(*edge_u), Vec3::from_array(*edge_v));
+                let (p, u, v) = (
+                    Vec3::from_array(*corner),
+                    Vec3::from_array(*edge_u),
+                    Vec3::from_array(*edge_v),
+                );
                 if u.cross(v).length_squared() == 0.0 {
                     return Err(fail(format!("{what}: edge_u and edge_v must span a plane")));
                 }
@@ -366,12 +371,16 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
             Vec3::from_array(cam.up),
         );
         if (target - eye).cross(up).length_squared() == 0.0 || !(eye.is_finite() && target.is_finite()) {
-            return Err(fail("[camera]: eye, look_at and up must be finite and not collinear".into()));
+            return Err(fail(
+                "[camera]: eye, look_at and up must be finite and not collinear".into(),
+            ));
         }
         let pose = CameraPose::look_at(eye, target, up);
         let fov_y_deg = cam.fov_y_deg.unwrap_or(super::import::DEFAULT_FOV_Y_DEG);
         if !(fov_y_deg > 0.0 && fov_y_deg < 180.0) {
-            return Err(fail(format!("[camera]: fov_y_deg must be between 0 and 180, got {fov_y_deg}")));
+            return Err(fail(format!(
+                "[camera]: fov_y_deg must be between 0 and 180, got {fov_y_deg}"
+            )));
         }
         let focus_distance = match cam.focus_distance {
             Some(d) if d > 0.0 && d.is_finite() => d,
@@ -470,7 +479,9 @@ fn light(spec: &LightSpec) -> std::result::Result<Light, String> {
             }
         }
         LightSpec::Directional { direction, irradiance } => Light::Directional {
-            direction: Vec3::from_array(direction).try_normalize().ok_or("direction must be non-zero")?,
+            direction: Vec3::from_array(direction)
+                .try_normalize()
+                .ok_or("direction must be non-zero")?,
             irradiance: irradiance.rgb(),
         },
         LightSpec::Environment { radiance } => Light::Environment {
@@ -487,7 +498,9 @@ fn matrix(t: &TransformSpec) -> std::result::Result<Mat4, String> {
     }
     let mut m = Mat4::from_scale(scale);
     for r in &t.rotate {
-        let axis = Vec3::from_array(r.axis).try_normalize().ok_or("rotation axis is zero")?;
+        let axis = Vec3::from_array(r.axis)
+            .try_normalize()
+            .ok_or("rotation axis is zero")?;
         m = Mat4::from_axis_angle(axis, r.degrees.to_radians()) * m;
     }
     m = Mat4::from_translation(Vec3::from_array(t.translate.unwrap_or_default())) * m;
