@@ -41,8 +41,8 @@ use glam::{Mat4, Vec3};
 use roxmltree::{Document, Node};
 
 use super::import::{
-    complete_scene, focus_on_subject, intern_material, scene_bounds, transform_mesh, LoadedScene, MeshBuilder,
-    SceneOptions, Warnings, DEFAULT_MATERIAL, DEFAULT_REFLECTANCE, EMITTER_MATERIAL, MAX_TRIANGLES,
+    focus_on_subject, intern_material, scene_bounds, transform_mesh, LoadedScene, MeshBuilder, SceneOptions, Warnings,
+    DEFAULT_MATERIAL, DEFAULT_REFLECTANCE, EMITTER_MATERIAL, MAX_TRIANGLES,
 };
 use crate::camera::CameraPose;
 use crate::error::{Error, Result};
@@ -54,6 +54,9 @@ use crate::shapes::{Sphere, TriangleMesh};
 
 /// Deepest node nesting followed (instancing included).
 const MAX_NODE_DEPTH: usize = 256;
+
+/// Most node instances followed (shared subtrees can multiply exponentially).
+const MAX_NODE_VISITS: usize = 1_000_000;
 
 /// Reads a COLLADA file.
 pub fn load_collada(path: &Path) -> Result<LoadedScene> {
@@ -87,6 +90,7 @@ pub fn parse_collada(text: &str, path: &Path) -> Result<LoadedScene> {
         materials: HashMap::new(),
         cameras: 0,
         triangles: 0,
+        node_visits: 0,
         area_lights: Vec::new(),
         cs184: doc
             .descendants()
@@ -115,20 +119,13 @@ pub fn parse_collada(text: &str, path: &Path) -> Result<LoadedScene> {
             }
         }
     }
-    let Reader {
-        mut scene,
-        mut warnings,
-        cameras,
-        ..
-    } = reader;
-    complete_scene(&mut scene, &mut warnings);
-    Ok(LoadedScene {
-        scene,
+    Ok(LoadedScene::completed(
+        reader.scene,
         options,
-        cameras,
-        warnings,
-        format: "COLLADA",
-    })
+        reader.cameras,
+        reader.warnings,
+        "COLLADA",
+    ))
 }
 
 /// Geometry parsed once per `<geometry>` and instanced any number of times.
@@ -165,6 +162,7 @@ struct Reader<'a, 'input> {
     materials: HashMap<String, SurfaceMaterial>,
     cameras: usize,
     triangles: usize,
+    node_visits: usize,
     area_lights: Vec<AreaLightQuad>,
     /// The file uses the CGL profile: place the camera as the CS184 renderer does.
     cs184: bool,
@@ -361,6 +359,10 @@ impl<'a, 'input> Reader<'a, 'input> {
         }
         if stack.len() >= MAX_NODE_DEPTH {
             return Err(self.error(node, format!("nodes nest deeper than {MAX_NODE_DEPTH} levels")));
+        }
+        self.node_visits += 1;
+        if self.node_visits > MAX_NODE_VISITS {
+            return Err(self.error(node, format!("instancing expands to more than {MAX_NODE_VISITS} nodes")));
         }
         let world = parent * self.local_transform(node)?;
         if !world.is_finite() {
@@ -738,8 +740,14 @@ impl<'a, 'input> Reader<'a, 'input> {
                     sizes
                 } else {
                     let d = declared.ok_or_else(|| self.error(prim, "missing or bad count attribute"))?;
-                    if d > MAX_TRIANGLES {
-                        return Err(self.error(prim, format!("count=\"{d}\" is beyond {MAX_TRIANGLES} triangles")));
+                    // Each index takes at least two characters: refuse a count the <p> cannot hold
+                    // before allocating for it.
+                    let room = p.text().map_or(0, str::len) / 2 + 1;
+                    if d.saturating_mul(3 * stride) > room {
+                        return Err(self.error(
+                            p,
+                            format!("count=\"{d}\" triangles need more indices than this <p> holds"),
+                        ));
                     }
                     vec![3; d]
                 };

@@ -23,8 +23,8 @@ use gltf::khr_lights_punctual::Kind;
 use gltf::mesh::Mode;
 
 use super::import::{
-    complete_scene, conductor_from_reflectance, focus_on_subject, intern_material, transform_mesh, LoadedScene,
-    MeshBuilder, SceneOptions, Warnings, MAX_TRIANGLES,
+    conductor_from_reflectance, focus_on_subject, intern_material, transform_mesh, LoadedScene, MeshBuilder,
+    SceneOptions, Warnings, MAX_TRIANGLES,
 };
 use crate::camera::CameraPose;
 use crate::error::{Error, Result};
@@ -36,6 +36,9 @@ use crate::shapes::TriangleMesh;
 
 /// Deepest node nesting followed.
 const MAX_NODE_DEPTH: usize = 256;
+
+/// Most node instances followed (shared subtrees can multiply exponentially).
+const MAX_NODE_VISITS: usize = 1_000_000;
 
 /// Reads a `.gltf` or `.glb` file; external buffers are read from beside it.
 pub fn load_gltf(path: &Path) -> Result<LoadedScene> {
@@ -101,6 +104,7 @@ pub fn parse_gltf(
         materials: HashMap::new(),
         cameras: 0,
         triangles: 0,
+        node_visits: 0,
         fail: &fail,
     };
     let scene = gltf
@@ -112,7 +116,7 @@ pub fn parse_gltf(
     }
     let Loader {
         mut scene,
-        mut warnings,
+        warnings,
         cameras,
         ..
     } = loader;
@@ -120,17 +124,12 @@ pub fn parse_gltf(
         return Err(fail("no triangles in the scene: nothing to render".into()));
     }
     focus_on_subject(&mut scene);
-    complete_scene(&mut scene, &mut warnings);
-    Ok(LoadedScene {
-        scene,
-        options: SceneOptions {
-            scene_unit_m: Some(1.0), // glTF's unit is the metre
-            ..Default::default()
-        },
-        cameras,
-        warnings,
-        format: "glTF",
-    })
+    // glTF's unit is the metre.
+    let options = SceneOptions {
+        scene_unit_m: Some(1.0),
+        ..Default::default()
+    };
+    Ok(LoadedScene::completed(scene, options, cameras, warnings, "glTF"))
 }
 
 struct Loader<'a> {
@@ -140,6 +139,7 @@ struct Loader<'a> {
     materials: HashMap<Option<usize>, (Material, Option<Rgb>)>,
     cameras: usize,
     triangles: usize,
+    node_visits: usize,
     fail: &'a dyn Fn(String) -> Error,
 }
 
@@ -153,6 +153,12 @@ impl Loader<'_> {
         }
         if stack.len() >= MAX_NODE_DEPTH {
             return Err((self.fail)(format!("nodes nest deeper than {MAX_NODE_DEPTH} levels")));
+        }
+        self.node_visits += 1;
+        if self.node_visits > MAX_NODE_VISITS {
+            return Err((self.fail)(format!(
+                "shared nodes expand to more than {MAX_NODE_VISITS} instances"
+            )));
         }
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         if !world.is_finite() {

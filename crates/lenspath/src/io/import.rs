@@ -77,6 +77,26 @@ pub struct Warnings {
     counts: BTreeMap<String, usize>,
 }
 
+impl LoadedScene {
+    /// A loader's result, completed by [`complete_scene`] (a camera and a light when missing).
+    pub fn completed(
+        mut scene: Scene,
+        options: SceneOptions,
+        cameras: usize,
+        mut warnings: Warnings,
+        format: &'static str,
+    ) -> Self {
+        complete_scene(&mut scene, &mut warnings);
+        LoadedScene {
+            scene,
+            options,
+            cameras,
+            warnings,
+            format,
+        }
+    }
+}
+
 impl Warnings {
     /// Records `count` occurrences of `what` (nothing when `count` is 0).
     pub fn add_n(&mut self, what: impl Into<String>, count: usize) {
@@ -258,18 +278,11 @@ pub fn complete_scene(scene: &mut Scene, warnings: &mut Warnings) {
 }
 
 /// A scene of one mesh (a PLY file) in grey diffuse, completed with a camera and light.
-pub fn mesh_scene(mut mesh: TriangleMesh, mut warnings: Warnings, format: &'static str) -> LoadedScene {
+pub fn mesh_scene(mut mesh: TriangleMesh, warnings: Warnings, format: &'static str) -> LoadedScene {
     let mut scene = Scene::default();
     mesh.material = intern_material(&mut scene, DEFAULT_MATERIAL);
     scene.meshes.push(mesh);
-    complete_scene(&mut scene, &mut warnings);
-    LoadedScene {
-        scene,
-        options: SceneOptions::default(),
-        cameras: 0,
-        warnings,
-        format,
-    }
+    LoadedScene::completed(scene, SceneOptions::default(), 0, warnings, format)
 }
 
 /// Index of `material` in `scene.materials`, adding it when new.

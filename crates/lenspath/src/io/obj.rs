@@ -20,8 +20,8 @@ use std::path::Path;
 use glam::Vec3;
 
 use super::import::{
-    complete_scene, conductor_from_reflectance, intern_material, LoadedScene, MeshBuilder, SceneOptions, Warnings,
-    DEFAULT_MATERIAL, DEFAULT_REFLECTANCE, EMITTER_MATERIAL,
+    conductor_from_reflectance, intern_material, LoadedScene, MeshBuilder, SceneOptions, Warnings, DEFAULT_MATERIAL,
+    DEFAULT_REFLECTANCE, EMITTER_MATERIAL,
 };
 use crate::error::{Error, Result};
 use crate::materials::Material;
@@ -118,14 +118,13 @@ pub fn parse_obj(text: &str, path: &Path, load_mtl: &dyn Fn(&Path) -> tobj::MTLL
             message: "no faces with area: nothing to render".into(),
         });
     }
-    complete_scene(&mut scene, &mut warnings);
-    Ok(LoadedScene {
+    Ok(LoadedScene::completed(
         scene,
-        options: SceneOptions::default(),
-        cameras: 0,
+        SceneOptions::default(),
+        0,
         warnings,
-        format: "OBJ",
-    })
+        "OBJ",
+    ))
 }
 
 /// The closest lenspath material to an MTL entry (see the module notes).

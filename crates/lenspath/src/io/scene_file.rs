@@ -12,8 +12,8 @@ use glam::{Mat4, Vec3};
 use serde::Deserialize;
 
 use super::import::{
-    complete_scene, intern_material, scene_bounds, subject_distance, transform_mesh, LensOptions, LoadedScene,
-    SceneOptions, Warnings, EMITTER_MATERIAL,
+    intern_material, scene_bounds, subject_distance, transform_mesh, LensOptions, LoadedScene, SceneOptions, Warnings,
+    EMITTER_MATERIAL,
 };
 use crate::camera::CameraPose;
 use crate::error::{Error, Result};
@@ -402,14 +402,13 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
         }
     }
     scene.validate().map_err(|e| fail(e.to_string()))?;
-    complete_scene(&mut scene, &mut warnings);
-    Ok(LoadedScene {
+    Ok(LoadedScene::completed(
         scene,
         options,
         cameras,
         warnings,
-        format: "lenspath TOML",
-    })
+        "lenspath TOML",
+    ))
 }
 
 /// The TOML parser's message on one line ("line L, column C: what").
