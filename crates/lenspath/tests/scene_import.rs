@@ -193,7 +193,8 @@ fn shipped_example_scenes_load() {
 }
 
 /// A glTF file with a camera, a punctual light, an emissive and a metallic
-/// material, buffers embedded as a data URI; the same as .glb.
+/// material, its buffer embedded as a data URI, beside it as a .bin with a
+/// percent-encoded name, and in a .glb.
 #[test]
 fn gltf_nodes_cameras_lights_and_materials() {
     use base64::Engine;
@@ -229,7 +230,7 @@ fn gltf_nodes_cameras_lights_and_materials() {
     {{"pbrMetallicRoughness": {{"baseColorFactor": [0.9, 0.6, 0.2, 1], "metallicFactor": 1, "roughnessFactor": 0.5}}}},
     {{"pbrMetallicRoughness": {{"baseColorFactor": [0.5, 0.5, 0.5, 1], "metallicFactor": 0}}, "emissiveFactor": [1, 1, 1]}}
   ],
-  "buffers": [{{"byteLength": 36, "uri": "{uri}"}}],
+  "buffers": [{{"byteLength": 36{uri}}}],
   "bufferViews": [{{"buffer": 0, "byteLength": 36}}],
   "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3",
                   "min": [-1, -1, 0], "max": [1, 1, 0]}}]
@@ -238,12 +239,27 @@ fn gltf_nodes_cameras_lights_and_materials() {
     };
     let dir = tempfile::tempdir().unwrap();
     let gltf_path = dir.path().join("scene.gltf");
-    std::fs::write(&gltf_path, json(&uri)).unwrap();
+    std::fs::write(&gltf_path, json(&format!(r#", "uri": "{uri}""#))).unwrap();
     // The same scene with its buffer in a .bin beside it.
     let bin_path = dir.path().join("scene with spaces.gltf");
     std::fs::write(dir.path().join("tri angle.bin"), &bin).unwrap();
-    std::fs::write(&bin_path, json("tri%20angle.bin")).unwrap();
-    for path in [&gltf_path, &bin_path] {
+    std::fs::write(&bin_path, json(r#", "uri": "tri%20angle.bin""#)).unwrap();
+    // And as binary glTF: a JSON chunk and a BIN chunk, each padded to 4 bytes.
+    let mut chunk = json("").into_bytes();
+    chunk.resize(chunk.len().div_ceil(4) * 4, b' ');
+    let mut glb = Vec::new();
+    glb.extend(0x4654_6C67u32.to_le_bytes()); // "glTF"
+    glb.extend(2u32.to_le_bytes());
+    glb.extend(((12 + 8 + chunk.len() + 8 + bin.len()) as u32).to_le_bytes());
+    glb.extend((chunk.len() as u32).to_le_bytes());
+    glb.extend(0x4E4F_534Au32.to_le_bytes()); // "JSON"
+    glb.extend(&chunk);
+    glb.extend((bin.len() as u32).to_le_bytes());
+    glb.extend(0x004E_4942u32.to_le_bytes()); // "BIN\0"
+    glb.extend(&bin);
+    let glb_path = dir.path().join("scene.glb");
+    std::fs::write(&glb_path, glb).unwrap();
+    for path in [&gltf_path, &bin_path, &glb_path] {
         let loaded = load_scene(path).unwrap_or_else(|e| panic!("{e}"));
         let s = &loaded.scene;
         assert_eq!(loaded.cameras, 1);

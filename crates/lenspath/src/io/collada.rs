@@ -996,3 +996,80 @@ fn inside_triangle_projected(p: Vec3, [a, b, c]: [Vec3; 3], n: Vec3) -> bool {
     let edge = |u: Vec3, v: Vec3| (v - u).cross(p - u).dot(n) >= -1e-6;
     edge(a, b) && edge(b, c) && edge(c, a)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A Blender-style file: transforms composed in document order, a shared
+    /// node instanced twice, a `<polygons>` quad, spot and ambient lights, a
+    /// `<lookat>` camera with `yfov`.
+    #[test]
+    fn transforms_instancing_polygons_lights_and_camera() {
+        let text = r##"<?xml version="1.0"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+  <asset><unit meter="0.01"/><up_axis>Y_UP</up_axis></asset>
+  <library_cameras><camera id="cam"><optics><technique_common><perspective><yfov>30</yfov></perspective></technique_common></optics></camera></library_cameras>
+  <library_lights>
+    <light id="spot"><technique_common><spot><color>2 2 2</color><falloff_angle>60</falloff_angle><falloff_exponent>1</falloff_exponent></spot></technique_common></light>
+    <light id="sky"><technique_common><ambient><color>0.1 0.2 0.3</color></ambient></technique_common></light>
+  </library_lights>
+  <library_geometries>
+    <geometry id="quad"><mesh>
+      <source id="p"><float_array id="pa" count="12">0 0 0 1 0 0 1 1 0 0 1 0</float_array>
+        <technique_common><accessor source="#pa" count="4" stride="3"/></technique_common></source>
+      <vertices id="v"><input semantic="POSITION" source="#p"/></vertices>
+      <polygons count="1"><input semantic="VERTEX" source="#v" offset="0"/><p>0 1 2 3</p></polygons>
+    </mesh></geometry>
+  </library_geometries>
+  <library_nodes>
+    <node id="shared"><scale>2 2 2</scale><instance_geometry url="#quad"/></node>
+  </library_nodes>
+  <library_visual_scenes><visual_scene id="s">
+    <node id="a"><translate>10 0 0</translate><rotate>0 0 1 90</rotate><instance_node url="#shared"/></node>
+    <node id="b"><translate>0 0 -5</translate><instance_node url="#shared"/>
+      <node id="lamp"><translate>0 3 0</translate><rotate>1 0 0 -90</rotate><instance_light url="#spot"/></node>
+    </node>
+    <node id="amb"><instance_light url="#sky"/></node>
+    <node id="c"><lookat>0 0 10  0 0 0  0 1 0</lookat><instance_camera url="#cam"/></node>
+  </visual_scene></library_visual_scenes>
+  <scene><instance_visual_scene url="#s"/></scene>
+</COLLADA>"##;
+        let loaded = parse_collada(text, Path::new("t.dae")).unwrap();
+        let s = &loaded.scene;
+        assert_eq!(loaded.options.scene_unit_m, Some(0.01));
+        assert_eq!(s.meshes.len(), 2);
+        assert_eq!(s.triangle_count(), 4);
+        // Node a: scale 2, then rotate 90° about z, then translate: (1,0,0) → (2,0,0) → (0,2,0) → (10,2,0).
+        let p = s.meshes[0].positions[1];
+        assert!((p - Vec3::new(10.0, 2.0, 0.0)).length() < 1e-5, "{p}");
+        assert!((s.meshes[1].positions[2] - Vec3::new(2.0, 2.0, -5.0)).length() < 1e-5);
+        let Light::Spot {
+            position,
+            direction,
+            cos_cutoff,
+            exponent,
+            ..
+        } = s.lights[0]
+        else {
+            panic!("{:?}", s.lights[0]);
+        };
+        // The lamp's −z turned −90° about x points down −y.
+        assert!((position - Vec3::new(0.0, 3.0, -5.0)).length() < 1e-5);
+        assert!((direction - Vec3::NEG_Y).length() < 1e-5, "{direction}");
+        assert!((cos_cutoff - 30f32.to_radians().cos()).abs() < 1e-6 && exponent == 1.0);
+        assert!(matches!(s.lights[1], Light::Environment { radiance } if radiance == Rgb::new(0.1, 0.2, 0.3)));
+        let view = s.view.unwrap();
+        assert_eq!(view.fov_y_deg, 30.0);
+        let m = view.pose.render_from_camera;
+        assert!((Vec3::from(m.translation) - Vec3::new(0.0, 0.0, 10.0)).length() < 1e-5);
+        assert!(
+            (Vec3::from(m.matrix3.z_axis) - Vec3::NEG_Z).length() < 1e-5,
+            "looks at the origin"
+        );
+        assert_eq!(
+            loaded.warnings.to_string(),
+            "geometry without a bound material: used grey diffuse (×2)"
+        );
+    }
+}
