@@ -227,6 +227,7 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
         threads: args.threads,
         tile_size: 16,
         crop: args.crop,
+        depth: true,
     };
     settings.validate()?;
     let view = scene

@@ -45,6 +45,10 @@ pub struct RenderSettings {
     /// output is the rectangle, each pixel exactly as in the full render.
     /// For patches rendered many times, as autofocus does.
     pub crop: Option<PixelRect>,
+    /// Compute the depth (Z) channel: one extra camera ray per pixel, in the
+    /// first pass. Off for renders only their colour is wanted from, such as
+    /// autofocus patches.
+    pub depth: bool,
 }
 
 /// A rectangle of pixels: columns `x0..x0 + width`, rows `y0..y0 + height`.
@@ -75,6 +79,7 @@ impl Default for RenderSettings {
             threads: None,
             tile_size: 16,
             crop: None,
+            depth: true,
         }
     }
 }
@@ -238,7 +243,7 @@ fn render_in_pool(
             let mut tile_invalid = 0u64;
             for ty in 0..tile.height {
                 // Depth, in the first pass: along the first lens position the optics let through.
-                for tx in (0..tile.width).filter(|_| pass_start == 0) {
+                for tx in (0..tile.width).filter(|_| pass_start == 0 && settings.depth) {
                     let (px, py) = (tile.x0 + tx, tile.y0 + ty);
                     let film = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
                     let ray = depth_lens_samples().find_map(|lens| camera.generate_ray(CameraSample { film, lens }));

@@ -55,6 +55,7 @@ fn shoot(scene: Scene, shot: &Shot) -> Image {
         threads: None,
         tile_size: 16,
         crop: None,
+        depth: true,
     };
     let compiled = scene.compile(&BvhSettings::default()).unwrap();
     let out = render(&compiled, &camera(shot), &settings, &|_, _| {}, &AtomicBool::new(false)).unwrap();

@@ -31,6 +31,7 @@ fn settings(width: u32, height: u32, spp: u32, seed: u32) -> RenderSettings {
         threads: None,
         tile_size: 16,
         crop: None,
+        depth: true,
     }
 }
 

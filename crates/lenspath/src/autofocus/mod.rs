@@ -1,6 +1,11 @@
-//! Contrast autofocus. So far: the focus measures, which score how sharp an
-//! image patch is (patch rendering and the search strategies come next).
+//! Autofocus: focus measures score how sharp an image patch is
+//! ([`measures`]); a [`Focuser`] renders the patch through the realistic
+//! camera at chosen sensor positions and searches for the sharpest
+//! ([`search`]). docs/autofocus.md describes the strategies and how they were
+//! checked against ground truth.
 
 pub mod measures;
+pub mod search;
 
-pub use measures::{FocusMeasure, Patch};
+pub use measures::{FocusMeasure, Patch, FOCUS_MEASURES};
+pub use search::{AutofocusResult, AutofocusSettings, Evaluation, Focuser, GroundTruth, Strategy, STRATEGIES};

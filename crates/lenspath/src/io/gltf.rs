@@ -60,6 +60,7 @@ pub fn parse_gltf(
         path: path.to_path_buf(),
         message: m,
     };
+    check_glb_header(bytes).map_err(&fail)?;
     let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| fail(format!("not valid glTF 2.0: {e}")))?;
     let mut buffers = Vec::new();
     for buffer in gltf.buffers() {
@@ -130,6 +131,32 @@ pub fn parse_gltf(
         ..Default::default()
     };
     Ok(LoadedScene::completed(scene, options, cameras, warnings, "glTF"))
+}
+
+/// The GLB header's length must cover the 12-byte header itself and fit the
+/// file; the gltf crate subtracts before it checks (found by fuzzing).
+fn check_glb_header(bytes: &[u8]) -> std::result::Result<(), String> {
+    if !bytes.starts_with(b"glTF") {
+        return Ok(());
+    }
+    let word = |at: usize| {
+        bytes
+            .get(at..at + 4)
+            .map(|w| u32::from_le_bytes([w[0], w[1], w[2], w[3]]) as usize)
+    };
+    let (Some(version), Some(length)) = (word(4), word(8)) else {
+        return Err(format!("GLB header is cut short ({} bytes)", bytes.len()));
+    };
+    if version != 2 {
+        return Err(format!("GLB version {version}; lenspath reads glTF 2.0"));
+    }
+    if length < 12 + 8 || length > bytes.len() {
+        return Err(format!(
+            "GLB header gives a length of {length} bytes, but the file has {} (and a GLB needs at least 20)",
+            bytes.len()
+        ));
+    }
+    Ok(())
 }
 
 struct Loader<'a> {

@@ -1,0 +1,591 @@
+//! Focusing a realistic camera on an image patch: rendering the patch at a
+//! sensor position and scoring it ([`Focuser::measure_at`]), the search
+//! strategies ([`Strategy`]), and the ground truth they are checked against
+//! ([`Focuser::ground_truth`]). docs/autofocus.md explains the designs.
+//!
+//! Sensor positions are in mm behind the aperture stop (lens coordinates);
+//! the sweep runs from the infinity focus to the close focus of
+//! [`LensAnalysis`]. One depth of focus (DoF) is the sensor shift that grows
+//! the blur circle of a point to one pixel: pitch × (z − z_exit pupil) / D_exit pupil.
+
+use std::sync::atomic::AtomicBool;
+use std::time::Instant;
+
+use glam::Vec2;
+
+use super::measures::{FocusMeasure, Patch};
+use crate::camera::{Camera, CameraPose, CameraSample, LensFocus, RealisticCamera, RealisticCameraSettings};
+use crate::error::{Error, Result};
+use crate::film::Filter;
+use crate::integrator::PathSettings;
+use crate::lens::{AnalysisSettings, LensAnalysis, LensSystem};
+use crate::render::{render, PixelRect, RenderSettings};
+use crate::scene::CompiledScene;
+
+/// Real-ray height for converting between sensor positions and distances (as the camera focuses).
+const FOCUS_RAY_HEIGHT_MM: f64 = 0.1;
+
+/// A search strategy.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Strategy {
+    /// Every pixel-pitch step from infinity focus to close focus; the reference.
+    Sweep,
+    /// The sweep, stopped after `patience` steps without a new best (the course project's speed-up).
+    EarlyExit {
+        /// Steps without improvement before stopping.
+        patience: usize,
+    },
+    /// Coarse-to-fine contrast search: a coarse low-sample scan of the whole range,
+    /// golden-section refinement of the best peaks, a parabolic fit of the log-score.
+    Fast,
+    /// Rangefinder: probe rays find the patch's dominant depth, the lens's inverse
+    /// focus map gives the sensor position; `refine` adds a 3-point contrast fit.
+    Depth {
+        /// Refine with three patch renders around the depth estimate.
+        refine: bool,
+    },
+}
+
+/// Every strategy with its command-line name.
+pub const STRATEGIES: [(&str, Strategy); 4] = [
+    ("sweep", Strategy::Sweep),
+    ("early-exit", Strategy::EarlyExit { patience: 12 }),
+    ("fast", Strategy::Fast),
+    ("depth", Strategy::Depth { refine: true }),
+];
+
+impl Strategy {
+    /// The strategy called `name` (see [`STRATEGIES`]); `patience` sets early-exit's.
+    pub fn from_name(name: &str, patience: usize) -> Result<Strategy> {
+        match STRATEGIES.iter().find(|(n, _)| *n == name) {
+            Some((_, Strategy::EarlyExit { .. })) => Ok(Strategy::EarlyExit { patience }),
+            Some((_, s)) => Ok(*s),
+            None => Err(Error::InvalidArgument(format!(
+                "unknown autofocus strategy '{name}'; use one of {}",
+                STRATEGIES.map(|(n, _)| n).join(", ")
+            ))),
+        }
+    }
+
+    /// The command-line name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Strategy::Sweep => "sweep",
+            Strategy::EarlyExit { .. } => "early-exit",
+            Strategy::Fast => "fast",
+            Strategy::Depth { .. } => "depth",
+        }
+    }
+}
+
+/// What autofocus looks at and how.
+#[derive(Clone, Debug)]
+pub struct AutofocusSettings {
+    /// The camera; its `focus` is what autofocus sets, and is ignored.
+    pub camera: RealisticCameraSettings,
+    /// Full image width in pixels.
+    pub width: u32,
+    /// Full image height in pixels.
+    pub height: u32,
+    /// The patch to focus on, in pixels of the full image.
+    pub patch: PixelRect,
+    /// The focus measure.
+    pub measure: FocusMeasure,
+    /// Samples per pixel of a patch render.
+    pub spp: u32,
+    /// Path depth and light samples of the patch renders.
+    pub path: PathSettings,
+    /// Seed of the patch renders (every render uses it: common random numbers
+    /// make the focus curve smooth in the sensor position).
+    pub seed: u32,
+    /// Worker threads (`None`: all cores).
+    pub threads: Option<usize>,
+}
+
+/// One patch render and its score.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Evaluation {
+    /// Sensor position, mm behind the stop.
+    pub sensor_z_mm: f64,
+    /// Focus measure of the patch.
+    pub score: f64,
+    /// Samples per pixel it was rendered with.
+    pub spp: u32,
+}
+
+/// What a strategy found and what it cost.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct AutofocusResult {
+    /// The strategy's name.
+    pub strategy: &'static str,
+    /// The chosen sensor position, mm behind the stop.
+    pub sensor_z_mm: f64,
+    /// The distance in focus there, from the sensor plane, in scene units
+    /// (`None` when the sensor is nearer than the infinity focus).
+    pub focus_distance: Option<f64>,
+    /// Every patch render, in order.
+    pub evaluations: Vec<Evaluation>,
+    /// Camera rays generated: patch samples plus depth probes.
+    pub camera_rays: u64,
+    /// Wall time.
+    pub seconds: f64,
+}
+
+/// The reference focus of a patch.
+#[derive(Clone, Copy, Debug, serde::Serialize)]
+pub struct GroundTruth {
+    /// Sensor position of the sharpest patch, mm behind the stop.
+    pub sensor_z_mm: f64,
+    /// How far two independent fine sweeps put the peak apart, in DoF (noise).
+    pub seed_spread_dof: f64,
+    /// Samples per pixel that brought the spread under a quarter DoF (or the most tried).
+    pub spp: u32,
+    /// The conjugate of the patch's dominant depth, mm behind the stop (`None` if the probes hit nothing).
+    pub depth_conjugate_z_mm: Option<f64>,
+}
+
+/// Focuses one camera on one patch of one scene.
+pub struct Focuser<'a> {
+    scene: &'a CompiledScene,
+    pose: CameraPose,
+    settings: AutofocusSettings,
+    system: LensSystem,
+    range_mm: (f64, f64),
+    pitch_mm: f64,
+    exit_pupil: (f64, f64),
+    mm_per_scene: f64,
+    evaluations: Vec<Evaluation>,
+    camera_rays: u64,
+}
+
+impl<'a> Focuser<'a> {
+    /// Checks the settings and finds the sweep range and the pixel pitch.
+    pub fn new(scene: &'a CompiledScene, pose: CameraPose, settings: AutofocusSettings) -> Result<Self> {
+        let p = settings.patch;
+        if p.width < 3 || p.height < 3 || p.x0 + p.width > settings.width || p.y0 + p.height > settings.height {
+            return Err(Error::InvalidArgument(format!(
+                "the patch {}x{} at ({}, {}) must be at least 3x3 pixels and inside the {}x{} image",
+                p.width, p.height, p.x0, p.y0, settings.width, settings.height
+            )));
+        }
+        if settings.spp == 0 {
+            return Err(Error::InvalidArgument(
+                "autofocus needs at least 1 sample per pixel".into(),
+            ));
+        }
+        let wide_open = LensSystem::new(&settings.camera.lens);
+        let system = match settings.camera.f_number {
+            Some(n) => wide_open.with_f_number(n)?,
+            None => wide_open,
+        };
+        let (sw, sh) = settings.camera.sensor_mm;
+        let analysis = LensAnalysis::new(
+            &system,
+            &AnalysisSettings {
+                sensor_mm: (sw, sh),
+                ..Default::default()
+            },
+        )?;
+        let paraxial = system.paraxial()?;
+        let pitch_mm = sw.hypot(sh) / f64::from(settings.width).hypot(f64::from(settings.height));
+        Ok(Focuser {
+            scene,
+            pose,
+            range_mm: (analysis.infinity_focus_mm, analysis.close_focus_mm),
+            pitch_mm,
+            exit_pupil: (paraxial.exit_pupil_z_mm, paraxial.exit_pupil_diameter_mm),
+            mm_per_scene: settings.camera.scene_unit_m * 1e3,
+            system,
+            settings,
+            evaluations: Vec::new(),
+            camera_rays: 0,
+        })
+    }
+
+    /// Infinity-focus and close-focus sensor positions, mm behind the stop.
+    pub fn sweep_range_mm(&self) -> (f64, f64) {
+        self.range_mm
+    }
+
+    /// Sensor diagonal over image diagonal in pixels, mm: the sweep's step.
+    pub fn pixel_pitch_mm(&self) -> f64 {
+        self.pitch_mm
+    }
+
+    /// The depth of focus at sensor position `z`: the shift that blurs a point to one pixel.
+    pub fn depth_of_focus_mm(&self, z: f64) -> f64 {
+        let (pupil_z, pupil_diameter) = self.exit_pupil;
+        self.pitch_mm * (z - pupil_z).abs() / pupil_diameter
+    }
+
+    /// The distance in focus at sensor position `z`, scene units from the sensor.
+    pub fn focus_distance_at(&self, z: f64) -> Option<f64> {
+        self.system
+            .focus_distance_mm(z, FOCUS_RAY_HEIGHT_MM)
+            .map(|mm| mm / self.mm_per_scene)
+    }
+
+    /// The sensor position that focuses `distance` (scene units from the sensor).
+    pub fn sensor_z_for_distance(&self, distance: f64) -> Result<f64> {
+        self.system
+            .sensor_z_for_focus_distance(distance * self.mm_per_scene, FOCUS_RAY_HEIGHT_MM)
+    }
+
+    fn camera_settings(&self, z: f64) -> RealisticCameraSettings {
+        RealisticCameraSettings {
+            focus: LensFocus::SensorPositionMm(z),
+            ..self.settings.camera.clone()
+        }
+    }
+
+    /// Renders the patch with the sensor at `z` and returns its score; counted
+    /// in the evaluations and camera rays of the running strategy.
+    pub fn measure_at(&mut self, z: f64, spp: u32, seed: u32) -> Result<f64> {
+        let s = &self.settings;
+        let camera = RealisticCamera::for_region(self.pose, s.width, s.height, &self.camera_settings(z), s.patch)?;
+        let render_settings = RenderSettings {
+            width: s.width,
+            height: s.height,
+            spp,
+            path: s.path,
+            seed,
+            filter: Filter::Box,
+            threads: s.threads,
+            tile_size: 16,
+            crop: Some(s.patch),
+            depth: false,
+        };
+        let output = render(
+            self.scene,
+            &camera,
+            &render_settings,
+            &|_, _| {},
+            &AtomicBool::new(false),
+        )?;
+        let image = &output.image;
+        let score = s
+            .measure
+            .evaluate(&Patch::new(image.width as usize, image.height as usize, &image.rgb)?);
+        self.camera_rays += output.stats.samples;
+        self.evaluations.push(Evaluation {
+            sensor_z_mm: z,
+            score,
+            spp,
+        });
+        Ok(score)
+    }
+
+    /// Runs `strategy` and reports what it found and what it cost.
+    pub fn run(&mut self, strategy: Strategy) -> Result<AutofocusResult> {
+        let started = Instant::now();
+        self.evaluations.clear();
+        self.camera_rays = 0;
+        let z = match strategy {
+            Strategy::Sweep => self.sweep(None)?,
+            Strategy::EarlyExit { patience } => self.sweep(Some(patience.max(1)))?,
+            Strategy::Fast => self.fast()?,
+            Strategy::Depth { refine } => self.depth(refine)?,
+        };
+        Ok(AutofocusResult {
+            strategy: strategy.name(),
+            sensor_z_mm: z,
+            focus_distance: self.focus_distance_at(z),
+            evaluations: std::mem::take(&mut self.evaluations),
+            camera_rays: self.camera_rays,
+            seconds: started.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// Sensor positions from infinity to close focus, `step` apart.
+    fn grid(&self, step: f64) -> Vec<f64> {
+        let (near, far) = self.range_mm;
+        let n = ((far - near) / step).floor() as usize + 1;
+        (0..n).map(|i| near + i as f64 * step).collect()
+    }
+
+    /// The pixel-pitch sweep; with `patience`, it stops after that many steps without a new best.
+    fn sweep(&mut self, patience: Option<usize>) -> Result<f64> {
+        let (spp, seed) = (self.settings.spp, self.settings.seed);
+        let mut best = (f64::NEG_INFINITY, self.range_mm.0);
+        let mut since_best = 0;
+        for z in self.grid(self.pitch_mm) {
+            let score = self.measure_at(z, spp, seed)?;
+            if score > best.0 {
+                best = (score, z);
+                since_best = 0;
+            } else {
+                since_best += 1;
+                if patience.is_some_and(|p| since_best >= p) {
+                    break;
+                }
+            }
+        }
+        Ok(best.1)
+    }
+
+    /// Coarse-to-fine: a scan of the whole range in steps of about 4 DoF at a
+    /// quarter of the samples; the best local maximum (and a second one within
+    /// 70% of it) refined by golden-section search at full samples down to one
+    /// pixel pitch; a parabola through the log-scores around the winner.
+    fn fast(&mut self) -> Result<f64> {
+        let (spp, seed) = (self.settings.spp, self.settings.seed);
+        let (near, far) = self.range_mm;
+        let step = 4.0 * self.depth_of_focus_mm(near);
+        let n = (((far - near) / step).ceil() as usize + 1).clamp(8, 64);
+        let coarse: Vec<(f64, f64)> = (0..n)
+            .map(|i| {
+                let z = near + (far - near) * i as f64 / (n - 1) as f64;
+                Ok((z, self.measure_at(z, (spp / 4).max(1), seed)?))
+            })
+            .collect::<Result<_>>()?;
+        let mut peaks: Vec<usize> = (0..n)
+            .filter(|&i| {
+                let left = if i > 0 { coarse[i - 1].1 } else { f64::NEG_INFINITY };
+                let right = coarse.get(i + 1).map_or(f64::NEG_INFINITY, |c| c.1);
+                coarse[i].1 >= left && coarse[i].1 >= right
+            })
+            .collect();
+        peaks.sort_by(|&a, &b| coarse[b].1.total_cmp(&coarse[a].1));
+        let top = coarse[peaks[0]].1;
+        peaks.truncate(2);
+        if peaks.len() == 2 && (coarse[peaks[1]].1 < 0.7 * top || peaks[0].abs_diff(peaks[1]) < 2) {
+            peaks.truncate(1);
+        }
+        let mut best = (f64::NEG_INFINITY, near);
+        for i in peaks {
+            let lo = coarse[i.saturating_sub(1)].0;
+            let hi = coarse[(i + 1).min(n - 1)].0;
+            let (score, z) = self.golden_section(lo, hi, spp, seed)?;
+            if score > best.0 {
+                best = (score, z);
+            }
+        }
+        Ok(self.parabolic_peak(best.1, spp))
+    }
+
+    /// Golden-section search for the maximum on [lo, hi] until the bracket is one pitch wide.
+    fn golden_section(&mut self, mut lo: f64, mut hi: f64, spp: u32, seed: u32) -> Result<(f64, f64)> {
+        const INV_PHI: f64 = 0.618_033_988_749_894_9;
+        let mut a = hi - INV_PHI * (hi - lo);
+        let mut b = lo + INV_PHI * (hi - lo);
+        let mut fa = self.measure_at(a, spp, seed)?;
+        let mut fb = self.measure_at(b, spp, seed)?;
+        while hi - lo > self.pitch_mm {
+            if fa >= fb {
+                (hi, b, fb) = (b, a, fa);
+                a = hi - INV_PHI * (hi - lo);
+                fa = self.measure_at(a, spp, seed)?;
+            } else {
+                (lo, a, fa) = (a, b, fb);
+                b = lo + INV_PHI * (hi - lo);
+                fb = self.measure_at(b, spp, seed)?;
+            }
+        }
+        Ok(if fa >= fb { (fa, a) } else { (fb, b) })
+    }
+
+    /// The vertex of the parabola through the log-scores of the three full-sample
+    /// evaluations nearest `z` (a Gaussian fit of the focus curve's peak), kept
+    /// within their span; `z` itself when they do not make a peak.
+    fn parabolic_peak(&self, z: f64, spp: u32) -> f64 {
+        let mut near: Vec<Evaluation> = self
+            .evaluations
+            .iter()
+            .filter(|e| e.spp == spp && e.score > 0.0)
+            .copied()
+            .collect();
+        near.sort_by(|a, b| (a.sensor_z_mm - z).abs().total_cmp(&(b.sensor_z_mm - z).abs()));
+        near.dedup_by(|a, b| (a.sensor_z_mm - b.sensor_z_mm).abs() < 1e-9);
+        if near.len() < 3 {
+            return z;
+        }
+        let mut three = [near[0], near[1], near[2]];
+        three.sort_by(|a, b| a.sensor_z_mm.total_cmp(&b.sensor_z_mm));
+        let [(x0, y0), (x1, y1), (x2, y2)] = three.map(|e| (e.sensor_z_mm, e.score.ln()));
+        parabola_vertex([x0, x1, x2], [y0, y1, y2]).unwrap_or(z)
+    }
+
+    /// Camera rays through `k` × `k` points of the patch: the depth (along the
+    /// view axis, scene units from the sensor) of what each hits.
+    fn probe_depths(&mut self, k: u32) -> Result<Vec<f64>> {
+        let s = &self.settings;
+        let camera = RealisticCamera::for_region(
+            self.pose,
+            s.width,
+            s.height,
+            &self.camera_settings(self.range_mm.0),
+            s.patch,
+        )?;
+        let (origin, axis) = camera.view_axis();
+        let p = s.patch;
+        let mut depths = Vec::new();
+        for j in 0..k {
+            for i in 0..k {
+                let film = Vec2::new(
+                    p.x0 as f32 + (i as f32 + 0.5) / k as f32 * p.width as f32,
+                    p.y0 as f32 + (j as f32 + 0.5) / k as f32 * p.height as f32,
+                );
+                // The first of a few lens positions the optics let through.
+                let ray = [Vec2::splat(0.5), Vec2::new(0.25, 0.5), Vec2::new(0.75, 0.5)]
+                    .into_iter()
+                    .find_map(|lens| camera.generate_ray(CameraSample { film, lens }));
+                if let Some(cr) = ray {
+                    self.camera_rays += 1;
+                    if let Some(hit) = self.scene.intersect(&cr.ray) {
+                        depths.push(f64::from((hit.p - origin).dot(axis)));
+                    }
+                }
+            }
+        }
+        Ok(depths)
+    }
+
+    /// The conjugate sensor position of the patch's dominant depth: each probe's
+    /// conjugate, then the densest one-DoF window of them and its median.
+    pub fn dominant_depth_conjugate(&mut self) -> Result<Option<f64>> {
+        let mut zs: Vec<f64> = self
+            .probe_depths(8)?
+            .into_iter()
+            .filter_map(|d| self.sensor_z_for_distance(d).ok())
+            .collect();
+        if zs.is_empty() {
+            return Ok(None);
+        }
+        zs.sort_by(f64::total_cmp);
+        let window = self.depth_of_focus_mm(zs[zs.len() / 2]);
+        let (mut best_start, mut best_count, mut end) = (0, 0, 0);
+        for start in 0..zs.len() {
+            while end < zs.len() && zs[end] - zs[start] <= window {
+                end += 1;
+            }
+            if end - start > best_count {
+                (best_start, best_count) = (start, end - start);
+            }
+        }
+        Ok(Some(zs[best_start + best_count / 2]))
+    }
+
+    /// Rangefinder focusing, optionally refined by a 3-point contrast fit one DoF apart.
+    fn depth(&mut self, refine: bool) -> Result<f64> {
+        let Some(z0) = self.dominant_depth_conjugate()? else {
+            // Nothing to range on (the patch sees only the sky): contrast search instead.
+            return self.fast();
+        };
+        if !refine {
+            return Ok(z0);
+        }
+        let (spp, seed) = (self.settings.spp, self.settings.seed);
+        let dof = self.depth_of_focus_mm(z0);
+        let xs = [z0 - dof, z0, z0 + dof];
+        let mut ys = [0.0; 3];
+        for (y, &x) in ys.iter_mut().zip(&xs) {
+            *y = self.measure_at(x, spp, seed)?;
+        }
+        if ys.iter().any(|&y| y <= 0.0) {
+            return Ok(z0);
+        }
+        // No peak among the three: the best of them.
+        let best = (0..3).max_by(|&a, &b| ys[a].total_cmp(&ys[b])).unwrap_or(1);
+        Ok(parabola_vertex(xs, ys.map(f64::ln)).unwrap_or(xs[best]))
+    }
+
+    /// The reference focus: the peak of a fine sweep (half-pitch steps over
+    /// ±6 pitches around the peak of a coarse 4-pitch scan), located by a
+    /// parabola through the log-scores around its maximum, with two seeds; the
+    /// samples are doubled (from 4× the settings', up to 16×) until the seeds
+    /// agree within a quarter DoF. Its evaluations are not counted anywhere.
+    pub fn ground_truth(&mut self) -> Result<GroundTruth> {
+        let saved = (std::mem::take(&mut self.evaluations), self.camera_rays);
+        let seed = self.settings.seed;
+        let mut spp = 4 * self.settings.spp;
+        let coarse_best = {
+            let mut best = (f64::NEG_INFINITY, self.range_mm.0);
+            for z in self.grid(4.0 * self.pitch_mm) {
+                let s = self.measure_at(z, spp, seed ^ 0x5eed)?;
+                if s > best.0 {
+                    best = (s, z);
+                }
+            }
+            best.1
+        };
+        let (near, far) = self.range_mm;
+        let fine: Vec<f64> = (-12..=12)
+            .map(|i| coarse_best + f64::from(i) * 0.5 * self.pitch_mm)
+            .filter(|z| (near - 1e-9..=far + 1e-9).contains(z))
+            .collect();
+        let result = loop {
+            let mut peaks = [0.0; 2];
+            for (k, peak) in peaks.iter_mut().enumerate() {
+                let seed = seed.wrapping_add(1000 + k as u32);
+                let scores: Vec<f64> = fine
+                    .iter()
+                    .map(|&z| self.measure_at(z, spp, seed))
+                    .collect::<Result<_>>()?;
+                let i = (0..scores.len())
+                    .max_by(|&a, &b| scores[a].total_cmp(&scores[b]))
+                    .unwrap_or(0);
+                *peak = if i > 0 && i + 1 < scores.len() && scores[i - 1..=i + 1].iter().all(|&s| s > 0.0) {
+                    parabola_vertex(
+                        [fine[i - 1], fine[i], fine[i + 1]],
+                        [scores[i - 1].ln(), scores[i].ln(), scores[i + 1].ln()],
+                    )
+                    .unwrap_or(fine[i])
+                } else {
+                    fine[i]
+                };
+            }
+            let z = 0.5 * (peaks[0] + peaks[1]);
+            let spread = (peaks[0] - peaks[1]).abs() / self.depth_of_focus_mm(z);
+            if spread <= 0.25 || spp >= 16 * self.settings.spp {
+                break (z, spread, spp);
+            }
+            spp *= 2;
+        };
+        let depth_conjugate_z_mm = self.dominant_depth_conjugate()?;
+        (self.evaluations, self.camera_rays) = saved;
+        Ok(GroundTruth {
+            sensor_z_mm: result.0,
+            seed_spread_dof: result.1,
+            spp: result.2,
+            depth_conjugate_z_mm,
+        })
+    }
+}
+
+/// The abscissa of the vertex of the parabola through three points, when it
+/// opens downward, kept within the points' span.
+fn parabola_vertex(x: [f64; 3], y: [f64; 3]) -> Option<f64> {
+    let (d01, d12) = (x[1] - x[0], x[2] - x[1]);
+    let (s01, s12) = ((y[1] - y[0]) / d01, (y[2] - y[1]) / d12);
+    let curvature = (s12 - s01) / (x[2] - x[0]);
+    if !curvature.is_finite() || curvature >= 0.0 {
+        return None;
+    }
+    // y = s01 + curvature·(x − x0 + x − x1) for the slope; zero at the vertex.
+    let vertex = 0.5 * (x[0] + x[1]) - s01 / (2.0 * curvature);
+    Some(vertex.clamp(x[0], x[2]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parabola_vertex_of_a_known_parabola() {
+        let f = |x: f64| -2.0 * (x - 1.3).powi(2) + 5.0;
+        let v = parabola_vertex([0.5, 1.0, 2.0], [f(0.5), f(1.0), f(2.0)]).unwrap();
+        assert!((v - 1.3).abs() < 1e-12, "{v}");
+        // Opening upward: no peak.
+        assert!(parabola_vertex([0.0, 1.0, 2.0], [1.0, 0.0, 1.0]).is_none());
+    }
+
+    #[test]
+    fn strategy_names_round_trip() {
+        for (name, s) in STRATEGIES {
+            assert_eq!(Strategy::from_name(name, 12).unwrap(), s);
+            assert_eq!(s.name(), name);
+        }
+        let err = Strategy::from_name("phase", 12).unwrap_err().to_string();
+        assert!(err.contains("use one of sweep, early-exit, fast, depth"), "{err}");
+    }
+}
