@@ -3,6 +3,7 @@
 //! Every error ends in one line on stderr and exit code 2; an interrupted
 //! render writes what it has and exits with 130.
 
+mod autofocus;
 mod bench;
 mod info;
 mod lens;
@@ -25,6 +26,8 @@ struct Cli {
 enum Command {
     /// Render a scene to an image (PNG or EXR by extension).
     Render(render::RenderArgs),
+    /// Focus the realistic camera on an image patch by contrast or by range.
+    Autofocus(autofocus::AutofocusArgs),
     /// Show what a scene file holds: meshes, triangles, materials, lights, cameras, bounds, warnings.
     Info(info::InfoArgs),
     /// Analyse a lens: focal lengths, pupils, focus, a layout plot.
@@ -73,6 +76,7 @@ fn main() -> ExitCode {
     };
     let outcome = match cli.command {
         Command::Render(args) => render::run(args),
+        Command::Autofocus(args) => autofocus::run(args),
         Command::Info(args) => info::run(args),
         Command::Lens(args) => lens::run(args),
         Command::Bench(BenchArgs {

@@ -14,6 +14,7 @@ use lenspath::io::image::{check_output_path, write_image};
 use lenspath::io::{load_scene, SceneOptions};
 use lenspath::lens::LensPrescription;
 use lenspath::render::{render, PixelRect, RenderSettings};
+use lenspath::scene::Scene;
 use lenspath::{Error, Result};
 
 use crate::progress::Progress;
@@ -76,7 +77,7 @@ pub struct Resolution {
     pub height: u32,
 }
 
-fn parse_resolution(s: &str) -> std::result::Result<Resolution, String> {
+pub fn parse_resolution(s: &str) -> std::result::Result<Resolution, String> {
     let (w, h) = s
         .split_once(['x', 'X'])
         .ok_or_else(|| format!("expected WIDTHxHEIGHT such as 640x480, got '{s}'"))?;
@@ -92,6 +93,50 @@ fn parse_resolution(s: &str) -> std::result::Result<Resolution, String> {
     Ok(Resolution { width, height })
 }
 
+/// A rectangle in fractions of the image: x, y of the top-left corner, width, height.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NormalizedRect {
+    pub x: f64,
+    pub y: f64,
+    pub width: f64,
+    pub height: f64,
+}
+
+impl NormalizedRect {
+    /// The pixels it covers in a `width` × `height` image (at least 3 × 3).
+    pub fn to_pixels(self, width: u32, height: u32) -> PixelRect {
+        let (w, h) = (f64::from(width), f64::from(height));
+        let x0 = ((self.x * w).round() as u32).min(width.saturating_sub(3));
+        let y0 = ((self.y * h).round() as u32).min(height.saturating_sub(3));
+        PixelRect {
+            x0,
+            y0,
+            width: ((self.width * w).round() as u32).clamp(3, width - x0),
+            height: ((self.height * h).round() as u32).clamp(3, height - y0),
+        }
+    }
+}
+
+pub fn parse_patch(s: &str) -> std::result::Result<NormalizedRect, String> {
+    let v: Vec<f64> = s.split(',').filter_map(|p| p.trim().parse().ok()).collect();
+    match v[..] {
+        [x, y, width, height]
+            if s.split(',').count() == 4
+                && x >= 0.0
+                && y >= 0.0
+                && width > 0.0
+                && height > 0.0
+                && x + width <= 1.0 + 1e-9
+                && y + height <= 1.0 + 1e-9 =>
+        {
+            Ok(NormalizedRect { x, y, width, height })
+        }
+        _ => Err(format!(
+            "expected X,Y,WIDTH,HEIGHT as fractions of the image, inside it, such as 0.55,0.7,0.1,0.12; got '{s}'"
+        )),
+    }
+}
+
 fn parse_crop(s: &str) -> std::result::Result<PixelRect, String> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
     let numbers: Vec<u32> = parts.iter().filter_map(|p| p.parse().ok()).collect();
@@ -103,19 +148,102 @@ fn parse_crop(s: &str) -> std::result::Result<PixelRect, String> {
     }
 }
 
+/// Which scene: a file or a built-in one (`render` and `autofocus`).
+#[derive(Args, Debug)]
+pub struct SceneArgs {
+    /// Scene file: .dae (COLLADA, CS184), .obj, .ply, .gltf/.glb or .toml (lenspath). Default: the
+    /// built-in scene named by --scene.
+    pub file: Option<PathBuf>,
+    /// Built-in scene: cornell-spheres, cornell-empty or cornell-mesh.
+    #[arg(long, default_value = "cornell-spheres", conflicts_with = "file")]
+    pub scene: String,
+    /// Triangles of the procedural mesh in cornell-mesh.
+    #[arg(long, default_value_t = DEFAULT_MESH_TRIANGLES)]
+    pub mesh_triangles: usize,
+}
+
+impl SceneArgs {
+    /// The scene's name, the scene and the settings its file gives; warnings go to stderr.
+    pub fn load(&self) -> Result<(String, Scene, SceneOptions)> {
+        match &self.file {
+            Some(path) => {
+                let loaded = load_scene(path)?;
+                for (what, n) in loaded.warnings.iter() {
+                    eprintln!(
+                        "warning: {what}{}",
+                        if n > 1 { format!(" (×{n})") } else { String::new() }
+                    );
+                }
+                Ok((path.display().to_string(), loaded.scene, loaded.options))
+            }
+            None => Ok((
+                self.scene.clone(),
+                builtin_scene(&self.scene, self.mesh_triangles)?,
+                SceneOptions::default(),
+            )),
+        }
+    }
+}
+
+/// The realistic camera's lens flags (`render` and `autofocus`).
+#[derive(Args, Debug)]
+pub struct LensFlags {
+    /// Realistic camera: built-in lens (dgauss50, wide22, tele250, fisheye10) or a lens table file
+    /// [default: the scene file's, else dgauss50].
+    #[arg(long)]
+    pub lens: Option<String>,
+    /// Realistic camera: sensor WIDTHxHEIGHT in mm; its width is kept and its height follows the
+    /// image aspect [default: the scene file's, else 36x24].
+    #[arg(long, value_parser = parse_sensor)]
+    pub sensor: Option<SensorSize>,
+    /// Realistic camera: stop down to this f-number (default: wide open).
+    #[arg(long, value_name = "N")]
+    pub fstop: Option<f64>,
+    /// Realistic camera: metres per scene unit, since lenses are in mm [default: the scene file's, else 1].
+    #[arg(long, value_name = "M")]
+    pub scene_unit: Option<f64>,
+    /// Realistic camera: exposure normalisation.
+    #[arg(long, value_enum, default_value = "normalized")]
+    pub radiometry: RadiometryKind,
+}
+
+impl LensFlags {
+    /// The realistic camera's settings for a `width` × `height` image: flags
+    /// win over the scene file's lens settings, which win over the defaults.
+    pub fn settings(
+        &self,
+        options: &SceneOptions,
+        width: u32,
+        height: u32,
+        focus: LensFocus,
+    ) -> Result<RealisticCameraSettings> {
+        let file_lens = options.lens.clone().unwrap_or_default();
+        let lens = LensPrescription::load(self.lens.as_deref().or(file_lens.lens.as_deref()).unwrap_or("dgauss50"))?;
+        let width_mm = self
+            .sensor
+            .map(|s| s.width_mm)
+            .or(file_lens.sensor_mm.map(|(w, _)| w))
+            .unwrap_or(36.0);
+        Ok(RealisticCameraSettings {
+            lens,
+            sensor_mm: (width_mm, width_mm * f64::from(height) / f64::from(width)),
+            focus,
+            f_number: self.fstop.or(file_lens.f_number),
+            scene_unit_m: self.scene_unit.or(options.scene_unit_m).unwrap_or(1.0),
+            radiometry: match self.radiometry {
+                RadiometryKind::Normalized => Radiometry::Normalized,
+                RadiometryKind::Physical => Radiometry::Physical,
+            },
+        })
+    }
+}
+
 /// Options of `lenspath render`.
 #[derive(Args, Debug)]
 #[command(allow_negative_numbers = true)]
 pub struct RenderArgs {
-    /// Scene file: .dae (COLLADA, CS184), .obj, .ply, .gltf/.glb or .toml (lenspath). Default: the
-    /// built-in scene named by --scene.
-    file: Option<PathBuf>,
-    /// Built-in scene: cornell-spheres, cornell-empty or cornell-mesh.
-    #[arg(long, default_value = "cornell-spheres", conflicts_with = "file")]
-    scene: String,
-    /// Triangles of the procedural mesh in cornell-mesh.
-    #[arg(long, default_value_t = DEFAULT_MESH_TRIANGLES)]
-    mesh_triangles: usize,
+    #[command(flatten)]
+    scene: SceneArgs,
     /// Samples per pixel [default: the scene file's, else 64].
     #[arg(long)]
     spp: Option<u32>,
@@ -143,26 +271,15 @@ pub struct RenderArgs {
     /// Camera model.
     #[arg(long, value_enum, default_value = "realistic")]
     camera: CameraKind,
-    /// Realistic camera: built-in lens (dgauss50, wide22, tele250, fisheye10) or a lens table file
-    /// [default: the scene file's, else dgauss50].
-    #[arg(long)]
-    lens: Option<String>,
-    /// Realistic camera: sensor WIDTHxHEIGHT in mm; its width is kept and its height follows the
-    /// image aspect [default: the scene file's, else 36x24].
-    #[arg(long, value_parser = parse_sensor)]
-    sensor: Option<SensorSize>,
+    #[command(flatten)]
+    lens: LensFlags,
+    /// Realistic camera: focus on this patch of the image first, X,Y,W,H in fractions of the
+    /// image (0 to 1) such as 0.55,0.7,0.1,0.12, with `lenspath autofocus`'s fast strategy.
+    #[arg(long, value_name = "X,Y,W,H", value_parser = parse_patch, conflicts_with_all = ["focus_distance", "sensor_depth"])]
+    autofocus: Option<NormalizedRect>,
     /// Realistic camera: put the sensor this many mm behind the aperture stop instead of focusing by distance.
     #[arg(long, value_name = "MM", conflicts_with = "focus_distance")]
     sensor_depth: Option<f64>,
-    /// Realistic camera: stop down to this f-number (default: wide open).
-    #[arg(long, value_name = "N")]
-    fstop: Option<f64>,
-    /// Realistic camera: metres per scene unit, since lenses are in mm [default: the scene file's, else 1].
-    #[arg(long, value_name = "M")]
-    scene_unit: Option<f64>,
-    /// Realistic camera: exposure normalisation.
-    #[arg(long, value_enum, default_value = "normalized")]
-    radiometry: RadiometryKind,
     /// Pinhole and thin lens: vertical field of view in degrees (default: the scene's).
     #[arg(long)]
     fov: Option<f32>,
@@ -187,30 +304,13 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
     if !args.exposure.is_finite() {
         return Err(Error::InvalidArgument("--exposure must be a finite number".into()));
     }
-    let (scene_name, scene, options) = match &args.file {
-        Some(path) => {
-            let loaded = load_scene(path)?;
-            for (what, n) in loaded.warnings.iter() {
-                eprintln!(
-                    "warning: {what}{}",
-                    if n > 1 { format!(" (×{n})") } else { String::new() }
-                );
-            }
-            (path.display().to_string(), loaded.scene, loaded.options)
-        }
-        None => (
-            args.scene.clone(),
-            builtin_scene(&args.scene, args.mesh_triangles)?,
-            SceneOptions::default(),
-        ),
-    };
+    let (scene_name, scene, options) = args.scene.load()?;
     // Flags win over the scene file, which wins over the defaults.
     let (width, height) = args
         .res
         .map(|r| (r.width, r.height))
         .or(options.resolution)
         .unwrap_or((640, 480));
-    let file_lens = options.lens.clone().unwrap_or_default();
     let settings = RenderSettings {
         width,
         height,
@@ -245,6 +345,10 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
             "--fov must be between 0 and 180 degrees, got {fov}"
         )));
     }
+    if args.autofocus.is_some() && !matches!(args.camera, CameraKind::Realistic) {
+        return Err(Error::InvalidArgument("--autofocus needs --camera realistic".into()));
+    }
+    let compiled = scene.compile(&BvhSettings::default())?;
     let camera: Box<dyn Camera> = match args.camera {
         CameraKind::Pinhole => Box::new(PerspectiveCamera::pinhole(
             view.pose,
@@ -275,44 +379,32 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
             ))
         }
         CameraKind::Realistic => {
-            let lens =
-                LensPrescription::load(args.lens.as_deref().or(file_lens.lens.as_deref()).unwrap_or("dgauss50"))?;
-            let focus = match args.sensor_depth {
-                Some(mm) => LensFocus::SensorPositionMm(mm),
-                None => LensFocus::Distance(
-                    args.focus_distance
-                        .map(f64::from)
-                        .or(file_lens.focus_distance)
+            let focus = match (args.sensor_depth, args.focus_distance) {
+                (Some(mm), _) => LensFocus::SensorPositionMm(mm),
+                (None, Some(d)) => LensFocus::Distance(f64::from(d)),
+                (None, None) => LensFocus::Distance(
+                    options
+                        .lens
+                        .as_ref()
+                        .and_then(|l| l.focus_distance)
                         .unwrap_or(f64::from(view.focus_distance)),
                 ),
             };
-            let width_mm = args
-                .sensor
-                .map(|s| s.width_mm)
-                .or(file_lens.sensor_mm.map(|(w, _)| w))
-                .unwrap_or(36.0);
-            let height_mm = width_mm * f64::from(settings.height) / f64::from(settings.width);
-            let camera = RealisticCamera::new(
-                view.pose,
-                settings.width,
-                settings.height,
-                &RealisticCameraSettings {
-                    lens,
-                    sensor_mm: (width_mm, height_mm),
-                    focus,
-                    f_number: args.fstop.or(file_lens.f_number),
-                    scene_unit_m: args.scene_unit.or(options.scene_unit_m).unwrap_or(1.0),
-                    radiometry: match args.radiometry {
-                        RadiometryKind::Normalized => Radiometry::Normalized,
-                        RadiometryKind::Physical => Radiometry::Physical,
-                    },
-                },
-            )?;
+            let mut lens_settings = args.lens.settings(&options, settings.width, settings.height, focus)?;
+            if let Some(patch) = args.autofocus {
+                lens_settings.focus = LensFocus::SensorPositionMm(crate::autofocus::focus_before_render(
+                    &compiled,
+                    view.pose,
+                    &lens_settings,
+                    &settings,
+                    patch,
+                )?);
+            }
+            let camera = RealisticCamera::new(view.pose, settings.width, settings.height, &lens_settings)?;
             Box::new(camera)
         }
     };
 
-    let compiled = scene.compile(&BvhSettings::default())?;
     let cancel = Arc::new(AtomicBool::new(false));
     {
         let cancel = cancel.clone();

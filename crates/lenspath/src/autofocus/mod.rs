@@ -5,6 +5,7 @@
 //! checked against ground truth.
 
 pub mod measures;
+pub mod plot;
 pub mod search;
 
 pub use measures::{FocusMeasure, Patch, FOCUS_MEASURES};

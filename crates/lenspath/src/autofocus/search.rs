@@ -22,6 +22,23 @@ use crate::lens::{AnalysisSettings, LensAnalysis, LensSystem};
 use crate::render::{render, PixelRect, RenderSettings};
 use crate::scene::CompiledScene;
 
+/// The band-pass applied to patch renders before scoring: a Gaussian of this
+/// standard deviation (pixels) minus one of [`BAND_PASS_WIDE_SIGMA_PX`].
+pub const BAND_PASS_NARROW_SIGMA_PX: f64 = 1.0;
+
+/// The wide Gaussian of the band-pass, pixels.
+pub const BAND_PASS_WIDE_SIGMA_PX: f64 = 4.0;
+
+/// `rgb` (`width` pixels wide) band-passed: a difference of Gaussians that
+/// keeps detail a few pixels across (edges, texture) and drops both the
+/// pixel-scale Monte Carlo noise and the smooth glow of bright things far out
+/// of focus, which gradient measures would otherwise score as detail.
+fn band_pass(rgb: &[f32], width: usize) -> Vec<f32> {
+    let narrow = gaussian_blur(rgb, width, BAND_PASS_NARROW_SIGMA_PX);
+    let wide = gaussian_blur(rgb, width, BAND_PASS_WIDE_SIGMA_PX);
+    narrow.iter().zip(&wide).map(|(n, w)| n - w).collect()
+}
+
 /// Real-ray height for converting between sensor positions and distances (as the camera focuses).
 const FOCUS_RAY_HEIGHT_MM: f64 = 0.1;
 
@@ -239,34 +256,47 @@ impl<'a> Focuser<'a> {
     }
 
     /// Renders the patch with the sensor at `z` and returns its score; counted
-    /// in the evaluations and camera rays of the running strategy.
+    /// in the evaluations and camera rays of the running strategy. The `spp`
+    /// samples are split between two renders with independent seeds, scored as
+    /// a pair ([`FocusMeasure::evaluate_pair`]) so render noise does not pass
+    /// for sharpness; with 1 sample, one render. Each render is band-passed
+    /// first (see [`band_pass`]).
     pub fn measure_at(&mut self, z: f64, spp: u32, seed: u32) -> Result<f64> {
         let s = &self.settings;
         let camera = RealisticCamera::for_region(self.pose, s.width, s.height, &self.camera_settings(z), s.patch)?;
-        let render_settings = RenderSettings {
-            width: s.width,
-            height: s.height,
-            spp,
-            path: s.path,
-            seed,
-            filter: Filter::Box,
-            threads: s.threads,
-            tile_size: 16,
-            crop: Some(s.patch),
-            depth: false,
+        let halves = if spp >= 2 { [spp / 2, spp - spp / 2] } else { [spp, 0] };
+        let mut images = Vec::new();
+        for (k, &half) in halves.iter().enumerate().filter(|(_, &h)| h > 0) {
+            let render_settings = RenderSettings {
+                width: s.width,
+                height: s.height,
+                spp: half,
+                path: s.path,
+                // Seeds far apart, so the halves' sample sequences are independent.
+                seed: seed.wrapping_add(k as u32 * 0x9E37_79B9),
+                filter: Filter::Box,
+                threads: s.threads,
+                tile_size: 16,
+                crop: Some(s.patch),
+                depth: false,
+            };
+            let output = render(
+                self.scene,
+                &camera,
+                &render_settings,
+                &|_, _| {},
+                &AtomicBool::new(false),
+            )?;
+            self.camera_rays += output.stats.samples;
+            images.push(band_pass(&output.image.rgb, output.image.width as usize));
+        }
+        let (w, h) = (s.patch.width as usize, s.patch.height as usize);
+        let patch = |i: usize| Patch::new(w, h, &images[i]);
+        let score = if images.len() == 2 {
+            s.measure.evaluate_pair(&patch(0)?, &patch(1)?)
+        } else {
+            s.measure.evaluate(&patch(0)?)
         };
-        let output = render(
-            self.scene,
-            &camera,
-            &render_settings,
-            &|_, _| {},
-            &AtomicBool::new(false),
-        )?;
-        let image = &output.image;
-        let score = s
-            .measure
-            .evaluate(&Patch::new(image.width as usize, image.height as usize, &image.rgb)?);
-        self.camera_rays += output.stats.samples;
         self.evaluations.push(Evaluation {
             sensor_z_mm: z,
             score,
@@ -325,8 +355,8 @@ impl<'a> Focuser<'a> {
 
     /// Coarse-to-fine: a scan of the whole range in steps of about 4 DoF at a
     /// quarter of the samples; the best local maximum (and a second one within
-    /// 70% of it) refined by golden-section search at full samples down to one
-    /// pixel pitch; a parabola through the log-scores around the winner.
+    /// 70% of it) refined by golden-section search at full samples down to two
+    /// pixel pitches; a parabola through the log-scores around the winner.
     fn fast(&mut self) -> Result<f64> {
         let (spp, seed) = (self.settings.spp, self.settings.seed);
         let (near, far) = self.range_mm;
@@ -363,14 +393,15 @@ impl<'a> Focuser<'a> {
         Ok(self.parabolic_peak(best.1, spp))
     }
 
-    /// Golden-section search for the maximum on [lo, hi] until the bracket is one pitch wide.
+    /// Golden-section search for the maximum on [lo, hi] until the bracket is two pitches wide.
     fn golden_section(&mut self, mut lo: f64, mut hi: f64, spp: u32, seed: u32) -> Result<(f64, f64)> {
         const INV_PHI: f64 = 0.618_033_988_749_894_9;
         let mut a = hi - INV_PHI * (hi - lo);
         let mut b = lo + INV_PHI * (hi - lo);
         let mut fa = self.measure_at(a, spp, seed)?;
         let mut fb = self.measure_at(b, spp, seed)?;
-        while hi - lo > self.pitch_mm {
+        // To a bracket of two pitches; the parabolic fit does the rest.
+        while hi - lo > 2.0 * self.pitch_mm {
             if fa >= fb {
                 (hi, b, fb) = (b, a, fa);
                 a = hi - INV_PHI * (hi - lo);
@@ -475,18 +506,30 @@ impl<'a> Focuser<'a> {
             return Ok(z0);
         }
         let (spp, seed) = (self.settings.spp, self.settings.seed);
-        let dof = self.depth_of_focus_mm(z0);
-        let xs = [z0 - dof, z0, z0 + dof];
-        let mut ys = [0.0; 3];
-        for (y, &x) in ys.iter_mut().zip(&xs) {
-            *y = self.measure_at(x, spp, seed)?;
+        // Three renders 1.5 DoF apart around the estimate; if the best is at an
+        // end, one more beyond it (the lens's best focus can differ from the
+        // real-ray conjugate by a DoF or two, through spherical aberration).
+        let step = 1.5 * self.depth_of_focus_mm(z0);
+        let mut points: Vec<(f64, f64)> = Vec::new();
+        for z in [z0 - step, z0, z0 + step] {
+            points.push((z, self.measure_at(z, spp, seed)?));
         }
-        if ys.iter().any(|&y| y <= 0.0) {
-            return Ok(z0);
+        let best = |p: &[(f64, f64)]| (0..p.len()).max_by(|&a, &b| p[a].1.total_cmp(&p[b].1)).unwrap_or(0);
+        match best(&points) {
+            0 => points.insert(0, (z0 - 2.0 * step, self.measure_at(z0 - 2.0 * step, spp, seed)?)),
+            2 => points.push((z0 + 2.0 * step, self.measure_at(z0 + 2.0 * step, spp, seed)?)),
+            _ => {}
         }
-        // No peak among the three: the best of them.
-        let best = (0..3).max_by(|&a, &b| ys[a].total_cmp(&ys[b])).unwrap_or(1);
-        Ok(parabola_vertex(xs, ys.map(f64::ln)).unwrap_or(xs[best]))
+        let i = best(&points).clamp(1, points.len() - 2);
+        let three = &points[i - 1..=i + 1];
+        if three.iter().any(|p| p.1 <= 0.0) {
+            return Ok(points[best(&points)].0);
+        }
+        Ok(parabola_vertex(
+            [three[0].0, three[1].0, three[2].0],
+            [three[0].1.ln(), three[1].1.ln(), three[2].1.ln()],
+        )
+        .unwrap_or(points[best(&points)].0))
     }
 
     /// The reference focus: the peak of a fine sweep (half-pitch steps over
@@ -550,6 +593,40 @@ impl<'a> Focuser<'a> {
             depth_conjugate_z_mm,
         })
     }
+}
+
+/// `rgb` (`width` pixels wide, three floats each) blurred by a separable
+/// Gaussian of standard deviation `sigma` pixels, renormalised at the borders.
+fn gaussian_blur(rgb: &[f32], width: usize, sigma: f64) -> Vec<f32> {
+    let height = rgb.len() / (3 * width.max(1));
+    let radius = (3.0 * sigma).ceil() as isize;
+    let weights: Vec<f64> = (-radius..=radius)
+        .map(|k| (-((k * k) as f64) / (2.0 * sigma * sigma)).exp())
+        .collect();
+    let pass = |src: &[f32], horizontal: bool| -> Vec<f32> {
+        let mut out = vec![0.0f32; src.len()];
+        for y in 0..height {
+            for x in 0..width {
+                for c in 0..3 {
+                    let (mut sum, mut total) = (0.0f64, 0.0f64);
+                    for (k, &w) in (-radius..=radius).zip(&weights) {
+                        let (sx, sy) = if horizontal {
+                            (x as isize + k, y as isize)
+                        } else {
+                            (x as isize, y as isize + k)
+                        };
+                        if sx >= 0 && sy >= 0 && (sx as usize) < width && (sy as usize) < height {
+                            sum += w * f64::from(src[3 * (sy as usize * width + sx as usize) + c]);
+                            total += w;
+                        }
+                    }
+                    out[3 * (y * width + x) + c] = (sum / total) as f32;
+                }
+            }
+        }
+        out
+    };
+    pass(&pass(rgb, true), false)
 }
 
 /// The abscissa of the vertex of the parabola through three points, when it

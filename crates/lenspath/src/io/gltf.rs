@@ -61,7 +61,14 @@ pub fn parse_gltf(
         message: m,
     };
     check_glb_header(bytes).map_err(&fail)?;
-    let gltf = gltf::Gltf::from_slice(bytes).map_err(|e| fail(format!("not valid glTF 2.0: {e}")))?;
+    let invalid = |e: gltf::Error| fail(format!("not valid glTF 2.0: {e}"));
+    let unvalidated = gltf::Gltf::from_slice_without_validation(bytes).map_err(invalid)?;
+    let json = unvalidated.document.into_json();
+    check_accessor_references(&json).map_err(&fail)?;
+    let gltf = gltf::Gltf {
+        document: gltf::Document::from_json(json).map_err(invalid)?,
+        blob: unvalidated.blob,
+    };
     let mut buffers = Vec::new();
     for buffer in gltf.buffers() {
         let data = match buffer.source() {
@@ -155,6 +162,24 @@ fn check_glb_header(bytes: &[u8]) -> std::result::Result<(), String> {
             "GLB header gives a length of {length} bytes, but the file has {} (and a GLB needs at least 20)",
             bytes.len()
         ));
+    }
+    Ok(())
+}
+
+/// Every accessor a mesh primitive names must exist: gltf-json's validation
+/// of a primitive's POSITION accessor indexes the accessor list before the
+/// reference itself is checked (found by fuzzing).
+fn check_accessor_references(json: &gltf::json::Root) -> std::result::Result<(), String> {
+    let count = json.accessors.len();
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let used = prim.attributes.values().chain(prim.indices.as_ref());
+            if let Some(bad) = used.map(|i| i.value()).find(|&i| i >= count) {
+                return Err(format!(
+                    "mesh {m} primitive {p} uses accessor {bad}, but the file has {count}"
+                ));
+            }
+        }
     }
     Ok(())
 }

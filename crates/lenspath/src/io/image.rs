@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use super::{io_error, temp_path, write_atomically};
+use super::{io_error, write_atomically};
 use crate::error::{Error, Result};
 use crate::film::Image;
 
@@ -54,12 +54,7 @@ pub fn linear_to_srgb(x: f32) -> f32 {
 /// or its directory cannot be written.
 pub fn check_output_path(path: &Path) -> Result<ImageFormat> {
     let format = ImageFormat::from_path(path)?;
-    if path.is_dir() {
-        return Err(Error::InvalidArgument(format!("{} is a directory", path.display())));
-    }
-    let probe = temp_path(path);
-    std::fs::File::create(&probe).map_err(|e| io_error(path, e))?;
-    let _ = std::fs::remove_file(&probe);
+    super::check_writable(path)?;
     Ok(format)
 }
 

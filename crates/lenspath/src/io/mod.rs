@@ -93,6 +93,18 @@ fn write_atomically(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Res
     })
 }
 
+/// Fails unless a file can be written at `path` (not a directory, its folder
+/// exists and is writable), before any slow work that would end by writing it.
+pub fn check_writable(path: &Path) -> Result<()> {
+    if path.is_dir() {
+        return Err(Error::InvalidArgument(format!("{} is a directory", path.display())));
+    }
+    let probe = temp_path(path);
+    std::fs::File::create(&probe).map_err(|e| io_error(path, e))?;
+    let _ = std::fs::remove_file(&probe);
+    Ok(())
+}
+
 /// Writes `contents` to `path` atomically.
 pub fn write_text(path: &Path, contents: &str) -> Result<()> {
     write_atomically(path, |tmp| std::fs::write(tmp, contents).map_err(|e| io_error(path, e)))

@@ -1,0 +1,509 @@
+//! `lenspath autofocus`: focus the realistic camera on an image patch, and
+//! `--evaluate`: every strategy against ground truth on a fixed set of patches.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
+
+use clap::Args;
+use lenspath::accel::BvhSettings;
+use lenspath::autofocus::plot::{focus_curve_svg, Series};
+use lenspath::autofocus::{
+    AutofocusResult, AutofocusSettings, FocusMeasure, Focuser, GroundTruth, Strategy, STRATEGIES,
+};
+use lenspath::camera::{CameraPose, LensFocus, RealisticCamera, RealisticCameraSettings};
+use lenspath::integrator::PathSettings;
+use lenspath::io::image::{check_output_path, write_image};
+use lenspath::io::{check_writable, write_text};
+use lenspath::render::{render, RenderSettings};
+use lenspath::scene::CompiledScene;
+use lenspath::{Error, Result};
+use serde_json::json;
+
+use crate::render::{parse_patch, parse_resolution, LensFlags, NormalizedRect, Resolution, SceneArgs};
+use crate::Outcome;
+
+/// Samples per pixel of the patch renders of `render --autofocus`.
+const RENDER_AUTOFOCUS_SPP: u32 = 16;
+
+/// Options of `lenspath autofocus`.
+#[derive(Args, Debug)]
+#[command(allow_negative_numbers = true)]
+pub struct AutofocusArgs {
+    #[command(flatten)]
+    scene: SceneArgs,
+    #[command(flatten)]
+    lens: LensFlags,
+    /// The patch to focus on, X,Y,W,H in fractions of the image (0 to 1), such as 0.55,0.7,0.1,0.12.
+    #[arg(long, value_name = "X,Y,W,H", value_parser = parse_patch, required_unless_present = "evaluate")]
+    patch: Option<NormalizedRect>,
+    /// Focus measure: variance, normalized-variance, sml, tenengrad, brenner, laplacian-energy, vollath.
+    #[arg(long, default_value = "tenengrad")]
+    metric: String,
+    /// Search: sweep, early-exit, fast or depth.
+    #[arg(long, default_value = "fast")]
+    strategy: String,
+    /// early-exit: stop after this many steps without a new best.
+    #[arg(long, default_value_t = 12)]
+    patience: usize,
+    /// Samples per pixel of each patch render.
+    #[arg(long, default_value_t = 16)]
+    spp: u32,
+    /// Image size, WIDTHxHEIGHT [default: the scene file's, else 640x480].
+    #[arg(long, value_parser = parse_resolution)]
+    res: Option<Resolution>,
+    /// Maximum path depth of the patch renders.
+    #[arg(long, default_value_t = 8)]
+    max_depth: u32,
+    /// Seed of the patch renders.
+    #[arg(long, default_value_t = 0)]
+    seed: u32,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    json: bool,
+    /// Also write the focus curve (a sweep) with the strategy's evaluations as SVG.
+    #[arg(long, value_name = "FILE")]
+    plot: Option<PathBuf>,
+    /// Also render the full image focused there (.png or .exr).
+    #[arg(long, value_name = "FILE")]
+    render: Option<PathBuf>,
+    /// Samples per pixel of --render.
+    #[arg(long, default_value_t = 64)]
+    render_spp: u32,
+    /// Run every strategy against ground truth on the evaluation patches (docs/autofocus.md).
+    #[arg(long, conflicts_with_all = ["patch", "file", "plot", "render"])]
+    evaluate: bool,
+    /// --evaluate: write every result as JSON here.
+    #[arg(long, value_name = "FILE", requires = "evaluate")]
+    evaluate_json: Option<PathBuf>,
+    /// --evaluate: write each patch's focus-curve SVG into this folder.
+    #[arg(long, value_name = "DIR", requires = "evaluate")]
+    plots_dir: Option<PathBuf>,
+}
+
+/// Focuses `lens` on `patch` with the fast strategy before a render, saying what it found on stderr.
+pub fn focus_before_render(
+    scene: &CompiledScene,
+    pose: CameraPose,
+    lens: &RealisticCameraSettings,
+    render_settings: &RenderSettings,
+    patch: NormalizedRect,
+) -> Result<f64> {
+    let measure = FocusMeasure::Tenengrad;
+    let settings = AutofocusSettings {
+        camera: lens.clone(),
+        width: render_settings.width,
+        height: render_settings.height,
+        patch: patch.to_pixels(render_settings.width, render_settings.height),
+        measure,
+        spp: RENDER_AUTOFOCUS_SPP,
+        path: PathSettings {
+            max_depth: render_settings.path.max_depth.min(8),
+            light_samples: 1,
+        },
+        seed: render_settings.seed,
+        threads: render_settings.threads,
+    };
+    let mut focuser = Focuser::new(scene, pose, settings)?;
+    let result = focuser.run(Strategy::Fast)?;
+    eprintln!("{}", summary_line(&result, "tenengrad", lens.scene_unit_m));
+    Ok(result.sensor_z_mm)
+}
+
+/// "autofocus (fast, sml): sensor 52.634 mm behind the stop, in focus at 3.412 m; 21 patch renders, ..."
+fn summary_line(r: &AutofocusResult, metric: &str, scene_unit_m: f64) -> String {
+    let distance = match r.focus_distance {
+        Some(d) => format!(
+            "in focus at {:.3} m ({d:.4} scene units) from the sensor",
+            d * scene_unit_m
+        ),
+        None => "focused beyond infinity".to_string(),
+    };
+    format!(
+        "autofocus ({}, {metric}): sensor {:.4} mm behind the stop, {distance}; {} patch renders, {:.2} M camera rays, {:.2} s",
+        r.strategy,
+        r.sensor_z_mm,
+        r.evaluations.len(),
+        r.camera_rays as f64 / 1e6,
+        r.seconds
+    )
+}
+
+/// Runs `lenspath autofocus`.
+pub fn run(args: AutofocusArgs) -> Result<Outcome> {
+    let measure = FocusMeasure::from_name(&args.metric)?;
+    let strategy = Strategy::from_name(&args.strategy, args.patience)?;
+    if let Some(path) = &args.render {
+        check_output_path(path)?;
+    }
+    for path in [&args.plot, &args.evaluate_json].into_iter().flatten() {
+        check_writable(path)?;
+    }
+    if args.evaluate {
+        return evaluate(&args, measure);
+    }
+    let (_, scene, options) = args.scene.load()?;
+    let (width, height) = args
+        .res
+        .map(|r| (r.width, r.height))
+        .or(options.resolution)
+        .unwrap_or((640, 480));
+    let view = scene
+        .view
+        .ok_or_else(|| Error::InvalidArgument("the scene has no camera".into()))?;
+    let lens = args
+        .lens
+        .settings(&options, width, height, LensFocus::SensorPositionMm(0.0))?;
+    let compiled = scene.compile(&BvhSettings::default())?;
+    let patch = args.patch.expect("clap requires --patch without --evaluate");
+    let settings = AutofocusSettings {
+        camera: lens.clone(),
+        width,
+        height,
+        patch: patch.to_pixels(width, height),
+        measure,
+        spp: args.spp,
+        path: PathSettings {
+            max_depth: args.max_depth,
+            light_samples: 1,
+        },
+        seed: args.seed,
+        threads: args.threads,
+    };
+    let mut focuser = Focuser::new(&compiled, view.pose, settings)?;
+    let result = focuser.run(strategy)?;
+    if args.json {
+        let out = json!({
+            "sensor_position_mm": result.sensor_z_mm,
+            "focus_distance": result.focus_distance,
+            "focus_distance_m": result.focus_distance.map(|d| d * lens.scene_unit_m),
+            "metric": args.metric,
+            "strategy": result.strategy,
+            "evaluations": result.evaluations.len(),
+            "camera_rays": result.camera_rays,
+            "seconds": result.seconds,
+            "depth_of_focus_mm": focuser.depth_of_focus_mm(result.sensor_z_mm),
+            "points": result.evaluations,
+        });
+        println!("{}", serde_json::to_string_pretty(&out).expect("JSON serializes"));
+    } else {
+        println!("{}", summary_line(&result, &args.metric, lens.scene_unit_m));
+    }
+    if let Some(path) = &args.plot {
+        let sweep = if strategy == Strategy::Sweep {
+            result.clone()
+        } else {
+            focuser.run(Strategy::Sweep)?
+        };
+        let title = format!("{} on {} ({})", result.strategy, args.metric, patch_label(&patch));
+        let svg = focus_curve_svg(
+            &title,
+            &[
+                Series {
+                    label: "sweep",
+                    points: &sweep.evaluations,
+                    chosen_mm: Some(sweep.sensor_z_mm),
+                    line: true,
+                },
+                Series {
+                    label: result.strategy,
+                    points: &result.evaluations,
+                    chosen_mm: Some(result.sensor_z_mm),
+                    line: false,
+                },
+            ],
+            None,
+        );
+        write_text(path, &svg)?;
+    }
+    if let Some(path) = &args.render {
+        let settings = RenderSettings {
+            width,
+            height,
+            spp: args.render_spp,
+            seed: args.seed,
+            threads: args.threads,
+            ..Default::default()
+        };
+        let camera = RealisticCamera::new(
+            view.pose,
+            width,
+            height,
+            &RealisticCameraSettings {
+                focus: LensFocus::SensorPositionMm(result.sensor_z_mm),
+                ..lens
+            },
+        )?;
+        let output = render(&compiled, &camera, &settings, &|_, _| {}, &AtomicBool::new(false))?;
+        write_image(path, &output.image, 0.0)?;
+        eprintln!("rendered {}x{} focused there -> {}", width, height, path.display());
+    }
+    Ok(Outcome::Done)
+}
+
+fn patch_label(p: &NormalizedRect) -> String {
+    format!("patch {:.2},{:.2},{:.2},{:.2}", p.x, p.y, p.width, p.height)
+}
+
+/// A scene of the evaluation set: where it comes from and the patches on it.
+struct EvaluationScene {
+    name: &'static str,
+    /// `builtin:NAME`, or a path relative to the repository (`../shared/...` or `scenes/...`).
+    source: &'static str,
+    patches: &'static [[f64; 4]],
+}
+
+/// The evaluation set: patches on edges and texture at different depths,
+/// in five scenes (docs/autofocus.md shows them).
+const EVALUATION_SET: [EvaluationScene; 5] = [
+    EvaluationScene {
+        name: "cornell-spheres",
+        source: "builtin:cornell-spheres",
+        patches: &[
+            [0.52, 0.70, 0.10, 0.12],
+            [0.20, 0.68, 0.10, 0.12],
+            [0.74, 0.74, 0.10, 0.12],
+            [0.15, 0.30, 0.10, 0.12],
+            [0.35, 0.00, 0.12, 0.08],
+        ],
+    },
+    EvaluationScene {
+        name: "CBspheres_lambertian",
+        source: "../shared/scenes/cs184/sky/CBspheres_lambertian.dae",
+        patches: &[
+            [0.26, 0.60, 0.08, 0.10],
+            [0.68, 0.62, 0.08, 0.10],
+            [0.33, 0.16, 0.08, 0.08],
+            [0.21, 0.35, 0.08, 0.12],
+            [0.45, 0.60, 0.10, 0.10],
+        ],
+    },
+    EvaluationScene {
+        name: "CBbunny",
+        source: "../shared/scenes/cs184/sky/CBbunny.dae",
+        patches: &[
+            [0.45, 0.50, 0.08, 0.10],
+            [0.40, 0.62, 0.08, 0.10],
+            [0.56, 0.62, 0.08, 0.10],
+            [0.33, 0.16, 0.08, 0.08],
+            [0.71, 0.35, 0.08, 0.12],
+        ],
+    },
+    EvaluationScene {
+        name: "CBdragon",
+        source: "scenes/cbdragon.toml",
+        patches: &[
+            [0.52, 0.46, 0.10, 0.10],
+            [0.20, 0.58, 0.10, 0.10],
+            [0.38, 0.58, 0.10, 0.12],
+            [0.33, 0.16, 0.08, 0.08],
+            [0.71, 0.35, 0.08, 0.12],
+        ],
+    },
+    EvaluationScene {
+        name: "glass-and-gold",
+        source: "scenes/glass-and-gold.toml",
+        patches: &[
+            [0.52, 0.50, 0.08, 0.10],
+            [0.82, 0.55, 0.08, 0.10],
+            [0.08, 0.55, 0.08, 0.10],
+            [0.88, 0.62, 0.10, 0.10],
+            [0.18, 0.82, 0.12, 0.10],
+        ],
+    },
+];
+
+/// The repository root (the CLI crate's manifest is two levels down).
+fn repo_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// Every strategy on every evaluation patch, against ground truth.
+fn evaluate(args: &AutofocusArgs, measure: FocusMeasure) -> Result<Outcome> {
+    let (width, height) = args.res.map_or((640, 480), |r| (r.width, r.height));
+    let mut rows = Vec::new();
+    let mut patches_run = 0;
+    for scene_spec in &EVALUATION_SET {
+        let scene_args = match scene_spec.source.strip_prefix("builtin:") {
+            Some(name) => SceneArgs {
+                file: None,
+                scene: name.to_string(),
+                mesh_triangles: 0,
+            },
+            None => {
+                let path = repo_root().join(scene_spec.source);
+                if !path.exists() || (scene_spec.source.contains("cb") && !repo_root().join("../shared").exists()) {
+                    eprintln!(
+                        "skipping {}: {} not found (../shared absent?)",
+                        scene_spec.name,
+                        path.display()
+                    );
+                    continue;
+                }
+                SceneArgs {
+                    file: Some(path),
+                    scene: String::new(),
+                    mesh_triangles: 0,
+                }
+            }
+        };
+        let (_, scene, options) = scene_args.load()?;
+        let view = scene.view.ok_or_else(|| Error::InvalidArgument("no camera".into()))?;
+        let lens = args
+            .lens
+            .settings(&options, width, height, LensFocus::SensorPositionMm(0.0))?;
+        let compiled = scene.compile(&BvhSettings::default())?;
+        for (k, p) in scene_spec.patches.iter().enumerate() {
+            let patch = NormalizedRect {
+                x: p[0],
+                y: p[1],
+                width: p[2],
+                height: p[3],
+            };
+            let settings = AutofocusSettings {
+                camera: lens.clone(),
+                width,
+                height,
+                patch: patch.to_pixels(width, height),
+                measure,
+                spp: args.spp,
+                path: PathSettings {
+                    max_depth: args.max_depth,
+                    light_samples: 1,
+                },
+                seed: args.seed,
+                threads: args.threads,
+            };
+            let mut focuser = Focuser::new(&compiled, view.pose, settings)?;
+            let truth = focuser.ground_truth()?;
+            let dof = focuser.depth_of_focus_mm(truth.sensor_z_mm);
+            let mut results = Vec::new();
+            for (_, strategy) in STRATEGIES {
+                let strategy = match strategy {
+                    Strategy::EarlyExit { .. } => Strategy::EarlyExit {
+                        patience: args.patience,
+                    },
+                    s => s,
+                };
+                results.push(focuser.run(strategy)?);
+            }
+            let id = format!("{}#{}", scene_spec.name, k + 1);
+            eprintln!("{}", row_text(&id, &truth, dof, &results));
+            if let Some(dir) = &args.plots_dir {
+                std::fs::create_dir_all(dir).map_err(|e| Error::Io {
+                    path: dir.clone(),
+                    source: e,
+                })?;
+                let series: Vec<Series> = results
+                    .iter()
+                    .map(|r| Series {
+                        label: r.strategy,
+                        points: &r.evaluations,
+                        chosen_mm: Some(r.sensor_z_mm),
+                        line: r.strategy == "sweep",
+                    })
+                    .collect();
+                let title = format!("{id} ({}, {} spp)", args.metric, args.spp);
+                let svg = focus_curve_svg(&title, &series, Some(truth.sensor_z_mm));
+                write_text(&dir.join(format!("{}-{}.svg", scene_spec.name, k + 1)), &svg)?;
+            }
+            rows.push(json!({
+                "patch": id,
+                "rect": p,
+                "truth": truth,
+                "depth_of_focus_mm": dof,
+                "results": results.iter().map(|r| json!({
+                    "strategy": r.strategy,
+                    "sensor_position_mm": r.sensor_z_mm,
+                    "error_dof": (r.sensor_z_mm - truth.sensor_z_mm) / dof,
+                    "evaluations": r.evaluations.len(),
+                    "camera_rays": r.camera_rays,
+                    "seconds": r.seconds,
+                })).collect::<Vec<_>>(),
+            }));
+            patches_run += 1;
+        }
+    }
+    let summary = summarize(&rows);
+    println!("{summary}");
+    if let Some(path) = &args.evaluate_json {
+        let out = json!({
+            "metric": args.metric,
+            "spp": args.spp,
+            "resolution": [width, height],
+            "patches": rows,
+        });
+        write_text(path, &serde_json::to_string_pretty(&out).expect("JSON serializes"))?;
+    }
+    if patches_run == 0 {
+        return Err(Error::InvalidArgument("no evaluation scene could be loaded".into()));
+    }
+    Ok(Outcome::Done)
+}
+
+fn row_text(id: &str, truth: &GroundTruth, dof: f64, results: &[AutofocusResult]) -> String {
+    let mut line = format!(
+        "{id:<24} truth {:.4} mm (seed spread {:.2} DoF, {} spp; depth conjugate {})",
+        truth.sensor_z_mm,
+        truth.seed_spread_dof,
+        truth.spp,
+        truth
+            .depth_conjugate_z_mm
+            .map_or("none".into(), |z| format!("{:+.2} DoF", (z - truth.sensor_z_mm) / dof))
+    );
+    for r in results {
+        line += &format!(
+            " | {} {:+.2} DoF {} evals",
+            r.strategy,
+            (r.sensor_z_mm - truth.sensor_z_mm) / dof,
+            r.evaluations.len()
+        );
+    }
+    line
+}
+
+/// A Markdown table: per strategy, patches within 1 DoF, mean |error|, cost relative to the sweep.
+fn summarize(rows: &[serde_json::Value]) -> String {
+    let mut out = String::from(
+        "| strategy | within 1 DoF | median abs error (DoF) | max abs error (DoF) | patch renders (mean) | camera rays vs sweep | seconds (mean) |\n|---|---|---|---|---|---|---|\n",
+    );
+    let sweep_rays: f64 = rows
+        .iter()
+        .flat_map(|r| r["results"].as_array().into_iter().flatten())
+        .filter(|r| r["strategy"] == "sweep")
+        .map(|r| r["camera_rays"].as_f64().unwrap_or(0.0))
+        .sum();
+    for (name, _) in STRATEGIES {
+        let results: Vec<&serde_json::Value> = rows
+            .iter()
+            .flat_map(|r| r["results"].as_array().into_iter().flatten())
+            .filter(|r| r["strategy"] == name)
+            .collect();
+        if results.is_empty() {
+            continue;
+        }
+        let n = results.len() as f64;
+        let mut errors: Vec<f64> = results
+            .iter()
+            .map(|r| r["error_dof"].as_f64().unwrap_or(f64::INFINITY).abs())
+            .collect();
+        errors.sort_by(f64::total_cmp);
+        let within = errors.iter().filter(|&&e| e <= 1.0).count();
+        let rays: f64 = results.iter().map(|r| r["camera_rays"].as_f64().unwrap_or(0.0)).sum();
+        let evals: f64 = results.iter().map(|r| r["evaluations"].as_f64().unwrap_or(0.0)).sum();
+        let secs: f64 = results.iter().map(|r| r["seconds"].as_f64().unwrap_or(0.0)).sum();
+        out += &format!(
+            "| {name} | {within}/{} ({:.0}%) | {:.2} | {:.2} | {:.1} | {:.1}% | {:.2} |\n",
+            results.len(),
+            100.0 * within as f64 / n,
+            errors[errors.len() / 2],
+            errors.last().copied().unwrap_or(0.0),
+            evals / n,
+            100.0 * rays / sweep_rays,
+            secs / n
+        );
+    }
+    out
+}

@@ -1,0 +1,151 @@
+//! Autofocus on an analytic scene: a checkerboard plane facing the camera at
+//! a known distance. Every strategy must land within one depth of focus of the
+//! sensor position that focuses that distance, and the cheap ones must cost a
+//! small part of the sweep.
+
+use glam::Vec3;
+use lenspath::accel::BvhSettings;
+use lenspath::autofocus::{AutofocusSettings, FocusMeasure, Focuser, Strategy};
+use lenspath::camera::{CameraPose, LensFocus, RealisticCameraSettings};
+use lenspath::integrator::PathSettings;
+use lenspath::lens::LensPrescription;
+use lenspath::lights::Light;
+use lenspath::materials::Material;
+use lenspath::math::Rgb;
+use lenspath::render::PixelRect;
+use lenspath::scene::{CompiledScene, Scene};
+use lenspath::shapes::TriangleMesh;
+
+/// Checker squares of `size` scene units, alternating white and dark, over
+/// [x0, x1] × [y0, y1] of the plane z = −`distance`, facing +z.
+fn board(scene: &mut Scene, (x0, x1): (f32, f32), (y0, y1): (f32, f32), distance: f32, size: f32) {
+    let (nx, ny) = (((x1 - x0) / size).ceil() as i32, ((y1 - y0) / size).ceil() as i32);
+    for j in 0..ny {
+        for i in 0..nx {
+            let (xa, ya) = (x0 + i as f32 * size, y0 + j as f32 * size);
+            let (xb, yb) = ((xa + size).min(x1), (ya + size).min(y1));
+            let z = -distance;
+            scene.meshes.push(TriangleMesh {
+                positions: vec![
+                    Vec3::new(xa, ya, z),
+                    Vec3::new(xb, ya, z),
+                    Vec3::new(xb, yb, z),
+                    Vec3::new(xa, yb, z),
+                ],
+                indices: vec![[0, 1, 2], [0, 2, 3]],
+                material: ((i + j) % 2) as u32,
+                ..Default::default()
+            });
+        }
+    }
+}
+
+/// A scene of black-and-white materials under a white sky.
+fn lit_scene() -> Scene {
+    Scene {
+        materials: vec![
+            Material::Diffuse {
+                reflectance: Rgb::splat(0.8),
+            },
+            Material::Diffuse {
+                reflectance: Rgb::splat(0.1),
+            },
+        ],
+        lights: vec![Light::Environment { radiance: Rgb::ONE }],
+        ..Default::default()
+    }
+}
+
+fn focuser(scene: &CompiledScene, f_number: f64) -> Focuser<'_> {
+    let pose = CameraPose::look_at(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y);
+    let (width, height) = (320, 240);
+    let mut camera = RealisticCameraSettings::new(
+        LensPrescription::load("dgauss50").unwrap(),
+        (36.0, 27.0),
+        LensFocus::SensorPositionMm(0.0),
+    );
+    camera.f_number = Some(f_number);
+    let settings = AutofocusSettings {
+        camera,
+        width,
+        height,
+        patch: PixelRect {
+            x0: 148,
+            y0: 108,
+            width: 24,
+            height: 24,
+        },
+        measure: FocusMeasure::Tenengrad,
+        spp: 4,
+        path: PathSettings {
+            max_depth: 2,
+            light_samples: 1,
+        },
+        seed: 7,
+        threads: None,
+    };
+    Focuser::new(scene, pose, settings).unwrap()
+}
+
+#[test]
+fn every_strategy_focuses_a_plane_at_its_conjugate() {
+    // A plane 1.5 m away, squares of 2 cm (about 5 pixels here).
+    let distance = 1.5;
+    let mut scene = lit_scene();
+    board(&mut scene, (-0.8, 0.8), (-0.6, 0.6), distance, 0.02);
+    let scene = scene.compile(&BvhSettings::default()).unwrap();
+    // At f/5.6 the lens's spherical aberration moves its best focus by well under a DoF.
+    let mut f = focuser(&scene, 5.6);
+    let conjugate = f.sensor_z_for_distance(f64::from(distance)).unwrap();
+    let dof = f.depth_of_focus_mm(conjugate);
+    let sweep = f.run(Strategy::Sweep).unwrap();
+    for strategy in [
+        Strategy::Sweep,
+        Strategy::EarlyExit { patience: 12 },
+        Strategy::Fast,
+        Strategy::Depth { refine: true },
+        Strategy::Depth { refine: false },
+    ] {
+        let r = f.run(strategy).unwrap();
+        let error = (r.sensor_z_mm - conjugate) / dof;
+        assert!(error.abs() <= 1.0, "{strategy:?}: {error:+.2} DoF from the conjugate");
+        let d = r.focus_distance.unwrap();
+        assert!(
+            (d / f64::from(distance) - 1.0).abs() < 0.05,
+            "{strategy:?}: in focus at {d}"
+        );
+        match strategy {
+            Strategy::Fast => assert!(
+                r.camera_rays * 10 <= sweep.camera_rays,
+                "fast used {} camera rays, the sweep {}",
+                r.camera_rays,
+                sweep.camera_rays
+            ),
+            Strategy::Depth { .. } => assert!(r.camera_rays * 50 <= sweep.camera_rays, "depth: {}", r.camera_rays),
+            _ => {}
+        }
+    }
+    // The sweep's step is the pixel pitch, over the whole range.
+    let (near, far) = f.sweep_range_mm();
+    let steps = ((far - near) / f.pixel_pitch_mm()).floor() as usize + 1;
+    assert_eq!(sweep.evaluations.len(), steps);
+}
+
+/// The depth strategy ranges on what most of the patch sees: a patch mostly on
+/// a near plane with a far plane behind focuses on the near one.
+#[test]
+fn depth_focuses_on_the_dominant_surface() {
+    // The patch sees about ±27 mm at 1 m: a near board over its left three
+    // quarters, a far one behind everything.
+    let mut scene = lit_scene();
+    board(&mut scene, (-3.0, 3.0), (-2.0, 2.0), 3.0, 0.04);
+    board(&mut scene, (-0.2, 0.0135), (-0.2, 0.2), 1.0, 0.005);
+    let scene = scene.compile(&BvhSettings::default()).unwrap();
+    let mut f = focuser(&scene, 2.0);
+    let conjugate_near = f.sensor_z_for_distance(1.0).unwrap();
+    let z = f.dominant_depth_conjugate().unwrap().unwrap();
+    assert!(
+        (z - conjugate_near).abs() < 0.5 * f.depth_of_focus_mm(z),
+        "ranged at {z} mm, the near board is at {conjugate_near} mm"
+    );
+}
