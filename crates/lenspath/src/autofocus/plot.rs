@@ -30,7 +30,10 @@ pub fn focus_curve_svg(title: &str, series: &[Series], truth_mm: Option<f64>) ->
         .flat_map(|s| s.points.iter().map(|e| e.sensor_z_mm).chain(s.chosen_mm))
         .chain(truth_mm);
     let (mut lo, mut hi) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
-    if !(lo < hi) {
+    if !lo.is_finite() {
+        (lo, hi) = (0.0, 1.0);
+    }
+    if hi <= lo {
         (lo, hi) = (lo - 0.5, lo + 0.5);
     }
     let px = |z: f64| margin + (z - lo) / (hi - lo) * (w - 2.0 * margin);

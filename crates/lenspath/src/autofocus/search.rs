@@ -533,9 +533,9 @@ impl<'a> Focuser<'a> {
     }
 
     /// The reference focus: the peak of a fine sweep (half-pitch steps over
-    /// ±6 pitches around the peak of a coarse 4-pitch scan), located by a
+    /// ±5 pitches around the peak of a coarse 4-pitch scan), located by a
     /// parabola through the log-scores around its maximum, with two seeds; the
-    /// samples are doubled (from 4× the settings', up to 16×) until the seeds
+    /// samples are doubled (from 4× the settings', up to 8×) until the seeds
     /// agree within a quarter DoF. Its evaluations are not counted anywhere.
     pub fn ground_truth(&mut self) -> Result<GroundTruth> {
         let saved = (std::mem::take(&mut self.evaluations), self.camera_rays);
@@ -552,7 +552,7 @@ impl<'a> Focuser<'a> {
             best.1
         };
         let (near, far) = self.range_mm;
-        let fine: Vec<f64> = (-12..=12)
+        let fine: Vec<f64> = (-10..=10)
             .map(|i| coarse_best + f64::from(i) * 0.5 * self.pitch_mm)
             .filter(|z| (near - 1e-9..=far + 1e-9).contains(z))
             .collect();
@@ -579,7 +579,7 @@ impl<'a> Focuser<'a> {
             }
             let z = 0.5 * (peaks[0] + peaks[1]);
             let spread = (peaks[0] - peaks[1]).abs() / self.depth_of_focus_mm(z);
-            if spread <= 0.25 || spp >= 16 * self.settings.spp {
+            if spread <= 0.25 || spp >= 8 * self.settings.spp {
                 break (z, spread, spp);
             }
             spp *= 2;

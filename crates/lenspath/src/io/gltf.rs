@@ -184,6 +184,38 @@ fn check_accessor_references(json: &gltf::json::Root) -> std::result::Result<(),
     Ok(())
 }
 
+/// An accessor's elements must lie inside its buffer view: the gltf crate's
+/// readers compute the extent without checking (`count − 1` underflows for an
+/// empty accessor; found by fuzzing). Sparse accessors are refused.
+fn check_accessor_extent(a: &gltf::Accessor) -> std::result::Result<(), String> {
+    if a.sparse().is_some() {
+        return Err(format!(
+            "accessor {} is sparse, which lenspath does not read",
+            a.index()
+        ));
+    }
+    if a.count() == 0 {
+        return Err(format!("accessor {} has no elements", a.index()));
+    }
+    if let Some(view) = a.view() {
+        let stride = view.stride().unwrap_or(a.size());
+        let end = stride
+            .checked_mul(a.count() - 1)
+            .and_then(|v| v.checked_add(a.offset()))
+            .and_then(|v| v.checked_add(a.size()));
+        if end.is_none_or(|end| end > view.length()) {
+            return Err(format!(
+                "accessor {} ({} elements) runs past the end of buffer view {} ({} bytes)",
+                a.index(),
+                a.count(),
+                view.index(),
+                view.length()
+            ));
+        }
+    }
+    Ok(())
+}
+
 struct Loader<'a> {
     buffers: &'a [Vec<u8>],
     scene: Scene,
@@ -242,6 +274,40 @@ impl Loader<'_> {
                     prim.mode()
                 ));
                 continue;
+            }
+            // The gltf crate's readers assume the types the spec requires (and
+            // hit `unreachable!` otherwise; found by fuzzing): check them first.
+            use gltf::accessor::{DataType, Dimensions};
+            use gltf::Semantic;
+            let typed = |semantic: Semantic| {
+                prim.get(&semantic)
+                    .is_none_or(|a| a.data_type() == DataType::F32 && a.dimensions() == Dimensions::Vec3)
+            };
+            if !typed(Semantic::Positions) || !typed(Semantic::Normals) {
+                return Err((self.fail)(format!(
+                    "{what}: POSITION and NORMAL must be float VEC3 accessors"
+                )));
+            }
+            for a in [
+                prim.get(&Semantic::Positions),
+                prim.get(&Semantic::Normals),
+                prim.indices(),
+            ]
+            .into_iter()
+            .flatten()
+            {
+                check_accessor_extent(&a).map_err(|e| (self.fail)(format!("{what}: {e}")))?;
+            }
+            if let Some(a) = prim.indices() {
+                if !matches!(a.data_type(), DataType::U8 | DataType::U16 | DataType::U32)
+                    || a.dimensions() != Dimensions::Scalar
+                {
+                    return Err((self.fail)(format!(
+                        "{what}: indices must be an unsigned integer SCALAR accessor, not {:?} {:?}",
+                        a.data_type(),
+                        a.dimensions()
+                    )));
+                }
             }
             let reader = prim.reader(|b| self.buffers.get(b.index()).map(Vec::as_slice));
             let positions: Vec<Vec3> = reader
