@@ -353,55 +353,58 @@ impl<'a> Focuser<'a> {
         Ok(best.1)
     }
 
-    /// Coarse-to-fine: a scan of the whole range in steps of about 4 DoF at a
-    /// quarter of the samples; the best local maximum (and a second one within
-    /// 70% of it) refined by golden-section search at full samples down to two
-    /// pixel pitches; a parabola through the log-scores around the winner.
+    /// Coarse-to-fine: a scan of the whole range in steps of about 5 DoF at
+    /// half the samples; its local maxima within half of the best (at most
+    /// three) re-scored at full samples; the winner refined by golden-section
+    /// search at full samples inside its coarse bracket, down to three pixel
+    /// pitches; a parabola through the log-scores around the best.
     fn fast(&mut self) -> Result<f64> {
         let (spp, seed) = (self.settings.spp, self.settings.seed);
         let (near, far) = self.range_mm;
-        let step = 4.0 * self.depth_of_focus_mm(near);
+        let step = 5.0 * self.depth_of_focus_mm(near);
         let n = (((far - near) / step).ceil() as usize + 1).clamp(8, 64);
         let coarse: Vec<(f64, f64)> = (0..n)
             .map(|i| {
                 let z = near + (far - near) * i as f64 / (n - 1) as f64;
-                Ok((z, self.measure_at(z, (spp / 4).max(1), seed)?))
+                Ok((z, self.measure_at(z, (spp / 2).max(1), seed)?))
             })
             .collect::<Result<_>>()?;
+        let best_coarse = coarse.iter().map(|c| c.1).fold(f64::NEG_INFINITY, f64::max);
         let mut peaks: Vec<usize> = (0..n)
             .filter(|&i| {
                 let left = if i > 0 { coarse[i - 1].1 } else { f64::NEG_INFINITY };
                 let right = coarse.get(i + 1).map_or(f64::NEG_INFINITY, |c| c.1);
-                coarse[i].1 >= left && coarse[i].1 >= right
+                coarse[i].1 >= left && coarse[i].1 >= right && coarse[i].1 >= 0.5 * best_coarse
             })
             .collect();
         peaks.sort_by(|&a, &b| coarse[b].1.total_cmp(&coarse[a].1));
-        let top = coarse[peaks[0]].1;
-        peaks.truncate(2);
-        if peaks.len() == 2 && (coarse[peaks[1]].1 < 0.7 * top || peaks[0].abs_diff(peaks[1]) < 2) {
-            peaks.truncate(1);
-        }
-        let mut best = (f64::NEG_INFINITY, near);
-        for i in peaks {
-            let lo = coarse[i.saturating_sub(1)].0;
-            let hi = coarse[(i + 1).min(n - 1)].0;
-            let (score, z) = self.golden_section(lo, hi, spp, seed)?;
-            if score > best.0 {
-                best = (score, z);
+        peaks.truncate(3);
+        // A coarse score at half the samples can be lucky: re-score the candidates.
+        let mut winner = (f64::NEG_INFINITY, peaks[0]);
+        if peaks.len() > 1 {
+            for &i in &peaks {
+                let score = self.measure_at(coarse[i].0, spp, seed)?;
+                if score > winner.0 {
+                    winner = (score, i);
+                }
             }
         }
-        Ok(self.parabolic_peak(best.1, spp))
+        let i = winner.1;
+        let lo = coarse[i.saturating_sub(1)].0;
+        let hi = coarse[(i + 1).min(n - 1)].0;
+        let (_, z) = self.golden_section(lo, hi, spp, seed)?;
+        Ok(self.parabolic_peak(z, spp))
     }
 
-    /// Golden-section search for the maximum on [lo, hi] until the bracket is two pitches wide.
+    /// Golden-section search for the maximum on [lo, hi] until the bracket is three pitches wide.
     fn golden_section(&mut self, mut lo: f64, mut hi: f64, spp: u32, seed: u32) -> Result<(f64, f64)> {
         const INV_PHI: f64 = 0.618_033_988_749_894_9;
         let mut a = hi - INV_PHI * (hi - lo);
         let mut b = lo + INV_PHI * (hi - lo);
         let mut fa = self.measure_at(a, spp, seed)?;
         let mut fb = self.measure_at(b, spp, seed)?;
-        // To a bracket of two pitches; the parabolic fit does the rest.
-        while hi - lo > 2.0 * self.pitch_mm {
+        // To a bracket of three pitches; the parabolic fit does the rest.
+        while hi - lo > 3.0 * self.pitch_mm {
             if fa >= fb {
                 (hi, b, fb) = (b, a, fa);
                 a = hi - INV_PHI * (hi - lo);
@@ -415,25 +418,27 @@ impl<'a> Focuser<'a> {
         Ok(if fa >= fb { (fa, a) } else { (fb, b) })
     }
 
-    /// The vertex of the parabola through the log-scores of the three full-sample
-    /// evaluations nearest `z` (a Gaussian fit of the focus curve's peak), kept
-    /// within their span; `z` itself when they do not make a peak.
+    /// The vertex of the least-squares parabola through the log-scores of the
+    /// full-sample evaluations within 3 DoF of `z` (a Gaussian fit of the focus
+    /// curve's peak, which averages the noise of several renders), kept within
+    /// their span; `z` itself when fewer than three are there or they make no peak.
     fn parabolic_peak(&self, z: f64, spp: u32) -> f64 {
-        let mut near: Vec<Evaluation> = self
+        let window = 3.0 * self.depth_of_focus_mm(z);
+        let points: Vec<(f64, f64)> = self
             .evaluations
             .iter()
-            .filter(|e| e.spp == spp && e.score > 0.0)
-            .copied()
+            .filter(|e| e.spp == spp && e.score > 0.0 && (e.sensor_z_mm - z).abs() <= window)
+            .map(|e| (e.sensor_z_mm - z, e.score.ln()))
             .collect();
-        near.sort_by(|a, b| (a.sensor_z_mm - z).abs().total_cmp(&(b.sensor_z_mm - z).abs()));
-        near.dedup_by(|a, b| (a.sensor_z_mm - b.sensor_z_mm).abs() < 1e-9);
-        if near.len() < 3 {
+        if points.len() < 3 {
             return z;
         }
-        let mut three = [near[0], near[1], near[2]];
-        three.sort_by(|a, b| a.sensor_z_mm.total_cmp(&b.sensor_z_mm));
-        let [(x0, y0), (x1, y1), (x2, y2)] = three.map(|e| (e.sensor_z_mm, e.score.ln()));
-        parabola_vertex([x0, x1, x2], [y0, y1, y2]).unwrap_or(z)
+        let lo = points.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
+        let hi = points.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
+        match least_squares_parabola(&points) {
+            Some((_, b, c)) if c < 0.0 => z + (-b / (2.0 * c)).clamp(lo, hi),
+            _ => z,
+        }
     }
 
     /// Camera rays through `k` × `k` points of the patch: the depth (along the
@@ -629,6 +634,40 @@ fn gaussian_blur(rgb: &[f32], width: usize, sigma: f64) -> Vec<f32> {
     pass(&pass(rgb, true), false)
 }
 
+/// Coefficients (a, b, c) of the least-squares parabola y = a + b·x + c·x²
+/// through `points`, from the 3×3 normal equations (Cramer's rule).
+fn least_squares_parabola(points: &[(f64, f64)]) -> Option<(f64, f64, f64)> {
+    let mut s = [0.0f64; 5]; // Σ x^k, k = 0..4
+    let mut t = [0.0f64; 3]; // Σ y·x^k, k = 0..2
+    for &(x, y) in points {
+        let mut xk = 1.0;
+        for k in 0..5 {
+            s[k] += xk;
+            if k < 3 {
+                t[k] += y * xk;
+            }
+            xk *= x;
+        }
+    }
+    let det3 = |m: [[f64; 3]; 3]| {
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+    };
+    let m = [[s[0], s[1], s[2]], [s[1], s[2], s[3]], [s[2], s[3], s[4]]];
+    let d = det3(m);
+    if d.abs() < 1e-300 || !d.is_finite() {
+        return None;
+    }
+    let column = |k: usize| {
+        let mut mk = m;
+        for (row, &tv) in mk.iter_mut().zip(&t) {
+            row[k] = tv;
+        }
+        det3(mk) / d
+    };
+    Some((column(0), column(1), column(2)))
+}
+
 /// The abscissa of the vertex of the parabola through three points, when it
 /// opens downward, kept within the points' span.
 fn parabola_vertex(x: [f64; 3], y: [f64; 3]) -> Option<f64> {
@@ -654,6 +693,14 @@ mod tests {
         assert!((v - 1.3).abs() < 1e-12, "{v}");
         // Opening upward: no peak.
         assert!(parabola_vertex([0.0, 1.0, 2.0], [1.0, 0.0, 1.0]).is_none());
+    }
+
+    #[test]
+    fn least_squares_parabola_recovers_an_exact_one() {
+        let f = |x: f64| 0.5 - 0.3 * x - 1.7 * x * x;
+        let points: Vec<(f64, f64)> = [-2.0, -0.5, 0.0, 1.0, 3.0].iter().map(|&x| (x, f(x))).collect();
+        let (a, b, c) = least_squares_parabola(&points).unwrap();
+        assert!((a - 0.5).abs() < 1e-9 && (b + 0.3).abs() < 1e-9 && (c + 1.7).abs() < 1e-9);
     }
 
     #[test]
