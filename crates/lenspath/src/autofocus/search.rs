@@ -396,15 +396,18 @@ impl<'a> Focuser<'a> {
         Ok(self.parabolic_peak(z, spp))
     }
 
-    /// Golden-section search for the maximum on [lo, hi] until the bracket is three pitches wide.
+    /// Golden-section search for the maximum on [lo, hi] until the bracket is
+    /// three pitches or one DoF wide.
     fn golden_section(&mut self, mut lo: f64, mut hi: f64, spp: u32, seed: u32) -> Result<(f64, f64)> {
         const INV_PHI: f64 = 0.618_033_988_749_894_9;
         let mut a = hi - INV_PHI * (hi - lo);
         let mut b = lo + INV_PHI * (hi - lo);
         let mut fa = self.measure_at(a, spp, seed)?;
         let mut fb = self.measure_at(b, spp, seed)?;
-        // To a bracket of three pitches; the parabolic fit does the rest.
-        while hi - lo > 3.0 * self.pitch_mm {
+        // To a bracket of three pitches or one DoF, whichever is wider: the
+        // parabolic fit over the evaluations near the peak does the rest.
+        let width = (3.0 * self.pitch_mm).max(self.depth_of_focus_mm(0.5 * (lo + hi)));
+        while hi - lo > width {
             if fa >= fb {
                 (hi, b, fb) = (b, a, fa);
                 a = hi - INV_PHI * (hi - lo);
