@@ -5,6 +5,7 @@
 
 mod autofocus;
 mod bench;
+mod bokeh;
 mod info;
 mod lens;
 mod progress;
@@ -28,6 +29,8 @@ enum Command {
     Render(render::RenderArgs),
     /// Focus the realistic camera on an image patch by contrast or by range.
     Autofocus(autofocus::AutofocusArgs),
+    /// Blur an image with a mask-shaped kernel (bokeh as a post-process).
+    Bokeh(bokeh::BokehArgs),
     /// Show what a scene file holds: meshes, triangles, materials, lights, cameras, bounds, warnings.
     Info(info::InfoArgs),
     /// Analyse a lens: focal lengths, pupils, focus, a layout plot.
@@ -77,6 +80,7 @@ fn main() -> ExitCode {
     let outcome = match cli.command {
         Command::Render(args) => render::run(args),
         Command::Autofocus(args) => autofocus::run(args),
+        Command::Bokeh(args) => bokeh::run(args),
         Command::Info(args) => info::run(args),
         Command::Lens(args) => lens::run(args),
         Command::Bench(BenchArgs {

@@ -7,7 +7,9 @@ use std::sync::Arc;
 use clap::{Args, ValueEnum};
 use lenspath::accel::BvhSettings;
 use lenspath::builtin::{builtin_scene, DEFAULT_MESH_TRIANGLES};
-use lenspath::camera::{Camera, LensFocus, PerspectiveCamera, Radiometry, RealisticCamera, RealisticCameraSettings};
+use lenspath::camera::{
+    Aperture, ApertureShape, Camera, LensFocus, PerspectiveCamera, Radiometry, RealisticCamera, RealisticCameraSettings,
+};
 use lenspath::film::Filter;
 use lenspath::integrator::PathSettings;
 use lenspath::io::image::{check_output_path, write_image};
@@ -234,7 +236,61 @@ impl LensFlags {
                 RadiometryKind::Normalized => Radiometry::Normalized,
                 RadiometryKind::Physical => Radiometry::Physical,
             },
+            aperture: ApertureShape::Circle,
         })
+    }
+}
+
+/// The aperture's shape, for the realistic and thin-lens cameras.
+#[derive(Args, Debug, Default)]
+pub struct ApertureFlags {
+    /// Aperture: an iris of N blades (a regular polygon, a corner at the top).
+    #[arg(long, value_name = "N", conflicts_with_all = ["star", "aperture_mask"])]
+    pub blades: Option<u32>,
+    /// Aperture: turn the blades or the star by this many degrees counter-clockwise.
+    #[arg(long, value_name = "DEG", default_value_t = 0.0)]
+    pub blade_rotation: f64,
+    /// Aperture: bend the blades' edges out, from 0 (straight) to 1 (round).
+    #[arg(long, value_name = "C", default_value_t = 0.0)]
+    pub blade_curvature: f64,
+    /// Aperture: a star of N points.
+    #[arg(long, value_name = "N", conflicts_with = "aperture_mask")]
+    pub star: Option<u32>,
+    /// Aperture: radius of the star's notches over its points'.
+    #[arg(long, value_name = "R", default_value_t = 0.5)]
+    pub star_inner_ratio: f64,
+    /// Aperture: a grayscale transmission mask (PNG, JPEG or EXR; white is open) laid over the
+    /// stop's bounding square, top row up.
+    #[arg(long, value_name = "FILE")]
+    pub aperture_mask: Option<PathBuf>,
+}
+
+impl ApertureFlags {
+    /// The shape the flags ask for (the circle when none).
+    pub fn shape(&self) -> Result<ApertureShape> {
+        let with_flag = |e: Error, flag: &str| match e {
+            Error::InvalidArgument(m) => Error::InvalidArgument(format!("{flag}: {m}")),
+            other => other,
+        };
+        if let Some(path) = &self.aperture_mask {
+            return ApertureShape::load_mask(path);
+        }
+        let shape = match (self.blades, self.star) {
+            (Some(count), _) => ApertureShape::Blades {
+                count,
+                rotation_deg: self.blade_rotation,
+                curvature: self.blade_curvature,
+            },
+            (None, Some(points)) => ApertureShape::Star {
+                points,
+                inner_ratio: self.star_inner_ratio,
+                rotation_deg: self.blade_rotation,
+            },
+            (None, None) => ApertureShape::Circle,
+        };
+        // Checks the values (blade count, curvature, ratio) now, before any rendering.
+        Aperture::new(&shape).map_err(|e| with_flag(e, if self.star.is_some() { "--star" } else { "--blades" }))?;
+        Ok(shape)
     }
 }
 
@@ -273,6 +329,8 @@ pub struct RenderArgs {
     camera: CameraKind,
     #[command(flatten)]
     lens: LensFlags,
+    #[command(flatten)]
+    aperture: ApertureFlags,
     /// Realistic camera: focus on this patch of the image first, X,Y,W,H in fractions of the
     /// image (0 to 1) such as 0.55,0.7,0.1,0.12, with `lenspath autofocus`'s fast strategy.
     #[arg(long, value_name = "X,Y,W,H", value_parser = parse_patch, conflicts_with_all = ["focus_distance", "sensor_depth"])]
@@ -348,6 +406,12 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
     if args.autofocus.is_some() && !matches!(args.camera, CameraKind::Realistic) {
         return Err(Error::InvalidArgument("--autofocus needs --camera realistic".into()));
     }
+    let aperture = args.aperture.shape()?;
+    if aperture != ApertureShape::Circle && matches!(args.camera, CameraKind::Pinhole) {
+        return Err(Error::InvalidArgument(
+            "--blades, --star and --aperture-mask shape a lens's aperture; a pinhole has none (use --camera thin-lens or realistic)".into(),
+        ));
+    }
     let compiled = scene.compile(&BvhSettings::default())?;
     let camera: Box<dyn Camera> = match args.camera {
         CameraKind::Pinhole => Box::new(PerspectiveCamera::pinhole(
@@ -369,14 +433,17 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
                     "--focus-distance must be positive, got {focus}"
                 )));
             }
-            Box::new(PerspectiveCamera::thin_lens(
-                view.pose,
-                fov,
-                settings.width,
-                settings.height,
-                args.aperture_radius,
-                focus,
-            ))
+            Box::new(
+                PerspectiveCamera::thin_lens(
+                    view.pose,
+                    fov,
+                    settings.width,
+                    settings.height,
+                    args.aperture_radius,
+                    focus,
+                )
+                .with_aperture(Arc::new(Aperture::new(&aperture)?)),
+            )
         }
         CameraKind::Realistic => {
             let focus = match (args.sensor_depth, args.focus_distance) {
@@ -391,6 +458,7 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
                 ),
             };
             let mut lens_settings = args.lens.settings(&options, settings.width, settings.height, focus)?;
+            lens_settings.aperture = aperture.clone();
             if let Some(patch) = args.autofocus {
                 lens_settings.focus = LensFocus::SensorPositionMm(crate::autofocus::focus_before_render(
                     &compiled,

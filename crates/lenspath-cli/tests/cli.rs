@@ -308,3 +308,83 @@ fn scene_files_render_and_describe_themselves() {
     );
     assert!(!never.exists());
 }
+
+#[test]
+fn bokeh_spreads_light_into_the_mask_and_refuses_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (48usize, 40usize);
+    let mut rgb = vec![0.01f32; w * h * 3];
+    // One bright point in the middle.
+    rgb[(20 * w + 24) * 3..(20 * w + 24) * 3 + 3].copy_from_slice(&[100.0, 80.0, 60.0]);
+    let image = lenspath::film::Image {
+        width: w as u32,
+        height: h as u32,
+        depth: vec![f32::INFINITY; w * h],
+        rgb,
+        spp_min: 1,
+        spp_requested: 1,
+    };
+    let input = dir.path().join("in.exr");
+    lenspath::io::image::write_image(&input, &image, 0.0).unwrap();
+    let input = input.to_str().unwrap();
+    let mut results = Vec::new();
+    for method in ["direct", "fft"] {
+        let out = dir.path().join(format!("{method}.exr"));
+        let o = lenspath(&[
+            "bokeh",
+            input,
+            "--mask",
+            "blades:3",
+            "--size",
+            "21",
+            "--method",
+            method,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(String::from_utf8_lossy(&o.stdout).contains("with a 21x21 kernel"));
+        results.push(lenspath::io::image::read_exr(&out).unwrap());
+    }
+    let (a, b) = (&results[0], &results[1]);
+    assert!(a.rgb.iter().zip(&b.rgb).all(|(x, y)| (x - y).abs() <= 1e-5 * 100.0));
+    // Light is kept, and the triangle points up: narrow above the point, wide below.
+    let total = |img: &lenspath::film::Image| img.rgb.iter().step_by(3).map(|&v| f64::from(v)).sum::<f64>();
+    assert!((total(a) / total(&image) - 1.0).abs() < 1e-3);
+    let row = |y: u32| (0..w as u32).filter(|&x| a.pixel(x, y)[0] > 0.1).count();
+    assert!(row(14) < row(25) && row(25) > 5, "{} vs {}", row(14), row(25));
+
+    let out = dir.path().join("x.png");
+    let out = out.to_str().unwrap();
+    for (args, expected) in [
+        (
+            vec!["bokeh", input, "--mask", "hexagon", "--out", out],
+            "no such file, and not a shape",
+        ),
+        (
+            vec!["bokeh", input, "--mask", "circle", "--highlights", "4", "--out", out],
+            "is linear",
+        ),
+        (
+            vec!["bokeh", input, "--mask", "circle", "--size", "0", "--out", out],
+            "--size",
+        ),
+        (vec!["bokeh", "nope.png", "--mask", "circle", "--out", out], "nope.png"),
+        (vec!["render", "--blades", "2", "--out", out], "at least 3 blades"),
+        (
+            vec!["render", "--camera", "pinhole", "--star", "5", "--out", out],
+            "a pinhole has none",
+        ),
+        (
+            vec!["render", "--aperture-mask", "nomask.png", "--out", out],
+            "nomask.png",
+        ),
+    ] {
+        let o = lenspath(&args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?} → {err}");
+        assert!(err.contains(expected), "{args:?}: expected '{expected}' in: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+    }
+    assert!(!Path::new(out).exists());
+}

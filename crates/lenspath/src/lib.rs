@@ -31,6 +31,7 @@
 
 pub mod accel;
 pub mod autofocus;
+pub mod bokeh;
 pub mod builtin;
 pub mod camera;
 pub mod error;

@@ -6,7 +6,10 @@ use std::sync::atomic::AtomicBool;
 
 use glam::{Vec2, Vec3};
 use lenspath::accel::BvhSettings;
-use lenspath::camera::{CameraPose, LensFocus, Radiometry, RealisticCamera, RealisticCameraSettings};
+use lenspath::camera::{
+    Aperture, ApertureMask, ApertureShape, CameraPose, LensFocus, PerspectiveCamera, Radiometry, RealisticCamera,
+    RealisticCameraSettings,
+};
 use lenspath::film::{Filter, Image};
 use lenspath::integrator::PathSettings;
 use lenspath::lens::{LensPrescription, LensSystem, BUILTIN_LENSES};
@@ -25,6 +28,7 @@ struct Shot {
     f_number: Option<f64>,
     radiometry: Radiometry,
     spp: u32,
+    aperture: ApertureShape,
 }
 
 fn camera(shot: &Shot) -> RealisticCamera {
@@ -35,6 +39,7 @@ fn camera(shot: &Shot) -> RealisticCamera {
         &RealisticCameraSettings {
             f_number: shot.f_number,
             radiometry: shot.radiometry,
+            aperture: shot.aperture.clone(),
             ..RealisticCameraSettings::new(LensPrescription::load(shot.lens).unwrap(), shot.sensor_mm, shot.focus)
         },
     )
@@ -94,6 +99,7 @@ fn a_uniform_scene_reads_its_radiance_at_the_centre_and_vignettes_symmetrically(
             f_number: None,
             radiometry: Radiometry::Normalized,
             spp: 256,
+            aperture: ApertureShape::Circle,
         };
         let image = shoot(uniform_environment(), &shot);
         assert!(image.rgb.iter().all(|v| v.is_finite() && *v >= 0.0), "{lens}");
@@ -138,6 +144,7 @@ fn physical_exposure_darkens_with_the_square_of_the_f_number() {
         f_number,
         radiometry: Radiometry::Physical,
         spp: 256,
+        aperture: ApertureShape::Circle,
     };
     let open = shoot(uniform_environment(), &shot(None)).mean()[1];
     let f8 = shoot(uniform_environment(), &shot(Some(8.0))).mean()[1];
@@ -230,21 +237,31 @@ fn point_shot(f_number: Option<f64>) -> Shot {
         f_number,
         radiometry: Radiometry::Normalized,
         spp: 128,
+        aperture: ApertureShape::Circle,
     }
 }
 
-#[test]
-fn a_point_in_focus_images_into_about_a_pixel() {
-    let shot = point_shot(Some(4.0));
+/// A point at the focus distance (2 m) through `aperture` at f/4 puts over
+/// 80% of its light within the 2×2 pixels around the image centre (60 µm square).
+fn assert_in_focus_point_is_a_point(aperture: ApertureShape) {
+    let shot = Shot {
+        aperture,
+        ..point_shot(Some(4.0))
+    };
     let image = shoot(point_source(2.0, 0.0004), &shot);
-    // Energy within the 2×2 pixels around the image centre (60 µm square).
     let total = block_mean(&image, 0..96, 0..96) * 96.0 * 96.0;
     let core = block_mean(&image, 47..49, 47..49) * 4.0;
     assert!(
         core > 0.8 * total,
-        "only {:.0}% of the light in the central 2x2 pixels",
+        "{:?}: only {:.0}% of the light in the central 2x2 pixels",
+        shot.aperture,
         100.0 * core / total
     );
+}
+
+#[test]
+fn a_point_in_focus_images_into_about_a_pixel() {
+    assert_in_focus_point_is_a_point(ApertureShape::Circle);
 }
 
 #[test]
@@ -297,6 +314,7 @@ fn most_generated_rays_get_through_at_the_centre() {
                 f_number,
                 radiometry: Radiometry::Normalized,
                 spp: 1,
+                aperture: ApertureShape::Circle,
             });
             let centre = cam.passing_fraction(Vec2::new(180.0, 120.0), 20_000);
             assert!(
@@ -328,6 +346,7 @@ fn pupil_sampling_loses_no_light_across_the_field() {
             f_number: None,
             radiometry: Radiometry::Normalized,
             spp: 1,
+            aperture: ApertureShape::Circle,
         });
         let system = cam.system();
         let sensor_z = cam.sensor_z_mm();
@@ -478,4 +497,169 @@ fn a_crop_is_the_same_pixels_as_the_full_render() {
         err.contains("crop 13x9 at (30, 11) is empty or leaves the 37x29 image"),
         "{err}"
     );
+}
+
+/// The pixels of `image` above half its bright level (the 90th percentile).
+fn bright_pixels(image: &Image) -> Vec<(u32, u32)> {
+    let mut values: Vec<f32> = image.rgb.chunks_exact(3).map(|p| p[1]).filter(|&v| v > 0.0).collect();
+    values.sort_by(f32::total_cmp);
+    let level = 0.5 * values[values.len() * 9 / 10];
+    (0..image.height)
+        .flat_map(|y| (0..image.width).map(move |x| (x, y)))
+        .filter(|&(x, y)| image.pixel(x, y)[1] > level)
+        .collect()
+}
+
+/// Intersection over union of the bright pixels with `aperture` scaled to
+/// the same area about their centroid, turned by 180° when `turned`.
+fn iou_with_shape(bright: &[(u32, u32)], aperture: &Aperture, turned: bool) -> f64 {
+    let n = bright.len() as f64;
+    let centre = bright.iter().fold(glam::DVec2::ZERO, |c, &(x, y)| {
+        c + glam::DVec2::new(f64::from(x) + 0.5, f64::from(y) + 0.5) / n
+    });
+    let scale = (n / (std::f64::consts::PI * aperture.open_fraction())).sqrt();
+    let sign = if turned { -1.0 } else { 1.0 };
+    // Image rows run down, the shape's y up.
+    let inside = |x: u32, y: u32| {
+        let p = glam::DVec2::new(f64::from(x) + 0.5 - centre.x, centre.y - f64::from(y) - 0.5) / scale;
+        aperture.transmission(p * sign) > 0.5
+    };
+    let size = 96;
+    let mut union = 0;
+    let mut intersection = 0;
+    for y in 0..size {
+        for x in 0..size {
+            let (a, b) = (bright.contains(&(x, y)), inside(x, y));
+            union += u32::from(a || b);
+            intersection += u32::from(a && b);
+        }
+    }
+    f64::from(intersection) / f64::from(union)
+}
+
+/// An out-of-focus point images as the aperture's shape: beyond the focus
+/// plane as the shape lies in the stop, nearer than it turned by 180°.
+#[test]
+fn an_out_of_focus_point_images_as_the_aperture_shape() {
+    for text in ["blades:3", "star:5:0.45:0"] {
+        let shape = ApertureShape::parse(text).unwrap();
+        let aperture = Aperture::new(&shape).unwrap();
+        for (distance_m, turned) in [(1.0f32, true), (20.0, false)] {
+            let shot = Shot {
+                pixels: (96, 96),
+                sensor_mm: (1.92, 1.92),
+                f_number: None,
+                spp: 1024,
+                aperture: shape.clone(),
+                ..point_shot(None)
+            };
+            let image = shoot(point_source(distance_m, source_radius_m(distance_m)), &shot);
+            let bright = bright_pixels(&image);
+            assert!(
+                bright.len() > 100,
+                "{text} at {distance_m} m: a spot of {} pixels",
+                bright.len()
+            );
+            let (right, wrong) = (
+                iou_with_shape(&bright, &aperture, turned),
+                iou_with_shape(&bright, &aperture, !turned),
+            );
+            assert!(
+                right >= 0.9 && wrong < 0.8,
+                "{text} at {distance_m} m: IoU {right:.3} with the shape as expected, {wrong:.3} turned the other way"
+            );
+        }
+    }
+}
+
+#[test]
+fn an_in_focus_point_stays_a_point_through_a_shaped_aperture() {
+    assert_in_focus_point_is_a_point(ApertureShape::parse("blades:5:0:0.3").unwrap());
+}
+
+/// A mask whose left half is open.
+fn half_open_mask() -> ApertureShape {
+    let values = (0..128 * 128).map(|k| if k % 128 < 64 { 1.0 } else { 0.0 }).collect();
+    ApertureShape::Mask(std::sync::Arc::new(ApertureMask::new(128, 128, values).unwrap()))
+}
+
+/// Light follows the open area, through the real lens and the thin lens:
+/// half a mask gives half the light, a hexagon 3√3/(2π) of the circle's.
+#[test]
+fn light_through_a_shaped_aperture_follows_its_open_area() {
+    for (shape, expected) in [
+        (half_open_mask(), 0.5),
+        (
+            ApertureShape::parse("blades:6").unwrap(),
+            3.0 * 3f64.sqrt() / (2.0 * std::f64::consts::PI),
+        ),
+    ] {
+        let shot = Shot {
+            lens: "dgauss50",
+            sensor_mm: (0.36, 0.24),
+            pixels: (6, 4),
+            focus: LensFocus::Distance(5.0),
+            f_number: Some(4.0),
+            radiometry: Radiometry::Normalized,
+            spp: 1024,
+            aperture: shape.clone(),
+        };
+        let through_lens = shoot(uniform_environment(), &shot).mean()[1];
+        let thin =
+            PerspectiveCamera::thin_lens(CameraPose::look_at(Vec3::ZERO, Vec3::Z, Vec3::Y), 30.0, 6, 4, 0.1, 3.0)
+                .with_aperture(std::sync::Arc::new(Aperture::new(&shape).unwrap()));
+        let settings = RenderSettings {
+            width: 6,
+            height: 4,
+            spp: 1024,
+            path: PathSettings {
+                max_depth: 1,
+                light_samples: 1,
+            },
+            seed: 3,
+            filter: Filter::Box,
+            threads: None,
+            tile_size: 16,
+            crop: None,
+            depth: false,
+        };
+        let compiled = uniform_environment().compile(&BvhSettings::default()).unwrap();
+        let thin_lens = render(&compiled, &thin, &settings, &|_, _| {}, &AtomicBool::new(false))
+            .unwrap()
+            .image
+            .mean()[1];
+        for (camera, reading) in [("realistic", through_lens), ("thin lens", thin_lens)] {
+            assert!(
+                (reading / expected - 1.0).abs() < 0.02,
+                "{shape:?} through the {camera} camera: {reading:.4}, open area {expected:.4}"
+            );
+        }
+    }
+}
+
+/// Shaped apertures are sampled at the stop, not by rejection: with a
+/// mask open over 4% of the stop, as many rays get through as wide open
+/// but for the pupil-grid share.
+#[test]
+fn a_small_opening_costs_no_rejected_rays() {
+    let n = 128;
+    let values = (0..n * n)
+        .map(|k| {
+            let (x, y) = ((k % n) as f64 / n as f64 - 0.5, (k / n) as f64 / n as f64 - 0.5);
+            if x.hypot(y) < 0.1 {
+                1.0
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let mask = ApertureShape::Mask(std::sync::Arc::new(ApertureMask::new(n, n, values).unwrap()));
+    let cam = camera(&Shot {
+        pixels: (360, 240),
+        sensor_mm: (36.0, 24.0),
+        aperture: mask,
+        ..point_shot(None)
+    });
+    let passing = cam.passing_fraction(Vec2::new(180.0, 120.0), 20_000);
+    assert!(passing >= 0.85, "{:.1}% of the rays pass", 100.0 * passing);
 }

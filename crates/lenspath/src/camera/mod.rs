@@ -5,12 +5,17 @@
 //! compound-lens camera, say) implements [`Camera`] and may return `None`
 //! for rays its optics block.
 
+use std::f64::consts::PI;
+use std::sync::Arc;
+
 use glam::{Affine3A, Mat3A, Vec2, Vec3, Vec3A};
 
 use crate::ray::Ray;
 use crate::sampling::concentric_disk;
 
+mod aperture;
 mod realistic;
+pub use aperture::{Aperture, ApertureMask, ApertureShape};
 pub use realistic::{LensFocus, Radiometry, RealisticCamera, RealisticCameraSettings};
 
 /// Where on the film and where on the lens a camera ray starts.
@@ -70,8 +75,9 @@ impl CameraPose {
 }
 
 /// A perspective camera: a pinhole when `aperture_radius` is 0, otherwise
-/// an ideal thin lens focused at `focus_distance` (pbrt-v4 `PerspectiveCamera`).
-#[derive(Clone, Copy, Debug)]
+/// an ideal thin lens focused at `focus_distance` (pbrt-v4 `PerspectiveCamera`),
+/// with a round aperture or any [`ApertureShape`].
+#[derive(Clone, Debug)]
 pub struct PerspectiveCamera {
     pose: CameraPose,
     width: f32,
@@ -79,6 +85,8 @@ pub struct PerspectiveCamera {
     tan_half_fov_y: f32,
     aperture_radius: f32,
     focus_distance: f32,
+    /// `None`: the full circle.
+    aperture: Option<Arc<Aperture>>,
 }
 
 impl PerspectiveCamera {
@@ -103,7 +111,15 @@ impl PerspectiveCamera {
             tan_half_fov_y: (0.5 * fov_y_deg.to_radians()).tan(),
             aperture_radius,
             focus_distance,
+            aperture: None,
         }
+    }
+
+    /// The same camera with its aperture (of radius `aperture_radius`) shaped
+    /// like `aperture`. The image darkens with the open area, as a real iris does.
+    pub fn with_aperture(mut self, aperture: Arc<Aperture>) -> Self {
+        self.aperture = (!aperture.is_circle()).then_some(aperture);
+        self
     }
 
     /// Camera-space direction (not normalised, z = 1) through a raster position.
@@ -118,19 +134,32 @@ impl PerspectiveCamera {
 impl Camera for PerspectiveCamera {
     fn generate_ray(&self, sample: CameraSample) -> Option<CameraRay> {
         let dir = self.direction_through(sample.film);
-        let (origin, dir) = if self.aperture_radius > 0.0 {
+        let (origin, dir, weight) = if self.aperture_radius > 0.0 {
+            // A point of the aperture and its weight: the shape's transmission
+            // over its sampling density, relative to the full circle's 1/π.
+            let (lens, weight) = match &self.aperture {
+                None => (concentric_disk(sample.lens), 1.0),
+                Some(aperture) => {
+                    let (p, pdf) = aperture.sample(sample.lens);
+                    let transmission = aperture.transmission(p);
+                    if transmission <= 0.0 {
+                        return None;
+                    }
+                    (p.as_vec2(), (transmission / (PI * pdf)) as f32)
+                }
+            };
             // Every ray through the lens meets the others on the plane of focus.
-            let lens = self.aperture_radius * concentric_disk(sample.lens);
+            let lens = self.aperture_radius * lens;
             let origin = Vec3::new(lens.x, lens.y, 0.0);
             let focus = dir * self.focus_distance;
-            (origin, focus - origin)
+            (origin, focus - origin, weight)
         } else {
-            (Vec3::ZERO, dir)
+            (Vec3::ZERO, dir, 1.0)
         };
         let m = &self.pose.render_from_camera;
         Some(CameraRay {
             ray: Ray::new(m.transform_point3(origin), m.transform_vector3(dir).normalize()),
-            weight: 1.0,
+            weight,
         })
     }
 

@@ -11,11 +11,21 @@
 //! `cos⁴θ · A / d²` (A: the sampled area, d: sensor to rear plane), pbrt's
 //! irradiance estimate, scaled so the centre of the image reads the radiance
 //! of a uniform scene.
+//!
+//! A shaped aperture ([`ApertureShape`]) is sampled at the stop itself: a
+//! point drawn from the shape is carried to the rear plane by the band's
+//! affine fit of the rear-plane → stop map (fitted when the camera is built),
+//! mixed with a tenth of the pupil-grid samples so that every open direction
+//! has a density; the transmission is read where the traced ray really
+//! crosses the stop. No sample is rejected for the shape's sake, so the cost
+//! does not grow as the opening shrinks, and the light follows the open area.
 
-use glam::{DVec2, DVec3, Vec2, Vec3};
+use std::sync::Arc;
+
+use glam::{DMat2, DMat3, DVec2, DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
-use super::{Camera, CameraPose, CameraRay, CameraSample};
+use super::{Aperture, ApertureShape, Camera, CameraPose, CameraRay, CameraSample};
 use crate::error::{Error, Result};
 use crate::lens::{Direction, LensPrescription, LensRay, LensSystem};
 use crate::ray::Ray;
@@ -32,6 +42,9 @@ const FILM_POSITIONS_PER_BAND: usize = 3;
 const BOUNDING_GRID: usize = 48;
 /// Real-ray height used when focusing, in mm (the CS184 lens simulator's).
 const FOCUS_RAY_HEIGHT_MM: f64 = 0.1;
+/// Share of a shaped aperture's samples drawn from the pupil grid (defensive
+/// sampling: covers whatever the affine stop map misses).
+const GRID_SHARE: f64 = 0.1;
 
 /// Where the sensor goes.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -67,6 +80,8 @@ pub struct RealisticCameraSettings {
     pub scene_unit_m: f64,
     /// Exposure normalisation.
     pub radiometry: Radiometry,
+    /// Shape of the opening at the aperture stop.
+    pub aperture: ApertureShape,
 }
 
 impl RealisticCameraSettings {
@@ -80,6 +95,7 @@ impl RealisticCameraSettings {
             f_number: None,
             scene_unit_m: 1.0,
             radiometry: Radiometry::Normalized,
+            aperture: ApertureShape::Circle,
         }
     }
 }
@@ -100,6 +116,8 @@ struct PupilGrid {
     cell: DVec2,
     /// Indices (`row · PUPIL_GRID + column`) of the usable cells.
     cells: Vec<u32>,
+    /// Whether each cell is usable, by index.
+    usable: Vec<bool>,
 }
 
 impl PupilGrid {
@@ -110,10 +128,18 @@ impl PupilGrid {
         min: DVec2::ZERO,
         cell: DVec2::ONE,
         cells: Vec::new(),
+        usable: Vec::new(),
     };
 
     fn area(&self) -> f64 {
         self.cells.len() as f64 * self.cell.x * self.cell.y
+    }
+
+    /// Whether `q` (rear plane) lies in a usable cell for a film point at radius `r` on +x.
+    fn contains(&self, q: DVec2, r: f64) -> bool {
+        let g = (q - self.centre - self.centre_slope * (r - self.r0) - self.min) / self.cell;
+        let n = PUPIL_GRID as f64;
+        (0.0..n).contains(&g.x) && (0.0..n).contains(&g.y) && self.usable[g.y as usize * PUPIL_GRID + g.x as usize]
     }
 
     /// A uniform point in the usable cells from `u` in [0, 1)², for a film point at radius `r` on +x.
@@ -144,6 +170,8 @@ pub struct RealisticCamera {
     band_width_mm: f64,
     pupils: Vec<PupilGrid>,
     weight_scale: f64,
+    /// A shaped aperture and each band's stop map (`None`: the plain circle).
+    shaped: Option<(Arc<Aperture>, Vec<Option<StopMap>>)>,
 }
 
 impl RealisticCamera {
@@ -252,6 +280,18 @@ impl RealisticCamera {
                 settings.lens.name()
             )));
         }
+        let aperture = Aperture::new(&settings.aperture)?;
+        let shaped = (!aperture.is_circle()).then(|| {
+            let maps = pupils
+                .par_iter()
+                .enumerate()
+                .map(|(band, grid)| {
+                    let r0 = band as f64 * band_width_mm;
+                    fit_stop_map(&system, sensor_z_mm, grid, r0, band_width_mm)
+                })
+                .collect();
+            (Arc::new(aperture), maps)
+        });
         let mut camera = RealisticCamera {
             pose,
             system,
@@ -263,6 +303,7 @@ impl RealisticCamera {
             band_width_mm,
             pupils,
             weight_scale: 1.0,
+            shaped: None,
         };
         // Normalise by the centre's irradiance from a uniform unit radiance:
         // with this lens as set, or wide open for physical exposure.
@@ -279,6 +320,7 @@ impl RealisticCamera {
             _ => camera.centre_irradiance(),
         };
         camera.weight_scale = 1.0 / centre_irradiance;
+        camera.shaped = shaped;
         Ok(camera)
     }
 
@@ -325,6 +367,58 @@ impl RealisticCamera {
         Some((ray, weight))
     }
 
+    /// A ray through a shaped aperture, traced out of the lens, with its
+    /// unnormalised weight: the mixture of stop-shape samples carried to the
+    /// rear plane and pupil-grid samples (see the module notes).
+    fn shaped_ray(
+        &self,
+        aperture: &Aperture,
+        maps: &[Option<StopMap>],
+        p_film: DVec3,
+        u: Vec2,
+    ) -> Option<(LensRay, f64)> {
+        let r = p_film.truncate().length();
+        let band = ((r / self.band_width_mm) as usize).min(self.pupils.len() - 1);
+        let (grid, map) = (&self.pupils[band], maps[band].as_ref()?);
+        if grid.cells.is_empty() {
+            return None;
+        }
+        // The band's grid and map are for film points on +x: rotate by the azimuth.
+        let azimuth = if r > 0.0 {
+            DVec2::new(p_film.x / r, p_film.y / r)
+        } else {
+            DVec2::X
+        };
+        let to_band = DVec2::new(azimuth.x, -azimuth.y);
+        let (a, b) = map.at(r);
+        let stop_radius = self.system.stop_radius();
+        let ux = f64::from(u.x);
+        let q = if ux < GRID_SHARE {
+            grid.sample(Vec2::new((ux / GRID_SHARE) as f32, u.y), r)
+        } else {
+            let (s, _) = aperture.sample(Vec2::new(((ux - GRID_SHARE) / (1.0 - GRID_SHARE)) as f32, u.y));
+            a.inverse() * (to_band.rotate(s * stop_radius) - b)
+        };
+        // The mixture's density at q, per mm² of the rear plane.
+        let predicted_stop = azimuth.rotate(a * q + b) / stop_radius;
+        let from_shape = aperture.pdf(predicted_stop) * a.determinant().abs() / (stop_radius * stop_radius);
+        let from_grid = if grid.contains(q, r) { 1.0 / grid.area() } else { 0.0 };
+        let pdf = GRID_SHARE * from_grid + (1.0 - GRID_SHARE) * from_shape;
+        if pdf <= 0.0 {
+            return None;
+        }
+        let target = azimuth.rotate(q);
+        let ray = LensRay::between(p_film, DVec3::new(target.x, target.y, self.rear_z_mm));
+        let (out, at_stop) = self.system.trace_to_scene_via_stop(&ray)?;
+        let transmission = aperture.transmission(at_stop.truncate() / stop_radius);
+        if transmission <= 0.0 {
+            return None;
+        }
+        let cos_theta = -ray.direction.z;
+        let d = self.sensor_z_mm - self.rear_z_mm;
+        Some((out, transmission * cos_theta.powi(4) / (d * d * pdf)))
+    }
+
     /// ∫ cos⁴θ / d² dA over the open pupil from the sensor centre (16 points per cell).
     fn centre_irradiance(&self) -> f64 {
         let grid = &self.pupils[0];
@@ -350,14 +444,11 @@ impl RealisticCamera {
     /// Fraction of `samples` generated rays (pseudo-random lens samples) that
     /// get through the lens from a raster position.
     pub fn passing_fraction(&self, film: Vec2, samples: usize) -> f64 {
-        let p = self.film_point(film);
         let mut rng = Rng::new(0x5eed);
         let passed = (0..samples)
             .filter(|_| {
-                let u = Vec2::new(rng.uniform(), rng.uniform());
-                self.lens_ray(p, u)
-                    .and_then(|(ray, _)| self.system.trace(&ray, Direction::ToScene))
-                    .is_some()
+                let lens = Vec2::new(rng.uniform(), rng.uniform());
+                self.generate_ray(CameraSample { film, lens }).is_some()
             })
             .count();
         passed as f64 / samples as f64
@@ -461,8 +552,67 @@ fn bound_pupil(system: &LensSystem, sensor_z: f64, r0: f64, width: f64) -> Pupil
         centre_slope,
         min: lo,
         cell,
+        usable: (0..PUPIL_GRID * PUPIL_GRID)
+            .map(|k| cells.binary_search(&(k as u32)).is_ok())
+            .collect(),
         cells,
     }
+}
+
+/// The affine map s = A q + b from rear-plane points q to the points s where
+/// rays from a film point on +x cross the stop, least-squares fitted, at the
+/// two ends of a sensor band (interpolated between them).
+#[derive(Clone, Copy, Debug)]
+struct StopMap {
+    r0: f64,
+    width: f64,
+    ends: [(DMat2, DVec2); 2],
+}
+
+impl StopMap {
+    /// A and b for a film point at radius `r` on +x.
+    fn at(&self, r: f64) -> (DMat2, DVec2) {
+        let t = ((r - self.r0) / self.width).clamp(0.0, 1.0);
+        let ([a0, a1], [b0, b1]) = ([self.ends[0].0, self.ends[1].0], [self.ends[0].1, self.ends[1].1]);
+        (a0 * (1.0 - t) + a1 * t, b0.lerp(b1, t))
+    }
+}
+
+/// Fits the [`StopMap`] of a band from rays through its grid's usable cells.
+fn fit_stop_map(system: &LensSystem, sensor_z: f64, grid: &PupilGrid, r0: f64, width: f64) -> Option<StopMap> {
+    let fit_at = |r: f64| {
+        // Normal equations of the two least-squares problems s.x, s.y ~ (q.x, q.y, 1).
+        let (mut m, mut rhs_x, mut rhs_y, mut n) = (DMat3::ZERO, DVec3::ZERO, DVec3::ZERO, 0);
+        for &k in &grid.cells {
+            let (row, column) = ((k as usize / PUPIL_GRID) as f64, (k as usize % PUPIL_GRID) as f64);
+            let q = grid.centre
+                + grid.centre_slope * (r - grid.r0)
+                + grid.min
+                + (DVec2::new(column, row) + 0.5) * grid.cell;
+            let ray = LensRay::between(DVec3::new(r, 0.0, sensor_z), DVec3::new(q.x, q.y, system.rear_z()));
+            if let Some((_, s)) = system.trace_to_scene_via_stop(&ray) {
+                let v = DVec3::new(q.x, q.y, 1.0);
+                m += DMat3::from_cols(v * v.x, v * v.y, v);
+                rhs_x += v * s.x;
+                rhs_y += v * s.y;
+                n += 1;
+            }
+        }
+        if n < 3 || m.determinant().abs() < 1e-300 {
+            return None;
+        }
+        let inverse = m.inverse();
+        let (cx, cy) = (inverse * rhs_x, inverse * rhs_y);
+        let a = DMat2::from_cols(DVec2::new(cx.x, cy.x), DVec2::new(cx.y, cy.y));
+        (a.determinant().abs() > 1e-12).then_some((a, DVec2::new(cx.z, cy.z)))
+    };
+    let (start, end) = (fit_at(r0), fit_at(r0 + width));
+    let ends = match (start, end) {
+        (Some(a), Some(b)) => [a, b],
+        (Some(a), None) | (None, Some(a)) => [a, a],
+        (None, None) => return None,
+    };
+    Some(StopMap { r0, width, ends })
 }
 
 impl RealisticCamera {
@@ -486,12 +636,19 @@ impl RealisticCamera {
 
 impl Camera for RealisticCamera {
     fn generate_ray(&self, sample: CameraSample) -> Option<CameraRay> {
+        if let Some((aperture, maps)) = &self.shaped {
+            let (out, weight) = self.shaped_ray(aperture, maps, self.film_point(sample.film), sample.lens)?;
+            return Some(self.scene_ray(&out, weight));
+        }
         let (ray, weight) = self.lens_ray(self.film_point(sample.film), sample.lens)?;
         let out = self.system.trace(&ray, Direction::ToScene)?;
         Some(self.scene_ray(&out, weight))
     }
 
     fn generate_ray_pair(&self, samples: [CameraSample; 2]) -> [Option<CameraRay>; 2] {
+        if self.shaped.is_some() {
+            return samples.map(|s| self.generate_ray(s));
+        }
         let starts = samples.map(|s| self.lens_ray(self.film_point(s.film), s.lens));
         let [Some((a, weight_a)), Some((b, weight_b))] = starts else {
             // A film point with no open pupil: trace whichever ray there is on its own.

@@ -50,6 +50,85 @@ pub fn linear_to_srgb(x: f32) -> f32 {
     }
 }
 
+/// The sRGB transfer function (IEC 61966-2-1) from encoded to linear.
+pub fn srgb_to_linear(x: f32) -> f32 {
+    if x <= 0.040_45 {
+        x / 12.92
+    } else {
+        ((x + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// An image read for processing, and how its values were stored.
+#[derive(Clone, Debug)]
+pub struct ReadImage {
+    /// The pixels, in linear light (PNG and JPEG are decoded from sRGB).
+    pub image: Image,
+    /// Whether the file held display-referred 8- or 16-bit sRGB values (PNG,
+    /// JPEG) rather than linear floats (EXR): its highlights are clipped at 1.
+    pub display_referred: bool,
+}
+
+/// Reads a PNG, JPEG or EXR image as linear RGB (see [`ReadImage`]).
+pub fn read_image(path: &Path) -> Result<ReadImage> {
+    if is_exr(path) {
+        return Ok(ReadImage {
+            image: read_exr(path)?,
+            display_referred: false,
+        });
+    }
+    let decoded = decode(path)?.to_rgb32f();
+    let (width, height) = decoded.dimensions();
+    let rgb: Vec<f32> = decoded.into_raw().into_iter().map(srgb_to_linear).collect();
+    Ok(ReadImage {
+        image: Image {
+            width,
+            height,
+            depth: vec![f32::INFINITY; rgb.len() / 3],
+            rgb,
+            spp_min: 0,
+            spp_requested: 0,
+        },
+        display_referred: true,
+    })
+}
+
+/// Reads a grayscale map such as an aperture mask: width, height and values
+/// row-major from the top. PNG and JPEG gray levels are read as fractions of
+/// full white, not linearised (a painted mask's gray is its transmission);
+/// EXR values as stored; colour becomes Rec. 709 luminance.
+pub fn read_gray(path: &Path) -> Result<(usize, usize, Vec<f32>)> {
+    let luminance = |rgb: &[f32]| 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2];
+    if is_exr(path) {
+        let image = read_exr(path)?;
+        let values = image.rgb.chunks_exact(3).map(luminance).collect();
+        return Ok((image.width as usize, image.height as usize, values));
+    }
+    let decoded = decode(path)?.to_rgb32f();
+    let (width, height) = decoded.dimensions();
+    let values = decoded.as_raw().chunks_exact(3).map(luminance).collect();
+    Ok((width as usize, height as usize, values))
+}
+
+fn is_exr(path: &Path) -> bool {
+    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+}
+
+/// Decodes a PNG or JPEG, with errors naming the file.
+fn decode(path: &Path) -> Result<::image::DynamicImage> {
+    let reader = ::image::ImageReader::open(path)
+        .map_err(|e| io_error(path, e))?
+        .with_guessed_format()
+        .map_err(|e| io_error(path, e))?;
+    reader.decode().map_err(|e| match e {
+        ::image::ImageError::IoError(io) => io_error(path, io),
+        other => Error::Parse {
+            path: path.to_path_buf(),
+            message: format!("not a readable PNG, JPEG or EXR image: {other}"),
+        },
+    })
+}
+
 /// Fails early (before a long render) when `path` has an unknown extension
 /// or its directory cannot be written.
 pub fn check_output_path(path: &Path) -> Result<ImageFormat> {
@@ -125,7 +204,8 @@ fn write_exr(tmp: &Path, image: &Image) -> Result<()> {
         .map_err(|e| io_error(tmp, std::io::Error::other(e.to_string())))
 }
 
-/// Reads an EXR written by [`write_image`] back (RGB, Z and the spp attributes).
+/// Reads an EXR: RGB (or a single gray channel, `Y` or the only one), `Z`
+/// if present (else infinite depth), and lenspath's spp attribute if present.
 pub fn read_exr(path: &Path) -> Result<Image> {
     use exr::prelude::{read_first_flat_layer_from_file, AttributeValue, Text};
     let fail = |m: String| Error::Parse {
@@ -143,7 +223,18 @@ pub fn read_exr(path: &Path) -> Result<Image> {
             .map(|c| c.sample_data.values_as_f32().collect::<Vec<f32>>())
             .ok_or_else(|| fail(format!("no '{name}' channel")))
     };
-    let (r, g, b) = (find("R")?, find("G")?, find("B")?);
+    // RGB, or one gray channel (Y, or the only one there is) for all three.
+    let channels = &img.layer_data.channel_data.list;
+    let (r, g, b) = match (find("R"), find("G"), find("B")) {
+        (Ok(r), Ok(g), Ok(b)) => (r, g, b),
+        _ => {
+            let gray = find("Y").or_else(|e| match &channels[..] {
+                [only] => Ok(only.sample_data.values_as_f32().collect()),
+                _ => Err(e),
+            })?;
+            (gray.clone(), gray.clone(), gray)
+        }
+    };
     let depth = find("Z").unwrap_or_else(|_| vec![f32::INFINITY; r.len()]);
     let (spp_min, spp_requested) = match img.layer_data.attributes.other.get(&Text::from(SPP_ATTRIBUTE)) {
         Some(AttributeValue::IntVec2(v)) => (v.0.max(0) as u32, v.1.max(0) as u32),

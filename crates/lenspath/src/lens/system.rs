@@ -226,6 +226,20 @@ impl LensSystem {
         Some(ray)
     }
 
+    /// [`LensSystem::trace`] toward the scene, also returning where the ray
+    /// crossed the aperture stop (what a shaped aperture's transmission is read at).
+    pub fn trace_to_scene_via_stop(&self, ray: &LensRay) -> Option<(LensRay, DVec3)> {
+        let stop_in_travel = self.surfaces.len() - 1 - self.stop;
+        let (mut crossed, mut at_stop) = (0, DVec3::ZERO);
+        let out = self.trace_visiting(ray, Direction::ToScene, |p| {
+            if crossed == stop_in_travel {
+                at_stop = p;
+            }
+            crossed += 1;
+        })?;
+        Some((out, at_stop))
+    }
+
     /// [`LensSystem::trace`] for `N` rays at once. Their arithmetic chains
     /// are independent, so the processor overlaps them: tracing is bound by
     /// the latency of square roots, not by their throughput.
@@ -683,6 +697,10 @@ mod tests {
                 let Some(out) = lens.trace(&ray, Direction::ToScene) else {
                     continue;
                 };
+                // The same ray, with the point where it crossed the stop (at z = 0).
+                let (via, at_stop) = lens.trace_to_scene_via_stop(&ray).unwrap();
+                assert_eq!((via.origin, via.direction), (out.origin, out.direction));
+                assert!(at_stop.z.abs() < 1e-12 && at_stop.truncate().length() <= lens.stop_radius());
                 let back = LensRay {
                     origin: out.origin + out.direction * 25.0,
                     direction: -out.direction,

@@ -1,0 +1,175 @@
+//! `lenspath bokeh`: blur an image with a mask-shaped kernel.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use clap::{Args, ValueEnum};
+use lenspath::bokeh::{choose_method, convolve_planes, lift_highlights, Edges, Kernel, KernelSize, Method};
+use lenspath::camera::{Aperture, ApertureShape};
+use lenspath::io::image::{check_output_path, read_gray, read_image, write_image};
+use lenspath::{Error, Result};
+
+use crate::Outcome;
+
+/// Convolution methods.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum MethodKind {
+    /// Shift-and-add over the open mask pixels (the reference).
+    Direct,
+    /// FFT with zero padding.
+    Fft,
+    /// Whichever is faster for this image and kernel.
+    Auto,
+}
+
+/// What lies beyond the image's edges.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum EdgesKind {
+    /// Divide by the share of the kernel inside the image: no dark border.
+    Renormalize,
+    /// Black beyond the edges (OpenCV's BORDER_CONSTANT): the border darkens.
+    Black,
+}
+
+/// Kernel size: pixels of its longer side, or the image's size.
+#[derive(Clone, Copy, Debug)]
+pub enum SizeArg {
+    Pixels(u32),
+    Full,
+}
+
+fn parse_size(s: &str) -> std::result::Result<SizeArg, String> {
+    if s.eq_ignore_ascii_case("full") {
+        return Ok(SizeArg::Full);
+    }
+    match s.parse::<u32>() {
+        Ok(n) if (1..=16384).contains(&n) => Ok(SizeArg::Pixels(n)),
+        _ => Err(format!("expected a size in pixels (1 to 16384) or 'full', got '{s}'")),
+    }
+}
+
+/// Options of `lenspath bokeh`.
+#[derive(Args, Debug)]
+pub struct BokehArgs {
+    /// Image to blur: PNG or JPEG (sRGB, linearised before blurring and encoded again after) or EXR (linear).
+    image: PathBuf,
+    /// The blur's shape: a grayscale image (PNG, JPEG or EXR; white is open), or circle,
+    /// blades:N[:ROTATION_DEG[:CURVATURE]] or star:N[:INNER_RATIO[:ROTATION_DEG]].
+    #[arg(long)]
+    mask: String,
+    /// Output image: .png (sRGB) or .exr (linear).
+    #[arg(long)]
+    out: PathBuf,
+    /// Kernel size: its longer side in pixels, or 'full' to resize it to the image's width and
+    /// height [default: a mask image's own size; 64 for a shape].
+    #[arg(long, value_parser = parse_size)]
+    size: Option<SizeArg>,
+    /// How to convolve.
+    #[arg(long, value_enum, default_value = "auto")]
+    method: MethodKind,
+    /// What lies beyond the image's edges.
+    #[arg(long, value_enum, default_value = "renormalize")]
+    edges: EdgesKind,
+    /// PNG or JPEG input: multiply its highlights by up to GAIN before blurring, so small
+    /// lights bloom into bright discs as they would from a linear image.
+    #[arg(long, value_name = "GAIN")]
+    highlights: Option<f32>,
+    /// With --highlights: the stored (sRGB) brightness, 0 to 1, where the lift starts.
+    #[arg(long, value_name = "T", default_value_t = 0.9)]
+    threshold: f32,
+}
+
+/// Runs `lenspath bokeh`.
+pub fn run(args: BokehArgs) -> Result<Outcome> {
+    check_output_path(&args.out)?;
+    if let Some(gain) = args.highlights {
+        if !(gain >= 1.0 && gain.is_finite()) {
+            return Err(Error::InvalidArgument(format!(
+                "--highlights must be a gain of 1 or more, got {gain}"
+            )));
+        }
+    }
+    if !(0.0..1.0).contains(&args.threshold) {
+        return Err(Error::InvalidArgument(format!(
+            "--threshold must be at least 0 and below 1, got {}",
+            args.threshold
+        )));
+    }
+    let mut input = read_image(&args.image)?;
+    let (width, height) = (input.image.width as usize, input.image.height as usize);
+    let size = match args.size {
+        None => KernelSize::Native,
+        Some(SizeArg::Pixels(n)) => KernelSize::LongerSide(n),
+        Some(SizeArg::Full) => KernelSize::Exactly(width as u32, height as u32),
+    };
+    let kernel = load_kernel(&args.mask, size)?;
+    if let Some(gain) = args.highlights {
+        if !input.display_referred {
+            return Err(Error::InvalidArgument(format!(
+                "--highlights is for PNG or JPEG input; {} is linear and keeps its highlights",
+                args.image.display()
+            )));
+        }
+        lift_highlights(&mut input.image.rgb, gain, args.threshold);
+    }
+    let method = match args.method {
+        MethodKind::Direct => Method::Direct,
+        MethodKind::Fft => Method::Fft,
+        MethodKind::Auto => choose_method(width, height, &kernel),
+    };
+    let edges = match args.edges {
+        EdgesKind::Renormalize => Edges::Renormalize,
+        EdgesKind::Black => Edges::Black,
+    };
+    let planes: Vec<Vec<f32>> = (0..3)
+        .map(|c| input.image.rgb.iter().skip(c).step_by(3).copied().collect())
+        .collect();
+    let start = Instant::now();
+    let blurred = convolve_planes(&planes, width, height, &kernel, method, edges);
+    let seconds = start.elapsed().as_secs_f64();
+    let mut output = input.image;
+    for (i, pixel) in output.rgb.chunks_exact_mut(3).enumerate() {
+        for (c, v) in pixel.iter_mut().enumerate() {
+            *v = blurred[c][i];
+        }
+    }
+    write_image(&args.out, &output, 0.0)?;
+    println!(
+        "blurred {width}x{height} with a {}x{} kernel by {} in {:.1} ms -> {}",
+        kernel.width,
+        kernel.height,
+        if method == Method::Direct {
+            "shift-and-add"
+        } else {
+            "FFT"
+        },
+        seconds * 1e3,
+        args.out.display()
+    );
+    Ok(Outcome::Done)
+}
+
+/// The kernel of `--mask`: an image file, or else a named shape.
+fn load_kernel(mask: &str, size: KernelSize) -> Result<Kernel> {
+    let path = PathBuf::from(mask);
+    if path.exists() {
+        let (w, h, values) = read_gray(&path)?;
+        return Kernel::from_mask(w, h, &values, size).map_err(|e| Error::Parse {
+            path,
+            message: e.to_string(),
+        });
+    }
+    let shape = ApertureShape::parse(mask).map_err(|e| {
+        Error::InvalidArgument(format!(
+            "--mask '{mask}': no such file, and not a shape ({})",
+            e.to_string().rsplit("; ").next().unwrap_or_default()
+        ))
+    })?;
+    let side = match size {
+        KernelSize::LongerSide(n) => n as usize,
+        KernelSize::Exactly(w, h) => w.max(h) as usize,
+        KernelSize::Native => 64,
+    };
+    let raster = Aperture::new(&shape)?.rasterize(side, side, 1.0);
+    Kernel::from_mask(side, side, &raster, size)
+}
