@@ -1,7 +1,8 @@
 """Renders every CS184 course scene in ../shared/scenes/cs184 small, through the scene's own
 camera (pinhole, the view the course renderer shows), and assembles a labelled contact sheet.
 
-    cargo build --release && python3 scripts/cs184_contact_sheet.py [--spp 128] [--out docs/images/cs184-contact-sheet.png]
+    cargo build --release && python3 scripts/cs184_contact_sheet.py [--spp 128] \
+        [--out docs/images/cs184-contact-sheet.png]
 
 Needs Pillow (pip install pillow) and ../shared beside the repository.
 """
@@ -35,9 +36,21 @@ def main() -> int:
         for scene in scenes:
             out = Path(tmp) / f"{scene.parent.name}-{scene.stem}.png"
             subprocess.run(
-                [str(binary), "render", str(scene), "--camera", "pinhole", "--res", f"{WIDTH}x{HEIGHT}",
-                 "--spp", str(args.spp), "--out", str(out)],
-                check=True, stderr=subprocess.DEVNULL,
+                [
+                    str(binary),
+                    "render",
+                    str(scene),
+                    "--camera",
+                    "pinhole",
+                    "--res",
+                    f"{WIDTH}x{HEIGHT}",
+                    "--spp",
+                    str(args.spp),
+                    "--out",
+                    str(out),
+                ],
+                check=True,
+                stderr=subprocess.DEVNULL,
             )
             tiles.append((f"{scene.parent.name}/{scene.stem}", Image.open(out).convert("RGB")))
     rows = (len(tiles) + args.columns - 1) // args.columns

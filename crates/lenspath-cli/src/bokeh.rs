@@ -4,9 +4,12 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use clap::{Args, ValueEnum};
-use lenspath::bokeh::{choose_method, convolve_planes, lift_highlights, Edges, Kernel, KernelSize, Method};
+use lenspath::bokeh::{
+    choose_method, convolve_planes, depth_blur, lift_highlights, CircleOfConfusion, Edges, Kernel, KernelSize, Method,
+};
 use lenspath::camera::{Aperture, ApertureShape};
-use lenspath::io::image::{check_output_path, read_gray, read_image, write_image};
+use lenspath::io::image::{check_output_path, read_exr, read_gray, read_image, write_image};
+use lenspath::lens::{LensPrescription, LensSystem};
 use lenspath::{Error, Result};
 
 use crate::Outcome;
@@ -77,6 +80,89 @@ pub struct BokehArgs {
     /// With --highlights: the stored (sRGB) brightness, 0 to 1, where the lift starts.
     #[arg(long, value_name = "T", default_value_t = 0.9)]
     threshold: f32,
+    #[command(flatten)]
+    depth: DepthFlags,
+}
+
+/// Depth-aware lens blur: where the depths come from and the lens that blurs.
+#[derive(Args, Debug)]
+struct DepthFlags {
+    /// Depth-aware blur with these depths: an EXR's Z channel (or its only channel), distances
+    /// along the view axis in scene units. Without it, an EXR input's own Z channel is used when
+    /// --focus-distance is given.
+    #[arg(long, value_name = "DEPTH.exr")]
+    depth: Option<PathBuf>,
+    /// Depth-aware blur: the distance in focus, scene units.
+    #[arg(long, value_name = "D")]
+    focus_distance: Option<f64>,
+    /// Depth-aware blur with a thin lens: its f-number (with --focal-length), or stop --lens down.
+    #[arg(long, value_name = "N")]
+    fstop: Option<f64>,
+    /// Depth-aware blur with a thin lens of this focal length, mm.
+    #[arg(long, value_name = "MM", conflicts_with = "lens")]
+    focal_length: Option<f64>,
+    /// Depth-aware blur with the first-order (paraxial) focal length and f-number of this lens.
+    #[arg(long, value_name = "NAME|FILE")]
+    lens: Option<String>,
+    /// Depth-aware blur with lenspath's thin-lens camera: its aperture radius, scene units (with --fov).
+    #[arg(long, value_name = "R", conflicts_with_all = ["lens", "focal_length"])]
+    aperture_radius: Option<f64>,
+    /// With --aperture-radius: the camera's vertical field of view, degrees.
+    #[arg(long, value_name = "DEG", requires = "aperture_radius")]
+    fov: Option<f64>,
+    /// Width of the sensor the image covers, mm (for --focal-length and --lens).
+    #[arg(long, value_name = "MM", default_value_t = 36.0)]
+    sensor_width: f64,
+    /// Metres per scene unit of the depths and --focus-distance (for --focal-length and --lens).
+    #[arg(long, value_name = "M", default_value_t = 1.0)]
+    scene_unit: f64,
+}
+
+impl DepthFlags {
+    /// The circle of confusion the flags describe for a `width`×`height` image,
+    /// or `None` without --focus-distance.
+    fn circle_of_confusion(&self, width: u32, height: u32) -> Result<Option<CircleOfConfusion>> {
+        let Some(focus) = self.focus_distance else {
+            if self.depth.is_some() {
+                return Err(Error::InvalidArgument("--depth needs --focus-distance".into()));
+            }
+            return Ok(None);
+        };
+        if let Some(radius) = self.aperture_radius {
+            let fov = self
+                .fov
+                .ok_or_else(|| Error::InvalidArgument("--aperture-radius needs --fov".into()))?;
+            return CircleOfConfusion::thin_lens_camera(radius, focus, fov, height).map(Some);
+        }
+        let (focal_length, f_number) = match (&self.lens, self.focal_length, self.fstop) {
+            (Some(name), _, stop) => {
+                let system = LensSystem::new(&LensPrescription::load(name)?);
+                let paraxial = system.paraxial()?;
+                (paraxial.effective_focal_length_mm, stop.unwrap_or(paraxial.f_number))
+            }
+            (None, Some(f), Some(n)) => (f, n),
+            _ => {
+                return Err(Error::InvalidArgument(
+                    "--focus-distance needs a lens: --fstop N --focal-length MM, --lens NAME, or --aperture-radius R --fov DEG"
+                        .into(),
+                ))
+            }
+        };
+        if !(self.scene_unit > 0.0 && self.scene_unit.is_finite()) {
+            return Err(Error::InvalidArgument(format!(
+                "--scene-unit must be a positive number of metres, got {}",
+                self.scene_unit
+            )));
+        }
+        let mm = self.scene_unit * 1e3;
+        let coc = CircleOfConfusion::thin_lens(focal_length, f_number, focus * mm, self.sensor_width, width)?;
+        // Depths stay in scene units: scale the lens's lengths instead.
+        Ok(Some(CircleOfConfusion {
+            aperture_diameter: coc.aperture_diameter / mm,
+            focus_distance: focus,
+            ..coc
+        }))
+    }
 }
 
 /// Runs `lenspath bokeh`.
@@ -97,12 +183,12 @@ pub fn run(args: BokehArgs) -> Result<Outcome> {
     }
     let mut input = read_image(&args.image)?;
     let (width, height) = (input.image.width as usize, input.image.height as usize);
+    let coc = args.depth.circle_of_confusion(input.image.width, input.image.height)?;
     let size = match args.size {
         None => KernelSize::Native,
         Some(SizeArg::Pixels(n)) => KernelSize::LongerSide(n),
         Some(SizeArg::Full) => KernelSize::Exactly(width as u32, height as u32),
     };
-    let kernel = load_kernel(&args.mask, size)?;
     if let Some(gain) = args.highlights {
         if !input.display_referred {
             return Err(Error::InvalidArgument(format!(
@@ -112,6 +198,15 @@ pub fn run(args: BokehArgs) -> Result<Outcome> {
         }
         lift_highlights(&mut input.image.rgb, gain, args.threshold);
     }
+    if let Some(coc) = coc {
+        if args.size.is_some() {
+            return Err(Error::InvalidArgument(
+                "--size is for a uniform blur; with depths each pixel's blur size comes from the lens".into(),
+            ));
+        }
+        return run_depth_blur(&args, input.image, &coc);
+    }
+    let kernel = load_kernel(&args.mask, size)?;
     let method = match args.method {
         MethodKind::Direct => Method::Direct,
         MethodKind::Fft => Method::Fft,
@@ -149,6 +244,67 @@ pub fn run(args: BokehArgs) -> Result<Outcome> {
     Ok(Outcome::Done)
 }
 
+/// Depth-aware blur of `image` and the report line.
+fn run_depth_blur(args: &BokehArgs, mut image: lenspath::film::Image, coc: &CircleOfConfusion) -> Result<Outcome> {
+    let depth = match &args.depth.depth {
+        Some(path) => {
+            let map = read_exr(path)?;
+            if (map.width, map.height) != (image.width, image.height) {
+                return Err(Error::Parse {
+                    path: path.clone(),
+                    message: format!(
+                        "the depth map is {}x{}, the image {}x{}",
+                        map.width, map.height, image.width, image.height
+                    ),
+                });
+            }
+            // A Z channel if there is one, else the (gray) image itself.
+            if map.depth.iter().any(|z| z.is_finite()) {
+                map.depth
+            } else {
+                map.rgb.iter().step_by(3).copied().collect()
+            }
+        }
+        None if image.depth.iter().any(|z| z.is_finite()) => image.depth.clone(),
+        None => {
+            return Err(Error::InvalidArgument(format!(
+                "--focus-distance needs depths: {} has no Z channel; give --depth DEPTH.exr",
+                args.image.display()
+            )))
+        }
+    };
+    let aperture = Aperture::new(&load_shape(&args.mask)?)?;
+    let (width, height) = (image.width as usize, image.height as usize);
+    let start = Instant::now();
+    let blurred = depth_blur(&image.rgb, &depth, width, height, coc, &aperture)?;
+    let seconds = start.elapsed().as_secs_f64();
+    let largest = depth
+        .iter()
+        .map(|&z| coc.diameter_px(f64::from(z)).abs())
+        .fold(0.0, f64::max);
+    image.rgb = blurred;
+    write_image(&args.out, &image, 0.0)?;
+    println!(
+        "blurred {width}x{height} by depth (circles of confusion up to {largest:.1} px) in {:.1} ms -> {}",
+        seconds * 1e3,
+        args.out.display()
+    );
+    Ok(Outcome::Done)
+}
+
+/// The shape of `--mask`: an image file, or else a named shape.
+fn load_shape(mask: &str) -> Result<ApertureShape> {
+    if PathBuf::from(mask).exists() {
+        return ApertureShape::load_mask(std::path::Path::new(mask));
+    }
+    ApertureShape::parse(mask).map_err(|e| {
+        Error::InvalidArgument(format!(
+            "--mask '{mask}': no such file, and not a shape ({})",
+            e.to_string().rsplit("; ").next().unwrap_or_default()
+        ))
+    })
+}
+
 /// The kernel of `--mask`: an image file, or else a named shape.
 fn load_kernel(mask: &str, size: KernelSize) -> Result<Kernel> {
     let path = PathBuf::from(mask);
@@ -159,12 +315,7 @@ fn load_kernel(mask: &str, size: KernelSize) -> Result<Kernel> {
             message: e.to_string(),
         });
     }
-    let shape = ApertureShape::parse(mask).map_err(|e| {
-        Error::InvalidArgument(format!(
-            "--mask '{mask}': no such file, and not a shape ({})",
-            e.to_string().rsplit("; ").next().unwrap_or_default()
-        ))
-    })?;
+    let shape = load_shape(mask)?;
     let side = match size {
         KernelSize::LongerSide(n) => n as usize,
         KernelSize::Exactly(w, h) => w.max(h) as usize,

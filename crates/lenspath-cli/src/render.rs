@@ -266,6 +266,19 @@ pub struct ApertureFlags {
 }
 
 impl ApertureFlags {
+    /// The shape the flags ask for; when they ask for none, the scene file's
+    /// (`[camera] aperture`), else the circle.
+    pub fn shape_or(&self, options: &SceneOptions) -> Result<ApertureShape> {
+        if self.blades.is_none() && self.star.is_none() && self.aperture_mask.is_none() {
+            return Ok(options
+                .lens
+                .as_ref()
+                .and_then(|l| l.aperture.clone())
+                .unwrap_or(ApertureShape::Circle));
+        }
+        self.shape()
+    }
+
     /// The shape the flags ask for (the circle when none).
     pub fn shape(&self) -> Result<ApertureShape> {
         let with_flag = |e: Error, flag: &str| match e {
@@ -406,7 +419,7 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
     if args.autofocus.is_some() && !matches!(args.camera, CameraKind::Realistic) {
         return Err(Error::InvalidArgument("--autofocus needs --camera realistic".into()));
     }
-    let aperture = args.aperture.shape()?;
+    let aperture = args.aperture.shape_or(&options)?;
     if aperture != ApertureShape::Circle && matches!(args.camera, CameraKind::Pinhole) {
         return Err(Error::InvalidArgument(
             "--blades, --star and --aperture-mask shape a lens's aperture; a pinhole has none (use --camera thin-lens or realistic)".into(),

@@ -386,5 +386,66 @@ fn bokeh_spreads_light_into_the_mask_and_refuses_bad_input() {
         assert!(err.contains(expected), "{args:?}: expected '{expected}' in: {err}");
         assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
     }
+    // Depth-aware blur's own mistakes ({in} and {out} stand for the paths).
+    for (line, expected) in [
+        (
+            "bokeh {in} --mask circle --depth {in} --out {out}",
+            "--depth needs --focus-distance",
+        ),
+        (
+            "bokeh {in} --mask circle --focus-distance 2 --out {out}",
+            "needs a lens",
+        ),
+        (
+            "bokeh {in} --mask circle --focus-distance 2 --fstop 2 --focal-length 50 --size 9 --out {out}",
+            "--size is for a uniform blur",
+        ),
+        (
+            "bokeh {in} --mask circle --focus-distance 0.01 --fstop 2 --focal-length 50 --out {out}",
+            "cannot focus at 0.0100 m",
+        ),
+    ] {
+        let line = line.replace("{in}", input).replace("{out}", out);
+        let o = lenspath(&line.split(' ').collect::<Vec<_>>());
+        assert_eq!(o.status.code(), Some(2), "{line}");
+        assert!(
+            stderr(&o).contains(expected),
+            "{line}: expected '{expected}' in: {}",
+            stderr(&o)
+        );
+    }
     assert!(!Path::new(out).exists());
+
+    // Depth-aware: a render's own Z channel, blurred as its thin lens would.
+    let render = dir.path().join("box.exr");
+    let o = lenspath(&[
+        "render",
+        "--camera",
+        "pinhole",
+        "--res",
+        "64x48",
+        "--spp",
+        "4",
+        "--out",
+        render.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let blurred = dir.path().join("box-dof.png");
+    let o = lenspath(&[
+        "bokeh",
+        render.to_str().unwrap(),
+        "--mask",
+        "blades:6",
+        "--focus-distance",
+        "3",
+        "--aperture-radius",
+        "0.1",
+        "--fov",
+        "29",
+        "--out",
+        blurred.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("by depth (circles of confusion up to"));
+    assert!(blurred.exists());
 }

@@ -7,6 +7,7 @@ use glam::Vec3;
 
 use crate::camera::CameraPose;
 use crate::error::{Error, Result};
+use crate::lights::Light;
 use crate::materials::Material;
 use crate::math::Rgb;
 use crate::scene::{Scene, SceneView};
@@ -175,6 +176,45 @@ fn cornell_box() -> Scene {
         focus_distance: 3.85,
     });
     scene
+}
+
+/// Test charts: an empty scene with two diffuse materials, white (0.8, id 0)
+/// and dark (0.1, id 1), under a white sky of radiance 1. Add boards to it
+/// with [`add_checkerboard`].
+pub fn checker_scene() -> Scene {
+    Scene {
+        materials: vec![
+            Material::Diffuse {
+                reflectance: Rgb::splat(0.8),
+            },
+            Material::Diffuse {
+                reflectance: Rgb::splat(0.1),
+            },
+        ],
+        lights: vec![Light::Environment { radiance: Rgb::ONE }],
+        ..Default::default()
+    }
+}
+
+/// Adds checker squares of `size` scene units, alternating materials 0 and
+/// 1, over [x0, x1] × [y0, y1] of the plane z = −`distance`, facing +z.
+pub fn add_checkerboard(scene: &mut Scene, (x0, x1): (f32, f32), (y0, y1): (f32, f32), distance: f32, size: f32) {
+    let (nx, ny) = (((x1 - x0) / size).ceil() as i32, ((y1 - y0) / size).ceil() as i32);
+    let z = -distance;
+    for j in 0..ny {
+        for i in 0..nx {
+            let (xa, ya) = (x0 + i as f32 * size, y0 + j as f32 * size);
+            let (xb, yb) = ((xa + size).min(x1), (ya + size).min(y1));
+            scene.meshes.push(quad(
+                Vec3::new(xa, ya, z),
+                Vec3::new(xb, ya, z),
+                Vec3::new(xb, yb, z),
+                Vec3::new(xa, yb, z),
+                ((i + j) % 2) as MaterialId,
+                None,
+            ));
+        }
+    }
 }
 
 /// A closed (3, 7) torus knot tube with a rippled surface, about

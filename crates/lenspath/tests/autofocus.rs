@@ -6,55 +6,12 @@
 use glam::Vec3;
 use lenspath::accel::BvhSettings;
 use lenspath::autofocus::{AutofocusSettings, FocusMeasure, Focuser, Strategy};
+use lenspath::builtin::{add_checkerboard, checker_scene};
 use lenspath::camera::{CameraPose, LensFocus, RealisticCameraSettings};
 use lenspath::integrator::PathSettings;
 use lenspath::lens::LensPrescription;
-use lenspath::lights::Light;
-use lenspath::materials::Material;
-use lenspath::math::Rgb;
 use lenspath::render::PixelRect;
-use lenspath::scene::{CompiledScene, Scene};
-use lenspath::shapes::TriangleMesh;
-
-/// Checker squares of `size` scene units, alternating white and dark, over
-/// [x0, x1] × [y0, y1] of the plane z = −`distance`, facing +z.
-fn board(scene: &mut Scene, (x0, x1): (f32, f32), (y0, y1): (f32, f32), distance: f32, size: f32) {
-    let (nx, ny) = (((x1 - x0) / size).ceil() as i32, ((y1 - y0) / size).ceil() as i32);
-    for j in 0..ny {
-        for i in 0..nx {
-            let (xa, ya) = (x0 + i as f32 * size, y0 + j as f32 * size);
-            let (xb, yb) = ((xa + size).min(x1), (ya + size).min(y1));
-            let z = -distance;
-            scene.meshes.push(TriangleMesh {
-                positions: vec![
-                    Vec3::new(xa, ya, z),
-                    Vec3::new(xb, ya, z),
-                    Vec3::new(xb, yb, z),
-                    Vec3::new(xa, yb, z),
-                ],
-                indices: vec![[0, 1, 2], [0, 2, 3]],
-                material: ((i + j) % 2) as u32,
-                ..Default::default()
-            });
-        }
-    }
-}
-
-/// A scene of black-and-white materials under a white sky.
-fn lit_scene() -> Scene {
-    Scene {
-        materials: vec![
-            Material::Diffuse {
-                reflectance: Rgb::splat(0.8),
-            },
-            Material::Diffuse {
-                reflectance: Rgb::splat(0.1),
-            },
-        ],
-        lights: vec![Light::Environment { radiance: Rgb::ONE }],
-        ..Default::default()
-    }
-}
+use lenspath::scene::CompiledScene;
 
 fn focuser(scene: &CompiledScene, f_number: Option<f64>) -> Focuser<'_> {
     let pose = CameraPose::look_at(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y);
@@ -91,8 +48,8 @@ fn focuser(scene: &CompiledScene, f_number: Option<f64>) -> Focuser<'_> {
 fn every_strategy_focuses_a_plane_at_its_conjugate() {
     // A plane 1.5 m away, squares of 2 cm (about 5 pixels here).
     let distance = 1.5;
-    let mut scene = lit_scene();
-    board(&mut scene, (-0.8, 0.8), (-0.6, 0.6), distance, 0.02);
+    let mut scene = checker_scene();
+    add_checkerboard(&mut scene, (-0.8, 0.8), (-0.6, 0.6), distance, 0.02);
     let scene = scene.compile(&BvhSettings::default()).unwrap();
     // At f/5.6 the lens's spherical aberration moves its best focus by well under a DoF.
     let mut f = focuser(&scene, Some(5.6));
@@ -144,9 +101,9 @@ fn every_strategy_focuses_a_plane_at_its_conjugate() {
 fn depth_focuses_on_the_dominant_surface() {
     // The patch sees about ±27 mm at 1 m: a near board over its left three
     // quarters, a far one behind everything.
-    let mut scene = lit_scene();
-    board(&mut scene, (-3.0, 3.0), (-2.0, 2.0), 3.0, 0.04);
-    board(&mut scene, (-0.2, 0.0135), (-0.2, 0.2), 1.0, 0.005);
+    let mut scene = checker_scene();
+    add_checkerboard(&mut scene, (-3.0, 3.0), (-2.0, 2.0), 3.0, 0.04);
+    add_checkerboard(&mut scene, (-0.2, 0.0135), (-0.2, 0.2), 1.0, 0.005);
     let scene = scene.compile(&BvhSettings::default()).unwrap();
     let mut f = focuser(&scene, None);
     let conjugate_near = f.sensor_z_for_distance(1.0).unwrap();

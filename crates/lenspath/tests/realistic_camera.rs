@@ -617,11 +617,7 @@ fn light_through_a_shaped_aperture_follows_its_open_area() {
                 light_samples: 1,
             },
             seed: 3,
-            filter: Filter::Box,
-            threads: None,
-            tile_size: 16,
-            crop: None,
-            depth: false,
+            ..RenderSettings::default()
         };
         let compiled = uniform_environment().compile(&BvhSettings::default()).unwrap();
         let thin_lens = render(&compiled, &thin, &settings, &|_, _| {}, &AtomicBool::new(false))

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
 use lenspath::accel::BvhSettings;
-use lenspath::camera::PerspectiveCamera;
+use lenspath::camera::{ApertureShape, PerspectiveCamera};
 use lenspath::film::Image;
 use lenspath::io::{load_scene, LoadedScene};
 use lenspath::lights::Light;
@@ -322,6 +322,7 @@ eye = [0, 0, 10]
 look_at = [0, 0, 0]
 lens = "wide22"
 f_number = 4
+aperture = "star:5:0.4"
 "#;
     let path = dir.path().join("scene.toml");
     std::fs::write(&path, toml).unwrap();
@@ -338,6 +339,21 @@ f_number = 4
     assert_eq!(loaded.options.scene_unit_m, Some(0.5));
     let lens = loaded.options.lens.unwrap();
     assert_eq!((lens.lens.as_deref(), lens.f_number), (Some("wide22"), Some(4.0)));
+    assert_eq!(lens.aperture, Some(ApertureShape::parse("star:5:0.4").unwrap()));
+    // A mask image, relative to the scene file; a misspelt shape is an error naming it.
+    let mask = dir.path().join("mask.png");
+    image::GrayImage::from_fn(8, 8, |x, _| image::Luma([if x < 4 { 255 } else { 0 }]))
+        .save(&mask)
+        .unwrap();
+    std::fs::write(&path, toml.replace("star:5:0.4", "mask.png")).unwrap();
+    let loaded = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert!(matches!(loaded.options.lens.unwrap().aperture, Some(ApertureShape::Mask(m)) if m.width == 8));
+    std::fs::write(&path, toml.replace("star:5:0.4", "hexagon")).unwrap();
+    let e = load_scene(&path).unwrap_err().to_string();
+    assert!(
+        e.contains("scene.toml") && e.contains("aperture shape 'hexagon'"),
+        "{e}"
+    );
 }
 
 /// Hand-made broken files under tests/data/broken, each with the message it must give:

@@ -1,13 +1,15 @@
 //! Bokeh as a post-process, on any image: convolution with a mask-shaped
 //! kernel ([`convolve_planes`], shift-and-add or FFT), highlight lifting
 //! for display-referred images ([`lift_highlights`]), and depth-aware lens
-//! blur. docs/bokeh.md explains the methods. In the camera,
+//! blur ([`depth_blur`]). docs/bokeh.md explains the methods. In the camera,
 //! bokeh comes from [`crate::camera::ApertureShape`] instead.
 
 mod convolve;
+mod depth;
 mod kernel;
 
 pub use convolve::{choose_method, convolve_planes, direct, Edges, Method};
+pub use depth::{depth_blur, CircleOfConfusion};
 pub use kernel::{Kernel, KernelSize};
 
 use crate::io::image::linear_to_srgb;

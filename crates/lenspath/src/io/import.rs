@@ -68,6 +68,8 @@ pub struct LensOptions {
     pub sensor_mm: Option<(f64, f64)>,
     /// Focus distance from the sensor, scene units.
     pub focus_distance: Option<f64>,
+    /// Shape of the aperture (`None`: the circle).
+    pub aperture: Option<crate::camera::ApertureShape>,
 }
 
 /// Warnings counted by kind, in the order first seen.

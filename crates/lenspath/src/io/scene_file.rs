@@ -15,7 +15,7 @@ use super::import::{
     intern_material, scene_bounds, subject_distance, transform_mesh, LensOptions, LoadedScene, SceneOptions, Warnings,
     EMITTER_MATERIAL,
 };
-use crate::camera::CameraPose;
+use crate::camera::{ApertureShape, CameraPose};
 use crate::error::{Error, Result};
 use crate::lights::Light;
 use crate::materials::Material;
@@ -69,6 +69,7 @@ struct CameraSpec {
     lens: Option<String>,
     f_number: Option<f64>,
     sensor_mm: Option<[f64; 2]>,
+    aperture: Option<String>,
 }
 
 fn y_up() -> [f32; 3] {
@@ -392,12 +393,30 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
             fov_y_deg,
             focus_distance,
         });
-        if cam.lens.is_some() || cam.f_number.is_some() || cam.sensor_mm.is_some() || cam.focus_distance.is_some() {
+        // A shape's spelling, or else a mask image relative to this file.
+        let aperture = match &cam.aperture {
+            None => None,
+            Some(text) => Some(match ApertureShape::parse(text) {
+                Ok(shape) => shape,
+                Err(_) if text.contains(['.', '/', '\\']) && !text.contains(':') => {
+                    let dir = path.parent().unwrap_or(Path::new(""));
+                    ApertureShape::load_mask(&dir.join(text))?
+                }
+                Err(e) => return Err(fail(format!("[camera]: {e}"))),
+            }),
+        };
+        if cam.lens.is_some()
+            || cam.f_number.is_some()
+            || cam.sensor_mm.is_some()
+            || cam.focus_distance.is_some()
+            || aperture.is_some()
+        {
             options.lens = Some(LensOptions {
                 lens: cam.lens.clone(),
                 f_number: cam.f_number,
                 sensor_mm: cam.sensor_mm.map(|[w, h]| (w, h)),
                 focus_distance: cam.focus_distance.map(f64::from),
+                aperture,
             });
         }
     }
