@@ -511,18 +511,31 @@ fn bright_pixels(image: &Image) -> Vec<(u32, u32)> {
 }
 
 /// Intersection over union of the bright pixels with `aperture` scaled to
-/// the same area about their centroid, turned by 180° when `turned`.
+/// the same area, centroid on centroid, turned by 180° when `turned`.
 fn iou_with_shape(bright: &[(u32, u32)], aperture: &Aperture, turned: bool) -> f64 {
     let n = bright.len() as f64;
     let centre = bright.iter().fold(glam::DVec2::ZERO, |c, &(x, y)| {
         c + glam::DVec2::new(f64::from(x) + 0.5, f64::from(y) + 0.5) / n
     });
+    // The shape's own centroid (unit-disk coordinates, y up), from a fine raster.
+    let grid = 200;
+    let raster = aperture.rasterize(grid, grid, 1.0);
+    let (mut mass, mut shape_centre) = (0.0, glam::DVec2::ZERO);
+    for (k, &v) in raster.iter().enumerate() {
+        let p = glam::DVec2::new(
+            -1.0 + 2.0 * ((k % grid) as f64 + 0.5) / grid as f64,
+            1.0 - 2.0 * ((k / grid) as f64 + 0.5) / grid as f64,
+        );
+        mass += f64::from(v);
+        shape_centre += p * f64::from(v);
+    }
+    shape_centre /= mass;
     let scale = (n / (std::f64::consts::PI * aperture.open_fraction())).sqrt();
     let sign = if turned { -1.0 } else { 1.0 };
     // Image rows run down, the shape's y up.
     let inside = |x: u32, y: u32| {
-        let p = glam::DVec2::new(f64::from(x) + 0.5 - centre.x, centre.y - f64::from(y) - 0.5) / scale;
-        aperture.transmission(p * sign) > 0.5
+        let q = glam::DVec2::new(f64::from(x) + 0.5 - centre.x, centre.y - f64::from(y) - 0.5) / scale;
+        aperture.transmission(q * sign + shape_centre) > 0.5
     };
     let size = 96;
     let mut union = 0;
@@ -537,12 +550,33 @@ fn iou_with_shape(bright: &[(u32, u32)], aperture: &Aperture, turned: bool) -> f
     f64::from(intersection) / f64::from(union)
 }
 
+/// An L-shaped mask image: a bar down the left and a foot along the bottom.
+fn l_mask() -> ApertureShape {
+    let n = 64;
+    let values = (0..n * n)
+        .map(|k| {
+            let (x, y) = ((k % n) as f64 / n as f64, (k / n) as f64 / n as f64);
+            if (0.25..0.5).contains(&x) && (0.15..0.85).contains(&y)
+                || (0.25..0.8).contains(&x) && (0.6..0.85).contains(&y)
+            {
+                1.0
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    ApertureShape::Mask(std::sync::Arc::new(ApertureMask::new(n, n, values).unwrap()))
+}
+
 /// An out-of-focus point images as the aperture's shape: beyond the focus
 /// plane as the shape lies in the stop, nearer than it turned by 180°.
 #[test]
 fn an_out_of_focus_point_images_as_the_aperture_shape() {
-    for text in ["blades:3", "star:5:0.45:0"] {
-        let shape = ApertureShape::parse(text).unwrap();
+    for (text, shape) in [
+        ("blades:3", ApertureShape::parse("blades:3").unwrap()),
+        ("star:5:0.45:0", ApertureShape::parse("star:5:0.45:0").unwrap()),
+        ("an L-shaped mask", l_mask()),
+    ] {
         let aperture = Aperture::new(&shape).unwrap();
         for (distance_m, turned) in [(1.0f32, true), (20.0, false)] {
             let shot = Shot {

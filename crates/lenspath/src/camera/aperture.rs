@@ -265,6 +265,12 @@ impl Aperture {
                 raster(w, h, values)?
             }
         };
+        if let Sampler::Fan { vertices, .. } = &sampler {
+            let area: f64 = fan_areas(vertices).iter().sum();
+            if area.is_nan() || area <= 0.0 {
+                return Err(Error::InvalidArgument("aperture shape has no open area".into()));
+            }
+        }
         let open_fraction = match &sampler {
             Sampler::Disk => 1.0,
             Sampler::Fan { vertices, .. } => fan_areas(vertices).iter().sum::<f64>() / PI,
@@ -392,7 +398,7 @@ impl Aperture {
 /// Vertices of a regular polygon (`inner_ratio` = 1) or star, counter-clockwise,
 /// a corner at the top rotated by `rotation_deg`.
 fn polygon_vertices(count: u32, inner_ratio: f64, rotation_deg: f64) -> Vec<DVec2> {
-    let start = FRAC_PI_2 + rotation_deg.to_radians();
+    let start = FRAC_PI_2 + rotation_deg.rem_euclid(360.0).to_radians();
     let corner = |k: u32, r: f64, half: f64| {
         let a = start + TAU * (f64::from(k) + half) / f64::from(count);
         DVec2::new(a.cos(), a.sin()) * r
@@ -440,7 +446,7 @@ fn inside_curved_blades(count: u32, rotation_deg: f64, curvature: f64, p: DVec2)
     }
     let half = PI / f64::from(count);
     // Angle from the nearest edge's midpoint direction.
-    let start = FRAC_PI_2 + rotation_deg.to_radians();
+    let start = FRAC_PI_2 + rotation_deg.rem_euclid(360.0).to_radians();
     let a = (p.y.atan2(p.x) - start - half).rem_euclid(2.0 * half) - half;
     let along = p.length() * a.cos();
     let across = p.length() * a.sin();
@@ -627,5 +633,16 @@ mod tests {
             .to_string()
             .contains("closed"));
         assert!(ApertureMask::new(2, 2, vec![0.5; 3]).is_err());
+    }
+
+    /// Found by fuzzing: a rotation so large that adding the corners' angles
+    /// to it did nothing, leaving a star of no area and an infinite density.
+    /// Rotations are now taken modulo 360°.
+    #[test]
+    fn huge_rotations_keep_the_shape() {
+        let text = format!("star:7:.04:10777{}", "7".repeat(24));
+        let star = Aperture::new(&ApertureShape::parse(&text).unwrap()).unwrap();
+        let (_, pdf) = star.sample(Vec2::new(0.3, 0.6));
+        assert!(pdf.is_finite() && pdf > 0.0, "{pdf}");
     }
 }
