@@ -14,12 +14,12 @@ use lenspath::camera::{CameraPose, LensFocus, RealisticCamera, RealisticCameraSe
 use lenspath::integrator::PathSettings;
 use lenspath::io::image::{check_output_path, write_image};
 use lenspath::io::{check_writable, write_text};
-use lenspath::render::{render, RenderSettings};
+use lenspath::render::{render, NormalizedRect, RenderSettings};
 use lenspath::scene::CompiledScene;
 use lenspath::{Error, Result};
 use serde_json::json;
 
-use crate::render::{parse_patch, parse_resolution, LensFlags, NormalizedRect, Resolution, SceneArgs};
+use crate::render::{parse_patch, parse_resolution, LensFlags, Resolution, SceneArgs};
 use crate::Outcome;
 
 /// Samples per pixel of the patch renders of `render --autofocus`.
@@ -39,7 +39,7 @@ pub struct AutofocusArgs {
     /// Focus measure: variance, normalized-variance, sml, tenengrad, brenner, laplacian-energy, vollath.
     #[arg(long, default_value = "tenengrad")]
     metric: String,
-    /// Search: sweep, early-exit, fast or depth.
+    /// Search: sweep, early-exit, fast, depth (range finder) or depth-refine (range finder, then contrast).
     #[arg(long, default_value = "fast")]
     strategy: String,
     /// early-exit: stop after this many steps without a new best.
@@ -81,6 +81,9 @@ pub struct AutofocusArgs {
     /// --evaluate: write each patch's focus-curve SVG into this folder.
     #[arg(long, value_name = "DIR", requires = "evaluate")]
     plots_dir: Option<PathBuf>,
+    /// --evaluate: only these patches (comma-separated, such as CBdragon#2,glass-and-gold#3) or scenes (CBbunny).
+    #[arg(long, value_name = "IDS", value_delimiter = ',', requires = "evaluate")]
+    only: Vec<String>,
 }
 
 /// Focuses `lens` on `patch` with the fast strategy before a render, saying what it found on stderr.
@@ -153,9 +156,7 @@ pub fn run(args: AutofocusArgs) -> Result<Outcome> {
     let view = scene
         .view
         .ok_or_else(|| Error::InvalidArgument("the scene has no camera".into()))?;
-    let lens = args
-        .lens
-        .settings(&options, width, height, LensFocus::SensorPositionMm(0.0))?;
+    let lens = args.lens.settings(&options, &view, width, height)?;
     let compiled = scene.compile(&BvhSettings::default())?;
     let patch = args.patch.expect("clap requires --patch without --evaluate");
     let settings = AutofocusSettings {
@@ -325,7 +326,11 @@ fn evaluate(args: &AutofocusArgs, measure: FocusMeasure) -> Result<Outcome> {
     let (width, height) = args.res.map_or((640, 480), |r| (r.width, r.height));
     let mut rows = Vec::new();
     let mut patches_run = 0;
-    for scene_spec in &EVALUATION_SET {
+    let wanted = |id: &str, scene: &str| args.only.is_empty() || args.only.iter().any(|o| o == id || o == scene);
+    for scene_spec in EVALUATION_SET
+        .iter()
+        .filter(|s| (1..=s.patches.len()).any(|k| wanted(&format!("{}#{k}", s.name), s.name)))
+    {
         let scene_args = match scene_spec.source.strip_prefix("builtin:") {
             Some(name) => SceneArgs {
                 file: None,
@@ -351,11 +356,13 @@ fn evaluate(args: &AutofocusArgs, measure: FocusMeasure) -> Result<Outcome> {
         };
         let (_, scene, options) = scene_args.load()?;
         let view = scene.view.ok_or_else(|| Error::InvalidArgument("no camera".into()))?;
-        let lens = args
-            .lens
-            .settings(&options, width, height, LensFocus::SensorPositionMm(0.0))?;
+        let lens = args.lens.settings(&options, &view, width, height)?;
         let compiled = scene.compile(&BvhSettings::default())?;
         for (k, p) in scene_spec.patches.iter().enumerate() {
+            let id = format!("{}#{}", scene_spec.name, k + 1);
+            if !wanted(&id, scene_spec.name) {
+                continue;
+            }
             let patch = NormalizedRect {
                 x: p[0],
                 y: p[1],
@@ -389,7 +396,6 @@ fn evaluate(args: &AutofocusArgs, measure: FocusMeasure) -> Result<Outcome> {
                 };
                 results.push(focuser.run(strategy)?);
             }
-            let id = format!("{}#{}", scene_spec.name, k + 1);
             eprintln!("{}", row_text(&id, &truth, dof, &results));
             if let Some(dir) = &args.plots_dir {
                 std::fs::create_dir_all(dir).map_err(|e| Error::Io {
@@ -438,20 +444,22 @@ fn evaluate(args: &AutofocusArgs, measure: FocusMeasure) -> Result<Outcome> {
         write_text(path, &serde_json::to_string_pretty(&out).expect("JSON serializes"))?;
     }
     if patches_run == 0 {
-        return Err(Error::InvalidArgument("no evaluation scene could be loaded".into()));
+        return Err(Error::InvalidArgument(
+            "no evaluation patch could be loaded (or none matched --only)".into(),
+        ));
     }
     Ok(Outcome::Done)
 }
 
 fn row_text(id: &str, truth: &GroundTruth, dof: f64, results: &[AutofocusResult]) -> String {
+    let offset = |z: Option<f64>| z.map_or("none".into(), |z| format!("{:+.2} DoF", (z - truth.sensor_z_mm) / dof));
     let mut line = format!(
-        "{id:<24} truth {:.4} mm (seed spread {:.2} DoF, {} spp; depth conjugate {})",
+        "{id:<24} truth {:.4} mm (seed spread {:.2} DoF, {} spp; depth conjugate {}, lens best focus {})",
         truth.sensor_z_mm,
         truth.seed_spread_dof,
         truth.spp,
-        truth
-            .depth_conjugate_z_mm
-            .map_or("none".into(), |z| format!("{:+.2} DoF", (z - truth.sensor_z_mm) / dof))
+        offset(truth.depth_conjugate_z_mm),
+        offset(truth.lens_best_focus_z_mm),
     );
     for r in results {
         line += &format!(

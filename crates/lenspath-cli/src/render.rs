@@ -8,15 +8,16 @@ use clap::{Args, ValueEnum};
 use lenspath::accel::BvhSettings;
 use lenspath::builtin::{builtin_scene, DEFAULT_MESH_TRIANGLES};
 use lenspath::camera::{
-    Aperture, ApertureShape, Camera, LensFocus, PerspectiveCamera, Radiometry, RealisticCamera, RealisticCameraSettings,
+    sensor_for_image, Aperture, ApertureShape, Camera, LensFocus, PerspectiveCamera, Radiometry, RealisticCamera,
+    RealisticCameraSettings,
 };
 use lenspath::film::Filter;
 use lenspath::integrator::PathSettings;
 use lenspath::io::image::{check_output_path, write_image};
 use lenspath::io::{load_scene, SceneOptions};
 use lenspath::lens::LensPrescription;
-use lenspath::render::{render, PixelRect, RenderSettings};
-use lenspath::scene::Scene;
+use lenspath::render::{render, NormalizedRect, PixelRect, RenderSettings};
+use lenspath::scene::{Scene, SceneView};
 use lenspath::{Error, Result};
 
 use crate::progress::Progress;
@@ -95,43 +96,13 @@ pub fn parse_resolution(s: &str) -> std::result::Result<Resolution, String> {
     Ok(Resolution { width, height })
 }
 
-/// A rectangle in fractions of the image: x, y of the top-left corner, width, height.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct NormalizedRect {
-    pub x: f64,
-    pub y: f64,
-    pub width: f64,
-    pub height: f64,
-}
-
-impl NormalizedRect {
-    /// The pixels it covers in a `width` × `height` image (at least 3 × 3).
-    pub fn to_pixels(self, width: u32, height: u32) -> PixelRect {
-        let (w, h) = (f64::from(width), f64::from(height));
-        let x0 = ((self.x * w).round() as u32).min(width.saturating_sub(3));
-        let y0 = ((self.y * h).round() as u32).min(height.saturating_sub(3));
-        PixelRect {
-            x0,
-            y0,
-            width: ((self.width * w).round() as u32).clamp(3, width - x0),
-            height: ((self.height * h).round() as u32).clamp(3, height - y0),
-        }
-    }
-}
-
+/// Parses X,Y,W,H (fractions of the image) for `--patch` and `--autofocus`.
 pub fn parse_patch(s: &str) -> std::result::Result<NormalizedRect, String> {
-    let v: Vec<f64> = s.split(',').filter_map(|p| p.trim().parse().ok()).collect();
-    match v[..] {
-        [x, y, width, height]
-            if s.split(',').count() == 4
-                && x >= 0.0
-                && y >= 0.0
-                && width > 0.0
-                && height > 0.0
-                && x + width <= 1.0 + 1e-9
-                && y + height <= 1.0 + 1e-9 =>
-        {
-            Ok(NormalizedRect { x, y, width, height })
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let numbers: Vec<f64> = parts.iter().filter_map(|p| p.parse().ok()).collect();
+    match numbers[..] {
+        [x, y, width, height] if parts.len() == 4 => {
+            NormalizedRect::new(x, y, width, height).map_err(|e| e.to_string())
         }
         _ => Err(format!(
             "expected X,Y,WIDTH,HEIGHT as fractions of the image, inside it, such as 0.55,0.7,0.1,0.12; got '{s}'"
@@ -211,33 +182,30 @@ pub struct LensFlags {
 
 impl LensFlags {
     /// The realistic camera's settings for a `width` × `height` image: flags
-    /// win over the scene file's lens settings, which win over the defaults.
+    /// win over the scene file's lens settings, which win over the defaults
+    /// ([`RealisticCameraSettings::for_scene`]). The aperture is the file's;
+    /// [`ApertureFlags::shape_or`] applies the flags'.
     pub fn settings(
         &self,
         options: &SceneOptions,
+        view: &SceneView,
         width: u32,
         height: u32,
-        focus: LensFocus,
     ) -> Result<RealisticCameraSettings> {
-        let file_lens = options.lens.clone().unwrap_or_default();
-        let lens = LensPrescription::load(self.lens.as_deref().or(file_lens.lens.as_deref()).unwrap_or("dgauss50"))?;
-        let width_mm = self
-            .sensor
-            .map(|s| s.width_mm)
-            .or(file_lens.sensor_mm.map(|(w, _)| w))
-            .unwrap_or(36.0);
-        Ok(RealisticCameraSettings {
-            lens,
-            sensor_mm: (width_mm, width_mm * f64::from(height) / f64::from(width)),
-            focus,
-            f_number: self.fstop.or(file_lens.f_number),
-            scene_unit_m: self.scene_unit.or(options.scene_unit_m).unwrap_or(1.0),
-            radiometry: match self.radiometry {
-                RadiometryKind::Normalized => Radiometry::Normalized,
-                RadiometryKind::Physical => Radiometry::Physical,
-            },
-            aperture: ApertureShape::Circle,
-        })
+        let mut settings = RealisticCameraSettings::for_scene(options, view, width, height)?;
+        if let Some(lens) = &self.lens {
+            settings.lens = LensPrescription::load(lens)?;
+        }
+        if let Some(sensor) = self.sensor {
+            settings.sensor_mm = sensor_for_image(sensor.width_mm, width, height);
+        }
+        settings.f_number = self.fstop.or(settings.f_number);
+        settings.scene_unit_m = self.scene_unit.unwrap_or(settings.scene_unit_m);
+        settings.radiometry = match self.radiometry {
+            RadiometryKind::Normalized => Radiometry::Normalized,
+            RadiometryKind::Physical => Radiometry::Physical,
+        };
+        Ok(settings)
     }
 }
 
@@ -459,18 +427,13 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
             )
         }
         CameraKind::Realistic => {
-            let focus = match (args.sensor_depth, args.focus_distance) {
-                (Some(mm), _) => LensFocus::SensorPositionMm(mm),
-                (None, Some(d)) => LensFocus::Distance(f64::from(d)),
-                (None, None) => LensFocus::Distance(
-                    options
-                        .lens
-                        .as_ref()
-                        .and_then(|l| l.focus_distance)
-                        .unwrap_or(f64::from(view.focus_distance)),
-                ),
-            };
-            let mut lens_settings = args.lens.settings(&options, settings.width, settings.height, focus)?;
+            let mut lens_settings = args.lens.settings(&options, &view, settings.width, settings.height)?;
+            match (args.sensor_depth, args.focus_distance) {
+                (Some(mm), _) => lens_settings.focus = LensFocus::SensorPositionMm(mm),
+                (None, Some(d)) => lens_settings.focus = LensFocus::Distance(f64::from(d)),
+                // The scene file's focus distance, else the view's subject distance.
+                (None, None) => {}
+            }
             lens_settings.aperture = aperture.clone();
             if let Some(patch) = args.autofocus {
                 lens_settings.focus = LensFocus::SensorPositionMm(crate::autofocus::focus_before_render(

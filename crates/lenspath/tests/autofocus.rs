@@ -13,7 +13,15 @@ use lenspath::lens::LensPrescription;
 use lenspath::render::PixelRect;
 use lenspath::scene::CompiledScene;
 
-fn focuser(scene: &CompiledScene, f_number: Option<f64>) -> Focuser<'_> {
+/// The centre 24 × 24 pixels of the 320 × 240 image.
+const CENTRE: PixelRect = PixelRect {
+    x0: 148,
+    y0: 108,
+    width: 24,
+    height: 24,
+};
+
+fn focuser(scene: &CompiledScene, f_number: Option<f64>, patch: PixelRect) -> Focuser<'_> {
     let pose = CameraPose::look_at(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y);
     let (width, height) = (320, 240);
     let mut camera = RealisticCameraSettings::new(
@@ -26,12 +34,7 @@ fn focuser(scene: &CompiledScene, f_number: Option<f64>) -> Focuser<'_> {
         camera,
         width,
         height,
-        patch: PixelRect {
-            x0: 148,
-            y0: 108,
-            width: 24,
-            height: 24,
-        },
+        patch,
         measure: FocusMeasure::Tenengrad,
         spp: 4,
         path: PathSettings {
@@ -52,7 +55,7 @@ fn every_strategy_focuses_a_plane_at_its_conjugate() {
     add_checkerboard(&mut scene, (-0.8, 0.8), (-0.6, 0.6), distance, 0.02);
     let scene = scene.compile(&BvhSettings::default()).unwrap();
     // At f/5.6 the lens's spherical aberration moves its best focus by well under a DoF.
-    let mut f = focuser(&scene, Some(5.6));
+    let mut f = focuser(&scene, Some(5.6), CENTRE);
     let conjugate = f.sensor_z_for_distance(f64::from(distance)).unwrap();
     let back = f.focus_distance_at(conjugate).unwrap();
     assert!((back - f64::from(distance)).abs() < 1e-3, "{back}");
@@ -105,11 +108,46 @@ fn depth_focuses_on_the_dominant_surface() {
     add_checkerboard(&mut scene, (-3.0, 3.0), (-2.0, 2.0), 3.0, 0.04);
     add_checkerboard(&mut scene, (-0.2, 0.0135), (-0.2, 0.2), 1.0, 0.005);
     let scene = scene.compile(&BvhSettings::default()).unwrap();
-    let mut f = focuser(&scene, None);
+    let mut f = focuser(&scene, None, CENTRE);
     let conjugate_near = f.sensor_z_for_distance(1.0).unwrap();
-    let z = f.dominant_depth_conjugate().unwrap().unwrap();
+    let z = f.range_focus().unwrap().unwrap().conjugate_z_mm;
     assert!(
         (z - conjugate_near).abs() < 0.5 * f.depth_of_focus_mm(z),
         "ranged at {z} mm, the near board is at {conjugate_near} mm"
+    );
+}
+
+/// Wide open, the range finder's lens model (through-focus modulation at the
+/// patch's place in the field) predicts where contrast peaks better than the
+/// plain conjugate of the depth: off the axis, field curvature moves the best
+/// focus back.
+#[test]
+fn range_focus_predicts_the_contrast_peak_off_axis() {
+    let distance = 1.5;
+    let mut scene = checker_scene();
+    add_checkerboard(&mut scene, (-1.2, 1.2), (-0.9, 0.9), distance, 0.02);
+    let scene = scene.compile(&BvhSettings::default()).unwrap();
+    // Near the corner: 19° off the axis.
+    let corner = PixelRect {
+        x0: 272,
+        y0: 196,
+        width: 32,
+        height: 32,
+    };
+    let mut f = focuser(&scene, None, corner);
+    let range = f.range_focus().unwrap().unwrap();
+    assert!(range.dominant_fraction > 0.99, "{range:?}");
+    let truth = f.ground_truth().unwrap();
+    let dof = f.depth_of_focus_mm(truth.sensor_z_mm);
+    let predicted = (range.best_focus_z_mm - truth.sensor_z_mm) / dof;
+    let conjugate = (range.conjugate_z_mm - truth.sensor_z_mm) / dof;
+    eprintln!("truth {truth:?}: lens best focus {predicted:+.2} DoF, conjugate {conjugate:+.2} DoF");
+    assert!(
+        predicted.abs() < 0.5,
+        "lens best focus {predicted:+.2} DoF from the contrast peak"
+    );
+    assert!(
+        predicted.abs() < conjugate.abs(),
+        "{predicted:+.2} vs conjugate {conjugate:+.2}"
     );
 }

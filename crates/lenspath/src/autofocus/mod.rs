@@ -9,4 +9,6 @@ pub mod plot;
 pub mod search;
 
 pub use measures::{FocusMeasure, Patch, FOCUS_MEASURES};
-pub use search::{AutofocusResult, AutofocusSettings, Evaluation, Focuser, GroundTruth, Strategy, STRATEGIES};
+pub use search::{
+    AutofocusResult, AutofocusSettings, Detail, Evaluation, Focuser, GroundTruth, RangeFocus, Strategy, STRATEGIES,
+};

@@ -11,7 +11,7 @@
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-use glam::Vec2;
+use glam::{DVec3, Vec2, Vec3};
 
 use super::measures::{FocusMeasure, Patch};
 use crate::camera::{Camera, CameraPose, CameraSample, LensFocus, RealisticCamera, RealisticCameraSettings};
@@ -22,22 +22,49 @@ use crate::lens::{AnalysisSettings, LensAnalysis, LensSystem};
 use crate::render::{render, PixelRect, RenderSettings};
 use crate::scene::CompiledScene;
 
-/// The band-pass applied to patch renders before scoring: a Gaussian of this
-/// standard deviation (pixels) minus one of [`BAND_PASS_WIDE_SIGMA_PX`].
-pub const BAND_PASS_NARROW_SIGMA_PX: f64 = 1.0;
-
-/// The wide Gaussian of the band-pass, pixels.
-pub const BAND_PASS_WIDE_SIGMA_PX: f64 = 4.0;
-
-/// `rgb` (`width` pixels wide) band-passed: a difference of Gaussians that
+/// The scale of detail a patch render is scored at: the band-pass applied
+/// before the focus measure, a Gaussian minus a Gaussian four times wider. It
 /// keeps detail a few pixels across (edges, texture) and drops both the
 /// pixel-scale Monte Carlo noise and the smooth glow of bright things far out
 /// of focus, which gradient measures would otherwise score as detail.
-fn band_pass(rgb: &[f32], width: usize) -> Vec<f32> {
-    let narrow = gaussian_blur(rgb, width, BAND_PASS_NARROW_SIGMA_PX);
-    let wide = gaussian_blur(rgb, width, BAND_PASS_WIDE_SIGMA_PX);
-    narrow.iter().zip(&wide).map(|(n, w)| n - w).collect()
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Detail {
+    /// σ = 1 and 4 pixels: where the sharpest focus shows; for locating the peak.
+    Fine,
+    /// σ = 2 and 8 pixels: for scanning. A peak stays visible several DoF
+    /// away, and white noise's gradient energy, which falls as σ⁻⁴, is about
+    /// a sixteenth of the fine scale's while an edge's falls as σ⁻¹.
+    Coarse,
 }
+
+impl Detail {
+    /// The narrow and wide standard deviations of the band-pass, pixels.
+    pub fn band_pass_sigmas_px(self) -> (f64, f64) {
+        match self {
+            Detail::Fine => (1.0, 4.0),
+            Detail::Coarse => (2.0, 8.0),
+        }
+    }
+
+    /// `rgb` (`width` pixels wide) band-passed at this scale.
+    fn band_pass(self, rgb: &[f32], width: usize) -> Vec<f32> {
+        let (narrow_sigma, wide_sigma) = self.band_pass_sigmas_px();
+        let narrow = gaussian_blur(rgb, width, narrow_sigma);
+        let wide = gaussian_blur(rgb, width, wide_sigma);
+        narrow.iter().zip(&wide).map(|(n, w)| n - w).collect()
+    }
+}
+
+/// The spatial frequency, cycles per pixel, at which the lens's best focus is
+/// found for the range finder: where the band-passed Tenengrad responds most
+/// (the peak of ν²·(G₁(ν) − G₄(ν))² is at 0.16).
+pub const BEST_FOCUS_CYCLES_PER_PIXEL: f64 = 0.15;
+
+/// The `fast` search's budget, as a fraction of the sweep's camera rays: its
+/// fine stage takes fewer samples when the scan and re-scoring have spent
+/// much (low resolutions, where the sweep has few steps).
+pub const FAST_BUDGET_OF_SWEEP: f64 = 0.1;
 
 /// Real-ray height for converting between sensor positions and distances (as the camera focuses).
 const FOCUS_RAY_HEIGHT_MM: f64 = 0.1;
@@ -52,11 +79,13 @@ pub enum Strategy {
         /// Steps without improvement before stopping.
         patience: usize,
     },
-    /// Coarse-to-fine contrast search: a coarse low-sample scan of the whole range,
-    /// golden-section refinement of the best peaks, a parabolic fit of the log-score.
+    /// Coarse-to-fine contrast search: a coarse low-sample scan of the whole
+    /// range, the best peaks re-scored, a least-squares fit of the log-score
+    /// over five finer renders around the winner.
     Fast,
-    /// Rangefinder: probe rays find the patch's dominant depth, the lens's inverse
-    /// focus map gives the sensor position; `refine` adds a 3-point contrast fit.
+    /// Rangefinder: probe rays find the patch's dominant surface, the lens's
+    /// through-focus modulation gives its best-contrast sensor position;
+    /// `refine` adds a 3-point contrast fit.
     Depth {
         /// Refine with three patch renders around the depth estimate.
         refine: bool,
@@ -64,11 +93,12 @@ pub enum Strategy {
 }
 
 /// Every strategy with its command-line name.
-pub const STRATEGIES: [(&str, Strategy); 4] = [
+pub const STRATEGIES: [(&str, Strategy); 5] = [
     ("sweep", Strategy::Sweep),
     ("early-exit", Strategy::EarlyExit { patience: 12 }),
     ("fast", Strategy::Fast),
-    ("depth", Strategy::Depth { refine: true }),
+    ("depth", Strategy::Depth { refine: false }),
+    ("depth-refine", Strategy::Depth { refine: true }),
 ];
 
 impl Strategy {
@@ -90,7 +120,8 @@ impl Strategy {
             Strategy::Sweep => "sweep",
             Strategy::EarlyExit { .. } => "early-exit",
             Strategy::Fast => "fast",
-            Strategy::Depth { .. } => "depth",
+            Strategy::Depth { refine: false } => "depth",
+            Strategy::Depth { refine: true } => "depth-refine",
         }
     }
 }
@@ -128,6 +159,8 @@ pub struct Evaluation {
     pub score: f64,
     /// Samples per pixel it was rendered with.
     pub spp: u32,
+    /// The scale it was scored at.
+    pub detail: Detail,
 }
 
 /// What a strategy found and what it cost.
@@ -159,6 +192,20 @@ pub struct GroundTruth {
     pub spp: u32,
     /// The conjugate of the patch's dominant depth, mm behind the stop (`None` if the probes hit nothing).
     pub depth_conjugate_z_mm: Option<f64>,
+    /// The lens's best-contrast sensor position for that depth at the patch's
+    /// place in the field (what the `depth` strategy starts from).
+    pub lens_best_focus_z_mm: Option<f64>,
+}
+
+/// Where the range finder puts a patch's focus, mm behind the stop.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct RangeFocus {
+    /// The real-ray conjugate of the dominant depth (a focus scale's reading).
+    pub conjugate_z_mm: f64,
+    /// The best-contrast position for the surface there, aberrations and field curvature included.
+    pub best_focus_z_mm: f64,
+    /// The fraction of the probes that hit something and fall in the dominant one-DoF window.
+    pub dominant_fraction: f64,
 }
 
 /// Focuses one camera on one patch of one scene.
@@ -260,8 +307,8 @@ impl<'a> Focuser<'a> {
     /// samples are split between two renders with independent seeds, scored as
     /// a pair ([`FocusMeasure::evaluate_pair`]) so render noise does not pass
     /// for sharpness; with 1 sample, one render. Each render is band-passed
-    /// first (see [`band_pass`]).
-    pub fn measure_at(&mut self, z: f64, spp: u32, seed: u32) -> Result<f64> {
+    /// first, at the scale of `detail`.
+    pub fn measure_at(&mut self, z: f64, spp: u32, seed: u32, detail: Detail) -> Result<f64> {
         let s = &self.settings;
         let camera = RealisticCamera::for_region(self.pose, s.width, s.height, &self.camera_settings(z), s.patch)?;
         let halves = if spp >= 2 { [spp / 2, spp - spp / 2] } else { [spp, 0] };
@@ -288,7 +335,7 @@ impl<'a> Focuser<'a> {
                 &AtomicBool::new(false),
             )?;
             self.camera_rays += output.stats.samples;
-            images.push(band_pass(&output.image.rgb, output.image.width as usize));
+            images.push(detail.band_pass(&output.image.rgb, output.image.width as usize));
         }
         let (w, h) = (s.patch.width as usize, s.patch.height as usize);
         let patch = |i: usize| Patch::new(w, h, &images[i]);
@@ -301,6 +348,7 @@ impl<'a> Focuser<'a> {
             sensor_z_mm: z,
             score,
             spp,
+            detail,
         });
         Ok(score)
     }
@@ -339,7 +387,7 @@ impl<'a> Focuser<'a> {
         let mut best = (f64::NEG_INFINITY, self.range_mm.0);
         let mut since_best = 0;
         for z in self.grid(self.pitch_mm) {
-            let score = self.measure_at(z, spp, seed)?;
+            let score = self.measure_at(z, spp, seed, Detail::Fine)?;
             if score > best.0 {
                 best = (score, z);
                 since_best = 0;
@@ -353,20 +401,26 @@ impl<'a> Focuser<'a> {
         Ok(best.1)
     }
 
-    /// Coarse-to-fine: a scan of the whole range in steps of about 5 DoF at
-    /// half the samples; its local maxima within half of the best (at most
-    /// three) re-scored at full samples; the winner refined by golden-section
-    /// search at full samples inside its coarse bracket, down to three pixel
-    /// pitches; a parabola through the log-scores around the best.
+    /// Coarse-to-fine contrast search (docs/autofocus.md):
+    /// 1. a scan of the whole range in steps of about 6 DoF at half the
+    ///    samples, scored at [`Detail::Coarse`], where a peak is several steps
+    ///    wide and the noise weak;
+    /// 2. its local maxima that reach half of the best (at most three)
+    ///    re-scored at full samples, since a half-sample score can be lucky;
+    /// 3. the winner's peak from the log-parabola through it and its neighbours;
+    /// 4. five renders 1 DoF apart around it at 1.5× the samples, scored at
+    ///    [`Detail::Fine`] (two more beyond an end when the best is there), and
+    ///    the vertex of the least-squares log-parabola through them; fewer
+    ///    samples when that would pass [`FAST_BUDGET_OF_SWEEP`].
     fn fast(&mut self) -> Result<f64> {
         let (spp, seed) = (self.settings.spp, self.settings.seed);
         let (near, far) = self.range_mm;
-        let step = 5.0 * self.depth_of_focus_mm(near);
+        let step = 6.0 * self.depth_of_focus_mm(near);
         let n = (((far - near) / step).ceil() as usize + 1).clamp(8, 64);
         let coarse: Vec<(f64, f64)> = (0..n)
             .map(|i| {
                 let z = near + (far - near) * i as f64 / (n - 1) as f64;
-                Ok((z, self.measure_at(z, (spp / 2).max(1), seed)?))
+                Ok((z, self.measure_at(z, (spp / 2).max(1), seed, Detail::Coarse)?))
             })
             .collect::<Result<_>>()?;
         let best_coarse = coarse.iter().map(|c| c.1).fold(f64::NEG_INFINITY, f64::max);
@@ -379,74 +433,53 @@ impl<'a> Focuser<'a> {
             .collect();
         peaks.sort_by(|&a, &b| coarse[b].1.total_cmp(&coarse[a].1));
         peaks.truncate(3);
-        // A coarse score at half the samples can be lucky: re-score the candidates.
         let mut winner = (f64::NEG_INFINITY, peaks[0]);
         if peaks.len() > 1 {
             for &i in &peaks {
-                let score = self.measure_at(coarse[i].0, spp, seed)?;
+                let score = self.measure_at(coarse[i].0, spp, seed, Detail::Coarse)?;
                 if score > winner.0 {
                     winner = (score, i);
                 }
             }
         }
         let i = winner.1;
-        let lo = coarse[i.saturating_sub(1)].0;
-        let hi = coarse[(i + 1).min(n - 1)].0;
-        let (_, z) = self.golden_section(lo, hi, spp, seed)?;
-        Ok(self.parabolic_peak(z, spp))
-    }
-
-    /// Golden-section search for the maximum on [lo, hi] until the bracket is
-    /// three pitches or one DoF wide.
-    fn golden_section(&mut self, mut lo: f64, mut hi: f64, spp: u32, seed: u32) -> Result<(f64, f64)> {
-        const INV_PHI: f64 = 0.618_033_988_749_894_9;
-        let mut a = hi - INV_PHI * (hi - lo);
-        let mut b = lo + INV_PHI * (hi - lo);
-        let mut fa = self.measure_at(a, spp, seed)?;
-        let mut fb = self.measure_at(b, spp, seed)?;
-        // To a bracket of three pitches or one DoF, whichever is wider: the
-        // parabolic fit over the evaluations near the peak does the rest.
-        let width = (3.0 * self.pitch_mm).max(self.depth_of_focus_mm(0.5 * (lo + hi)));
-        while hi - lo > width {
-            if fa >= fb {
-                (hi, b, fb) = (b, a, fa);
-                a = hi - INV_PHI * (hi - lo);
-                fa = self.measure_at(a, spp, seed)?;
-            } else {
-                (lo, a, fa) = (a, b, fb);
-                b = lo + INV_PHI * (hi - lo);
-                fb = self.measure_at(b, spp, seed)?;
+        let around = &coarse[i.saturating_sub(1)..=(i + 1).min(n - 1)];
+        let z0 = log_parabola_peak(around, coarse[i].0, 1.01 * (far - near) / (n - 1) as f64);
+        // The fine stage: common random numbers keep neighbouring scores'
+        // noise alike, so the shape of the peak shows through it. Its samples
+        // are 1.5× the scan's, less if its seven renders at most would take
+        // the search past its budget.
+        let spent: u32 = self.evaluations.iter().map(|e| e.spp).sum();
+        let budget = FAST_BUDGET_OF_SWEEP * (self.grid(self.pitch_mm).len() as u32 * spp) as f64;
+        let affordable = ((budget - f64::from(spent)) / 7.0).floor().max(1.0) as u32;
+        let (fine_spp, dof) = ((spp + spp / 2).min(affordable), self.depth_of_focus_mm(z0));
+        let mut points: Vec<(f64, f64)> = Vec::new();
+        for k in -2..=2 {
+            let z = (z0 + f64::from(k) * dof).clamp(near, far);
+            points.push((z, self.measure_at(z, fine_spp, seed, Detail::Fine)?));
+        }
+        let best = |p: &[(f64, f64)]| (0..p.len()).max_by(|&a, &b| p[a].1.total_cmp(&p[b].1)).unwrap_or(0);
+        let last = points.len() - 1;
+        let beyond: Option<f64> = match best(&points) {
+            0 => Some(-dof),
+            b if b == last => Some(dof),
+            _ => None,
+        };
+        if let Some(direction) = beyond {
+            let end = if direction < 0.0 { points[0].0 } else { points[last].0 };
+            for k in 1..=2 {
+                let z = (end + f64::from(k) * direction).clamp(near, far);
+                points.push((z, self.measure_at(z, fine_spp, seed, Detail::Fine)?));
             }
         }
-        Ok(if fa >= fb { (fa, a) } else { (fb, b) })
+        let peak = points[best(&points)].0;
+        Ok(log_parabola_peak(&points, peak, 2.5 * dof))
     }
 
-    /// The vertex of the least-squares parabola through the log-scores of the
-    /// full-sample evaluations within 3 DoF of `z` (a Gaussian fit of the focus
-    /// curve's peak, which averages the noise of several renders), kept within
-    /// their span; `z` itself when fewer than three are there or they make no peak.
-    fn parabolic_peak(&self, z: f64, spp: u32) -> f64 {
-        let window = 3.0 * self.depth_of_focus_mm(z);
-        let points: Vec<(f64, f64)> = self
-            .evaluations
-            .iter()
-            .filter(|e| e.spp == spp && e.score > 0.0 && (e.sensor_z_mm - z).abs() <= window)
-            .map(|e| (e.sensor_z_mm - z, e.score.ln()))
-            .collect();
-        if points.len() < 3 {
-            return z;
-        }
-        let lo = points.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
-        let hi = points.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
-        match least_squares_parabola(&points) {
-            Some((_, b, c)) if c < 0.0 => z + (-b / (2.0 * c)).clamp(lo, hi),
-            _ => z,
-        }
-    }
-
-    /// Camera rays through `k` × `k` points of the patch: the depth (along the
-    /// view axis, scene units from the sensor) of what each hits.
-    fn probe_depths(&mut self, k: u32) -> Result<Vec<f64>> {
+    /// Camera rays through `k` × `k` points of the patch: what each hits, in
+    /// camera space (scene units; the sensor centre is the origin and +z the
+    /// view axis, so `z` is the depth along the axis).
+    fn probe_points(&mut self, k: u32) -> Result<Vec<Vec3>> {
         let s = &self.settings;
         let camera = RealisticCamera::for_region(
             self.pose,
@@ -455,9 +488,9 @@ impl<'a> Focuser<'a> {
             &self.camera_settings(self.range_mm.0),
             s.patch,
         )?;
-        let (origin, axis) = camera.view_axis();
+        let camera_from_render = self.pose.render_from_camera.inverse();
         let p = s.patch;
-        let mut depths = Vec::new();
+        let mut points = Vec::new();
         for j in 0..k {
             for i in 0..k {
                 let film = Vec2::new(
@@ -471,42 +504,86 @@ impl<'a> Focuser<'a> {
                 if let Some(cr) = ray {
                     self.camera_rays += 1;
                     if let Some(hit) = self.scene.intersect(&cr.ray) {
-                        depths.push(f64::from((hit.p - origin).dot(axis)));
+                        points.push(camera_from_render.transform_point3(hit.p));
                     }
                 }
             }
         }
-        Ok(depths)
+        Ok(points)
     }
 
-    /// The conjugate sensor position of the patch's dominant depth: each probe's
-    /// conjugate, then the densest one-DoF window of them and its median.
-    pub fn dominant_depth_conjugate(&mut self) -> Result<Option<f64>> {
-        let mut zs: Vec<f64> = self
-            .probe_depths(8)?
+    /// Where the patch's dominant surface focuses, from 8×8 probe rays: each
+    /// probe's depth conjugate; the densest one-DoF window of them (the depth
+    /// most of the patch sees, robust to a background peeking past an edge)
+    /// and its median; and the best-contrast sensor position of up to nine
+    /// probes spread through that window, from the lens's through-focus
+    /// modulation at their actual positions ([`Focuser::point_best_focus_z`]),
+    /// and their median. `None` when no probe hits anything.
+    pub fn range_focus(&mut self) -> Result<Option<RangeFocus>> {
+        let mut probes: Vec<(f64, Vec3)> = self
+            .probe_points(8)?
             .into_iter()
-            .filter_map(|d| self.sensor_z_for_distance(d).ok())
+            .filter_map(|p| self.sensor_z_for_distance(f64::from(p.z)).ok().map(|z| (z, p)))
             .collect();
-        if zs.is_empty() {
+        if probes.is_empty() {
             return Ok(None);
         }
-        zs.sort_by(f64::total_cmp);
-        let window = self.depth_of_focus_mm(zs[zs.len() / 2]);
+        probes.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let window = self.depth_of_focus_mm(probes[probes.len() / 2].0);
         let (mut best_start, mut best_count, mut end) = (0, 0, 0);
-        for start in 0..zs.len() {
-            while end < zs.len() && zs[end] - zs[start] <= window {
+        for start in 0..probes.len() {
+            while end < probes.len() && probes[end].0 - probes[start].0 <= window {
                 end += 1;
             }
             if end - start > best_count {
                 (best_start, best_count) = (start, end - start);
             }
         }
-        Ok(Some(zs[best_start + best_count / 2]))
+        let dominant = &probes[best_start..best_start + best_count];
+        let picks = dominant.len().min(9);
+        let mut best_focus: Vec<f64> = (0..picks)
+            .map(|k| {
+                let (z, p) = dominant[k * (dominant.len() - 1) / (picks - 1).max(1)];
+                self.point_best_focus_z(p, z)
+            })
+            .collect();
+        best_focus.sort_by(f64::total_cmp);
+        Ok(Some(RangeFocus {
+            conjugate_z_mm: dominant[dominant.len() / 2].0,
+            best_focus_z_mm: best_focus[best_focus.len() / 2],
+            dominant_fraction: best_count as f64 / probes.len() as f64,
+        }))
     }
 
-    /// Rangefinder focusing, optionally refined by a 3-point contrast fit one DoF apart.
+    /// The sensor position where the image of the camera-space point `p` has
+    /// the most contrast at the frequencies the focus measures see
+    /// ([`BEST_FOCUS_CYCLES_PER_PIXEL`]), searched within 5 DoF of its
+    /// conjugate `conjugate_z` (which it falls back to). The point's place in
+    /// lens coordinates depends on the sensor position (the lens moves to
+    /// focus), so the search is repeated once from its own answer.
+    fn point_best_focus_z(&self, p: Vec3, conjugate_z: f64) -> f64 {
+        let frequency_per_mm = BEST_FOCUS_CYCLES_PER_PIXEL / self.pitch_mm;
+        let mm = self.mm_per_scene;
+        let mut z = conjugate_z;
+        for _ in 0..2 {
+            let object = DVec3::new(f64::from(p.x) * mm, f64::from(p.y) * mm, z - f64::from(p.z) * mm);
+            let half_range = 5.0 * self.depth_of_focus_mm(z);
+            let bundle = self.system.spot_bundle(object, 32);
+            match bundle.best_focus_z(z - half_range, z + half_range, 100, frequency_per_mm) {
+                Some(best) => z = best,
+                None => return conjugate_z,
+            }
+        }
+        z
+    }
+
+    /// Rangefinder focusing ([`Focuser::range_focus`]), optionally refined by
+    /// a contrast fit through three renders 1.5 DoF apart.
     fn depth(&mut self, refine: bool) -> Result<f64> {
-        let Some(z0) = self.dominant_depth_conjugate()? else {
+        let Some(RangeFocus {
+            best_focus_z_mm: z0, ..
+        }) = self.range_focus()?
+        else {
             // Nothing to range on (the patch sees only the sky): contrast search instead.
             return self.fast();
         };
@@ -520,12 +597,21 @@ impl<'a> Focuser<'a> {
         let step = 1.5 * self.depth_of_focus_mm(z0);
         let mut points: Vec<(f64, f64)> = Vec::new();
         for z in [z0 - step, z0, z0 + step] {
-            points.push((z, self.measure_at(z, spp, seed)?));
+            points.push((z, self.measure_at(z, spp, seed, Detail::Fine)?));
         }
         let best = |p: &[(f64, f64)]| (0..p.len()).max_by(|&a, &b| p[a].1.total_cmp(&p[b].1)).unwrap_or(0);
         match best(&points) {
-            0 => points.insert(0, (z0 - 2.0 * step, self.measure_at(z0 - 2.0 * step, spp, seed)?)),
-            2 => points.push((z0 + 2.0 * step, self.measure_at(z0 + 2.0 * step, spp, seed)?)),
+            0 => points.insert(
+                0,
+                (
+                    z0 - 2.0 * step,
+                    self.measure_at(z0 - 2.0 * step, spp, seed, Detail::Fine)?,
+                ),
+            ),
+            2 => points.push((
+                z0 + 2.0 * step,
+                self.measure_at(z0 + 2.0 * step, spp, seed, Detail::Fine)?,
+            )),
             _ => {}
         }
         let i = best(&points).clamp(1, points.len() - 2);
@@ -541,8 +627,10 @@ impl<'a> Focuser<'a> {
     }
 
     /// The reference focus: the peak of a fine sweep (half-pitch steps over
-    /// ±5 pitches around the peak of a coarse 4-pitch scan), located by a
-    /// parabola through the log-scores around its maximum, with two seeds; the
+    /// ±5 pitches around the peak of a coarse 4-pitch scan at the coarse
+    /// scale, widened while its maximum is near an end), located by a
+    /// least-squares parabola through the log-scores within 1.5 DoF of its
+    /// maximum, with two seeds; the
     /// samples are doubled (from 4× the settings', up to 8×) until the seeds
     /// agree within a quarter DoF. Its evaluations are not counted anywhere.
     pub fn ground_truth(&mut self) -> Result<GroundTruth> {
@@ -552,7 +640,7 @@ impl<'a> Focuser<'a> {
         let coarse_best = {
             let mut best = (f64::NEG_INFINITY, self.range_mm.0);
             for z in self.grid(4.0 * self.pitch_mm) {
-                let s = self.measure_at(z, spp, seed ^ 0x5eed)?;
+                let s = self.measure_at(z, spp, seed ^ 0x5eed, Detail::Coarse)?;
                 if s > best.0 {
                     best = (s, z);
                 }
@@ -560,30 +648,56 @@ impl<'a> Focuser<'a> {
             best.1
         };
         let (near, far) = self.range_mm;
-        let fine: Vec<f64> = (-10..=10)
-            .map(|i| coarse_best + f64::from(i) * 0.5 * self.pitch_mm)
+        let half_pitch = 0.5 * self.pitch_mm;
+        let mut fine: Vec<f64> = (-10..=10)
+            .map(|i| coarse_best + f64::from(i) * half_pitch)
             .filter(|z| (near - 1e-9..=far + 1e-9).contains(z))
             .collect();
+        // The coarse scan can miss the peak by a step or two: while the fine
+        // scan's maximum is within two steps of an end, widen it there by ten.
+        loop {
+            let scores: Vec<f64> = fine
+                .iter()
+                .map(|&z| self.measure_at(z, spp, seed ^ 0xf1e1d, Detail::Fine))
+                .collect::<Result<_>>()?;
+            let i = (0..scores.len())
+                .max_by(|&a, &b| scores[a].total_cmp(&scores[b]))
+                .unwrap_or(0);
+            let (first, last) = (fine[0], fine[fine.len() - 1]);
+            if i <= 1 && first - half_pitch >= near - 1e-9 {
+                fine.splice(
+                    0..0,
+                    (1..=10)
+                        .rev()
+                        .map(|k| first - f64::from(k) * half_pitch)
+                        .filter(|&z| z >= near - 1e-9),
+                );
+            } else if i + 2 >= fine.len() && last + half_pitch <= far + 1e-9 {
+                fine.extend(
+                    (1..=10)
+                        .map(|k| last + f64::from(k) * half_pitch)
+                        .filter(|&z| z <= far + 1e-9),
+                );
+            } else {
+                break;
+            }
+        }
         let result = loop {
             let mut peaks = [0.0; 2];
             for (k, peak) in peaks.iter_mut().enumerate() {
                 let seed = seed.wrapping_add(1000 + k as u32);
                 let scores: Vec<f64> = fine
                     .iter()
-                    .map(|&z| self.measure_at(z, spp, seed))
+                    .map(|&z| self.measure_at(z, spp, seed, Detail::Fine))
                     .collect::<Result<_>>()?;
                 let i = (0..scores.len())
                     .max_by(|&a, &b| scores[a].total_cmp(&scores[b]))
                     .unwrap_or(0);
-                *peak = if i > 0 && i + 1 < scores.len() && scores[i - 1..=i + 1].iter().all(|&s| s > 0.0) {
-                    parabola_vertex(
-                        [fine[i - 1], fine[i], fine[i + 1]],
-                        [scores[i - 1].ln(), scores[i].ln(), scores[i + 1].ln()],
-                    )
-                    .unwrap_or(fine[i])
-                } else {
-                    fine[i]
-                };
+                // A least-squares fit over ±1.5 DoF (about 15 half-pitch
+                // steps), not the three points around the maximum: those
+                // are a fifth of a DoF apart, and noise tilts their parabola.
+                let points: Vec<(f64, f64)> = fine.iter().copied().zip(scores).collect();
+                *peak = log_parabola_peak(&points, fine[i], 1.5 * self.depth_of_focus_mm(fine[i]));
             }
             let z = 0.5 * (peaks[0] + peaks[1]);
             let spread = (peaks[0] - peaks[1]).abs() / self.depth_of_focus_mm(z);
@@ -592,13 +706,14 @@ impl<'a> Focuser<'a> {
             }
             spp *= 2;
         };
-        let depth_conjugate_z_mm = self.dominant_depth_conjugate()?;
+        let range = self.range_focus()?;
         (self.evaluations, self.camera_rays) = saved;
         Ok(GroundTruth {
             sensor_z_mm: result.0,
             seed_spread_dof: result.1,
             spp: result.2,
-            depth_conjugate_z_mm,
+            depth_conjugate_z_mm: range.map(|r| r.conjugate_z_mm),
+            lens_best_focus_z_mm: range.map(|r| r.best_focus_z_mm),
         })
     }
 }
@@ -635,6 +750,27 @@ fn gaussian_blur(rgb: &[f32], width: usize, sigma: f64) -> Vec<f32> {
         out
     };
     pass(&pass(rgb, true), false)
+}
+
+/// The vertex of the least-squares parabola through the log-scores of the
+/// `(z, score)` points within `window` of `z` (a Gaussian fit of a focus
+/// curve's peak), kept within their span; `z` itself when fewer than three
+/// positive scores are there or they make no peak.
+fn log_parabola_peak(points: &[(f64, f64)], z: f64, window: f64) -> f64 {
+    let near: Vec<(f64, f64)> = points
+        .iter()
+        .filter(|&&(x, score)| score > 0.0 && (x - z).abs() <= window)
+        .map(|&(x, score)| (x - z, score.ln()))
+        .collect();
+    if near.len() < 3 {
+        return z;
+    }
+    let lo = near.iter().map(|p| p.0).fold(f64::INFINITY, f64::min);
+    let hi = near.iter().map(|p| p.0).fold(f64::NEG_INFINITY, f64::max);
+    match least_squares_parabola(&near) {
+        Some((_, b, c)) if c < 0.0 => z + (-b / (2.0 * c)).clamp(lo, hi),
+        _ => z,
+    }
 }
 
 /// Coefficients (a, b, c) of the least-squares parabola y = a + b·x + c·x²

@@ -16,7 +16,10 @@ use crate::sampling::concentric_disk;
 mod aperture;
 mod realistic;
 pub use aperture::{Aperture, ApertureMask, ApertureShape};
-pub use realistic::{LensFocus, Radiometry, RealisticCamera, RealisticCameraSettings};
+pub use realistic::{
+    sensor_for_image, LensFocus, Radiometry, RealisticCamera, RealisticCameraSettings, DEFAULT_LENS,
+    DEFAULT_SENSOR_WIDTH_MM,
+};
 
 /// Where on the film and where on the lens a camera ray starts.
 #[derive(Clone, Copy, Debug)]

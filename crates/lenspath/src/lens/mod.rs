@@ -4,9 +4,11 @@
 pub mod plot;
 pub mod prescription;
 pub mod system;
+pub mod through_focus;
 
 pub use prescription::{LensPrescription, LensSurface, TableConvention, BUILTIN_LENSES};
 pub use system::{Direction, LensRay, LensSystem, ParaxialData};
+pub use through_focus::SpotBundle;
 
 use crate::error::Result;
 

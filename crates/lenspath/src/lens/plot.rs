@@ -23,18 +23,100 @@ fn sag(radius: f64, y: f64) -> f64 {
     }
 }
 
-/// The SVG drawing of `system` with its sensor (`sensor_diagonal_mm`) at the
+/// A polyline in the layout's coordinates: (z along the axis, height), mm.
+pub type Polyline = Vec<(f64, f64)>;
+
+/// What a layout drawing shows, in lens coordinates (z along the axis from
+/// the stop toward the sensor, height in the meridional plane; mm): drawn as
+/// SVG by [`layout_svg`] and by the Python package's matplotlib helper.
+#[derive(Clone, Debug)]
+pub struct Layout {
+    /// A one-line caption: the lens, its focal length, f-number and field.
+    pub title: String,
+    /// Each glass element's closed outline.
+    pub elements: Vec<Polyline>,
+    /// The stop's two blades, from its opening outward.
+    pub stop: [Polyline; 2],
+    /// The sensor, at infinity focus.
+    pub sensor: Polyline,
+    /// Real rays from infinity to the sensor: (field, as a fraction of the
+    /// half diagonal field, and the ray's path).
+    pub rays: Vec<(f64, Polyline)>,
+    /// The z range to show.
+    pub z_range_mm: (f64, f64),
+    /// Half the height to show.
+    pub half_height_mm: f64,
+}
+
+/// The layout of `system` with its sensor (`sensor_diagonal_mm`) at the
 /// infinity focus from `analysis`.
-pub fn layout_svg(system: &LensSystem, analysis: &LensAnalysis, sensor_diagonal_mm: f64) -> String {
-    let layout: Vec<(f64, f64, f64, f64)> = system.surface_layout().collect();
+pub fn layout(system: &LensSystem, analysis: &LensAnalysis, sensor_diagonal_mm: f64) -> Layout {
+    let surfaces: Vec<(f64, f64, f64, f64)> = system.surface_layout().collect();
     let sensor_z = analysis.infinity_focus_mm;
-    let half_height = layout.iter().map(|s| s.2).fold(0.5 * sensor_diagonal_mm, f64::max) * 1.15;
-    let (z0, z1) = (system.front_z() - 0.15 * (sensor_z - system.front_z()), sensor_z + 2.0);
+    let largest_aperture = surfaces.iter().map(|s| s.2).fold(0.0, f64::max);
+
+    // Elements: each glass gap between two surfaces.
+    let elements = surfaces
+        .windows(2)
+        .filter(|pair| pair[0].3 > 1.0)
+        .map(|pair| {
+            let ((za, ra, aa, _), (zb, rb, ab, _)) = (pair[0], pair[1]);
+            let front = (0..=32)
+                .map(|k| -aa + 2.0 * aa * k as f64 / 32.0)
+                .map(|h| (za + sag(ra, h), h));
+            let back = (0..=32)
+                .map(|k| ab - 2.0 * ab * k as f64 / 32.0)
+                .map(|h| (zb + sag(rb, h), h));
+            front.chain(back).collect()
+        })
+        .collect();
+    let outer = system.stop_radius() + 0.25 * largest_aperture;
+    let blade = |sign: f64| vec![(0.0, sign * system.stop_radius()), (0.0, sign * outer)];
+    let max_field = (0.5 * analysis.diagonal_fov_deg).to_radians();
+    let rays = FIELD_FRACTIONS
+        .iter()
+        .flat_map(|&fraction| {
+            ray_fan(system, fraction * max_field, sensor_z)
+                .into_iter()
+                .map(move |path| (fraction, path.iter().map(|p| (p.z, p.x)).collect()))
+        })
+        .collect();
+    Layout {
+        title: format!(
+            "{} — EFL {:.2} mm, f/{:.2}, {:.1}° diagonal field ({:.0} mm sensor diagonal), focused at infinity",
+            system.prescription().name(),
+            analysis.effective_focal_length_mm,
+            analysis.f_number,
+            analysis.diagonal_fov_deg,
+            sensor_diagonal_mm
+        ),
+        elements,
+        stop: [blade(1.0), blade(-1.0)],
+        sensor: vec![
+            (sensor_z, 0.5 * sensor_diagonal_mm),
+            (sensor_z, -0.5 * sensor_diagonal_mm),
+        ],
+        rays,
+        z_range_mm: (system.front_z() - 0.15 * (sensor_z - system.front_z()), sensor_z + 2.0),
+        half_height_mm: largest_aperture.max(0.5 * sensor_diagonal_mm) * 1.15,
+    }
+}
+
+/// The SVG drawing of `system` with its sensor (`sensor_diagonal_mm`) at the
+/// infinity focus from `analysis` (see [`layout`]).
+pub fn layout_svg(system: &LensSystem, analysis: &LensAnalysis, sensor_diagonal_mm: f64) -> String {
+    let l = layout(system, analysis, sensor_diagonal_mm);
+    let (z0, z1) = l.z_range_mm;
     let width_px = 1000.0;
     let scale = width_px / (z1 - z0);
-    let height_px = 2.0 * half_height * scale + 40.0;
-    let x = |z: f64| (z - z0) * scale;
-    let y = |h: f64| height_px / 2.0 - h * scale;
+    let height_px = 2.0 * l.half_height_mm * scale + 40.0;
+    let points = |line: &Polyline| -> String {
+        let p: Vec<String> = line
+            .iter()
+            .map(|&(z, h)| format!("{:.2},{:.2}", (z - z0) * scale, height_px / 2.0 - h * scale))
+            .collect();
+        p.join(" ")
+    };
 
     let mut svg = String::new();
     let _ = writeln!(
@@ -44,77 +126,43 @@ pub fn layout_svg(system: &LensSystem, analysis: &LensAnalysis, sensor_diagonal_
     let _ = writeln!(svg, r#"<rect width="100%" height="100%" fill="white"/>"#);
     let _ = writeln!(
         svg,
-        r##"<text x="8" y="18" font-family="sans-serif" font-size="14">{} — EFL {:.2} mm, f/{:.2}, {:.1}° diagonal field ({:.0} mm sensor diagonal), focused at infinity</text>"##,
-        system.prescription().name(),
-        analysis.effective_focal_length_mm,
-        analysis.f_number,
-        analysis.diagonal_fov_deg,
-        sensor_diagonal_mm
+        r##"<text x="8" y="18" font-family="sans-serif" font-size="14">{}</text>"##,
+        l.title
     );
     let _ = writeln!(
         svg,
         r##"<line x1="0" y1="{0:.2}" x2="{width_px:.0}" y2="{0:.2}" stroke="#888" stroke-dasharray="6 4"/>"##,
-        y(0.0)
+        height_px / 2.0
     );
-
-    // Elements: each glass gap between two surfaces.
-    for pair in layout.windows(2) {
-        let ((za, ra, aa, ior), (zb, rb, ab, _)) = (pair[0], pair[1]);
-        if ior <= 1.0 {
-            continue;
-        }
-        let mut points = Vec::new();
-        for k in 0..=32 {
-            let h = -aa + 2.0 * aa * k as f64 / 32.0;
-            points.push((za + sag(ra, h), h));
-        }
-        for k in 0..=32 {
-            let h = ab - 2.0 * ab * k as f64 / 32.0;
-            points.push((zb + sag(rb, h), h));
-        }
-        let path: Vec<String> = points
-            .iter()
-            .map(|&(z, h)| format!("{:.2},{:.2}", x(z), y(h)))
-            .collect();
+    for outline in &l.elements {
         let _ = writeln!(
             svg,
             r##"<polygon points="{}" fill="#cfe3f5" stroke="#234" stroke-width="1.2"/>"##,
-            path.join(" ")
+            points(outline)
         );
     }
-
-    // The stop: two blades from its opening outward.
-    let outer = system.stop_radius() + 0.25 * layout.iter().map(|s| s.2).fold(0.0, f64::max);
-    for sign in [1.0, -1.0] {
+    for blade in &l.stop {
         let _ = writeln!(
             svg,
-            r##"<line x1="{0:.2}" y1="{1:.2}" x2="{0:.2}" y2="{2:.2}" stroke="black" stroke-width="3"/>"##,
-            x(0.0),
-            y(sign * system.stop_radius()),
-            y(sign * outer)
+            r##"<polyline points="{}" stroke="black" stroke-width="3"/>"##,
+            points(blade)
         );
     }
-    // The sensor.
     let _ = writeln!(
         svg,
-        r##"<line x1="{0:.2}" y1="{1:.2}" x2="{0:.2}" y2="{2:.2}" stroke="#444" stroke-width="4"/>"##,
-        x(sensor_z),
-        y(0.5 * sensor_diagonal_mm),
-        y(-0.5 * sensor_diagonal_mm)
+        r##"<polyline points="{}" stroke="#444" stroke-width="4"/>"##,
+        points(&l.sensor)
     );
-
-    // Ray fans from infinity.
-    let max_field = (0.5 * analysis.diagonal_fov_deg).to_radians();
-    for (fraction, colour) in FIELD_FRACTIONS.iter().zip(FAN_COLOURS) {
-        let field = fraction * max_field;
-        for path in ray_fan(system, field, sensor_z) {
-            let pts: Vec<String> = path.iter().map(|p| format!("{:.2},{:.2}", x(p.z), y(p.x))).collect();
-            let _ = writeln!(
-                svg,
-                r#"<polyline points="{}" fill="none" stroke="{colour}" stroke-width="0.9"/>"#,
-                pts.join(" ")
-            );
-        }
+    for (fraction, path) in &l.rays {
+        let colour = FIELD_FRACTIONS
+            .iter()
+            .position(|f| f == fraction)
+            .map_or(FAN_COLOURS[0], |i| FAN_COLOURS[i]);
+        let _ = writeln!(
+            svg,
+            r#"<polyline points="{}" fill="none" stroke="{colour}" stroke-width="0.9"/>"#,
+            points(path)
+        );
     }
     svg.push_str("</svg>\n");
     svg

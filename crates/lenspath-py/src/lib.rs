@@ -1,0 +1,1248 @@
+//! The native module `lenspath._core`: a thin binding of the `lenspath`
+//! crate, wrapped by the pure-Python package `lenspath` (python/lenspath),
+//! whose `.pyi` stub documents it for users.
+//!
+//! Library errors become Python exceptions ([`to_py`]): bad arguments
+//! `ValueError`, broken scene files `lenspath.SceneError`, broken lens tables
+//! `lenspath.LensError`, I/O failures `OSError`. Renders release the GIL and
+//! poll for Ctrl-C (see [`render`]).
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::Arc;
+use std::time::Duration;
+
+use glam::{DVec3, Vec3};
+use lenspath::accel::BvhSettings;
+use lenspath::autofocus::{AutofocusSettings, FocusMeasure, Focuser, Patch, Strategy};
+use lenspath::bokeh::{convolve_planes, Edges, Kernel, KernelSize, Method};
+use lenspath::builtin::{builtin_scene, BUILTIN_SCENES, DEFAULT_MESH_TRIANGLES};
+use lenspath::camera::{
+    Aperture, ApertureShape, Camera as CameraTrait, CameraPose, LensFocus, PerspectiveCamera, RealisticCamera,
+    RealisticCameraSettings,
+};
+use lenspath::film::{Filter, Image};
+use lenspath::integrator::PathSettings;
+use lenspath::io::image::{read_image, write_image};
+use lenspath::io::{load_scene, SceneOptions};
+use lenspath::lens::{
+    plot::{layout, layout_svg, Polyline},
+    AnalysisSettings, Direction, LensAnalysis, LensPrescription, LensRay, LensSystem, TableConvention, BUILTIN_LENSES,
+};
+use lenspath::lights::Light;
+use lenspath::materials::Material;
+use lenspath::render::{render as render_scene, NormalizedRect, RenderSettings};
+use lenspath::scene::{Scene as CoreScene, SceneView};
+use lenspath::shapes::{Sphere, TriangleMesh};
+use lenspath::Error;
+use numpy::ndarray::{Array2, Array3};
+use numpy::{AllowTypeChange, IntoPyArray, PyArray2, PyArray3, PyArrayLike2, PyArrayLike3, PyUntypedArrayMethods};
+use pyo3::create_exception;
+use pyo3::exceptions::{PyException, PyOSError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+create_exception!(
+    lenspath,
+    LenspathError,
+    PyException,
+    "Base class of lenspath's own errors."
+);
+create_exception!(
+    lenspath,
+    SceneError,
+    LenspathError,
+    "A scene file is broken or inconsistent."
+);
+create_exception!(lenspath, LensError, LenspathError, "A lens table is broken.");
+
+/// What kind of file a [`Error::Parse`] is about, to pick the exception.
+#[derive(Clone, Copy)]
+enum FileKind {
+    Scene,
+    Lens,
+    Image,
+}
+
+/// A library error as the Python exception users expect.
+fn to_py(error: Error, kind: FileKind) -> PyErr {
+    let message = error.to_string();
+    match error {
+        Error::InvalidArgument(_) => PyValueError::new_err(message),
+        Error::InvalidScene(_) => SceneError::new_err(message),
+        Error::Parse { .. } => match kind {
+            FileKind::Scene => SceneError::new_err(message),
+            FileKind::Lens => LensError::new_err(message),
+            FileKind::Image => PyValueError::new_err(message),
+        },
+        Error::Io { source, .. } => PyOSError::new_err((source.raw_os_error().unwrap_or(0), message)),
+    }
+}
+
+fn value_error(message: impl Into<String>) -> PyErr {
+    PyValueError::new_err(message.into())
+}
+
+// ---------------------------------------------------------------------------
+// Scenes
+
+/// A scene: shapes, materials, lights and the view it was made for.
+#[pyclass(module = "lenspath._core")]
+#[derive(Clone)]
+struct Scene {
+    name: String,
+    scene: CoreScene,
+    options: SceneOptions,
+}
+
+#[pymethods]
+impl Scene {
+    /// An empty scene (add shapes, lights and a view to it).
+    #[new]
+    fn new() -> Self {
+        Scene {
+            name: "scene".into(),
+            scene: CoreScene::default(),
+            options: SceneOptions::default(),
+        }
+    }
+
+    /// A built-in scene by name (see `builtin_scenes()`).
+    #[staticmethod]
+    #[pyo3(signature = (name, mesh_triangles = DEFAULT_MESH_TRIANGLES))]
+    fn builtin(name: &str, mesh_triangles: usize) -> PyResult<Self> {
+        Ok(Scene {
+            name: name.into(),
+            scene: builtin_scene(name, mesh_triangles).map_err(|e| to_py(e, FileKind::Scene))?,
+            options: SceneOptions::default(),
+        })
+    }
+
+    #[getter]
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    #[getter]
+    fn mesh_count(&self) -> usize {
+        self.scene.meshes.len()
+    }
+
+    #[getter]
+    fn triangle_count(&self) -> usize {
+        self.scene.triangle_count()
+    }
+
+    #[getter]
+    fn sphere_count(&self) -> usize {
+        self.scene.spheres.len()
+    }
+
+    #[getter]
+    fn material_count(&self) -> usize {
+        self.scene.materials.len()
+    }
+
+    #[getter]
+    fn light_count(&self) -> usize {
+        self.scene.lights.len()
+            + self.scene.meshes.iter().filter(|m| m.emission.is_some()).count()
+            + self.scene.spheres.iter().filter(|s| s.emission.is_some()).count()
+    }
+
+    /// The image size the scene file asks for, or None.
+    #[getter]
+    fn resolution(&self) -> Option<(u32, u32)> {
+        self.options.resolution
+    }
+
+    /// Adds a material: `kind` is "diffuse" (reflectance), "mirror"
+    /// (reflectance), "glass" (eta) or "metal" (eta, k, roughness); returns its index.
+    #[pyo3(signature = (kind, *, reflectance = (0.8, 0.8, 0.8), eta = None, k = None, roughness = 0.0))]
+    fn add_material(
+        &mut self,
+        kind: &str,
+        reflectance: (f32, f32, f32),
+        eta: Option<(f32, f32, f32)>,
+        k: Option<(f32, f32, f32)>,
+        roughness: f32,
+    ) -> PyResult<u32> {
+        let rgb = |c: (f32, f32, f32)| Vec3::new(c.0, c.1, c.2);
+        let material = match kind {
+            "diffuse" => Material::Diffuse {
+                reflectance: rgb(reflectance),
+            },
+            "mirror" => Material::Mirror {
+                reflectance: rgb(reflectance),
+            },
+            "glass" => Material::clear_dielectric(eta.map_or(1.5, |e| e.0)),
+            "metal" => Material::Conductor {
+                eta: rgb(eta.ok_or_else(|| value_error("a metal needs eta=(r, g, b)"))?),
+                k: rgb(k.ok_or_else(|| value_error("a metal needs k=(r, g, b)"))?),
+                alpha: roughness,
+            },
+            other => {
+                return Err(value_error(format!(
+                    "unknown material kind '{other}'; use diffuse, mirror, glass or metal"
+                )))
+            }
+        };
+        self.scene.materials.push(material);
+        Ok(self.scene.materials.len() as u32 - 1)
+    }
+
+    /// Adds a triangle mesh from `vertices` (N × 3 float32) and `indices`
+    /// (M × 3 uint32) with material index `material`; `emission` makes it an area light.
+    #[pyo3(signature = (vertices, indices, material, *, emission = None))]
+    fn add_mesh(
+        &mut self,
+        vertices: PyArrayLike2<'_, f32, AllowTypeChange>,
+        indices: PyArrayLike2<'_, u32, AllowTypeChange>,
+        material: u32,
+        emission: Option<(f32, f32, f32)>,
+    ) -> PyResult<()> {
+        if vertices.shape()[1] != 3 || indices.shape()[1] != 3 {
+            return Err(value_error(format!(
+                "vertices and indices must be N x 3 arrays, got {:?} and {:?}",
+                vertices.shape(),
+                indices.shape()
+            )));
+        }
+        let positions: Vec<Vec3> = vertices
+            .as_array()
+            .rows()
+            .into_iter()
+            .map(|r| Vec3::new(r[0], r[1], r[2]))
+            .collect();
+        let triangles: Vec<[u32; 3]> = indices
+            .as_array()
+            .rows()
+            .into_iter()
+            .map(|r| [r[0], r[1], r[2]])
+            .collect();
+        let mut scene = self.scene.clone();
+        scene.meshes.push(TriangleMesh {
+            positions,
+            normals: None,
+            uvs: None,
+            indices: triangles,
+            material,
+            emission: emission.map(|e| Vec3::new(e.0, e.1, e.2)),
+        });
+        // Checked now, so a bad mesh is reported where it was added.
+        scene.validate().map_err(|e| to_py(e, FileKind::Scene))?;
+        self.scene = scene;
+        Ok(())
+    }
+
+    /// Adds a sphere; `emission` makes it an area light.
+    #[pyo3(signature = (center, radius, material, *, emission = None))]
+    fn add_sphere(
+        &mut self,
+        center: (f32, f32, f32),
+        radius: f32,
+        material: u32,
+        emission: Option<(f32, f32, f32)>,
+    ) -> PyResult<()> {
+        let mut scene = self.scene.clone();
+        scene.spheres.push(Sphere {
+            center: Vec3::new(center.0, center.1, center.2),
+            radius,
+            material,
+            emission: emission.map(|e| Vec3::new(e.0, e.1, e.2)),
+        });
+        scene.validate().map_err(|e| to_py(e, FileKind::Scene))?;
+        self.scene = scene;
+        Ok(())
+    }
+
+    /// Adds a uniform environment: `radiance` from every direction the scene does not block.
+    fn add_environment(&mut self, radiance: (f32, f32, f32)) -> PyResult<()> {
+        let radiance = Vec3::from(radiance);
+        if !(radiance.is_finite() && radiance.min_element() >= 0.0) {
+            return Err(value_error(format!(
+                "radiance must be finite and non-negative, got {radiance}"
+            )));
+        }
+        self.scene.lights.push(Light::Environment { radiance });
+        Ok(())
+    }
+
+    /// Sets the view: a camera at `eye` looking at `target`, vertical field
+    /// of view `fov_deg` (pinhole), subject at `focus_distance` (default: the target).
+    #[pyo3(signature = (eye, target, up = (0.0, 1.0, 0.0), fov_deg = 40.0, focus_distance = None))]
+    fn look_at(
+        &mut self,
+        eye: (f32, f32, f32),
+        target: (f32, f32, f32),
+        up: (f32, f32, f32),
+        fov_deg: f32,
+        focus_distance: Option<f32>,
+    ) -> PyResult<()> {
+        let (eye, target, up) = (Vec3::from(eye), Vec3::from(target), Vec3::from(up));
+        if (target - eye).length() <= 0.0 || (target - eye).cross(up).length() <= 1e-6 {
+            return Err(value_error(
+                "look_at: eye and target must differ, and up must not be along the view",
+            ));
+        }
+        if !(fov_deg > 0.0 && fov_deg < 180.0) {
+            return Err(value_error(format!("fov_deg must be between 0 and 180, got {fov_deg}")));
+        }
+        self.scene.view = Some(SceneView {
+            pose: CameraPose::look_at(eye, target, up),
+            fov_y_deg: fov_deg,
+            focus_distance: focus_distance.unwrap_or((target - eye).length()),
+        });
+        Ok(())
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "<lenspath.Scene '{}': {} meshes ({} triangles), {} spheres, {} materials>",
+            self.name,
+            self.scene.meshes.len(),
+            self.scene.triangle_count(),
+            self.scene.spheres.len(),
+            self.scene.materials.len()
+        )
+    }
+}
+
+/// Loads a scene file (COLLADA, OBJ, PLY, glTF or lenspath TOML) by extension.
+#[pyfunction]
+fn load(py: Python<'_>, path: PathBuf) -> PyResult<Scene> {
+    let loaded = py.detach(|| load_scene(&path)).map_err(|e| to_py(e, FileKind::Scene))?;
+    Ok(Scene {
+        name: path.display().to_string(),
+        scene: loaded.scene,
+        options: loaded.options,
+    })
+}
+
+/// The built-in scenes' names.
+#[pyfunction]
+fn builtin_scenes() -> Vec<&'static str> {
+    BUILTIN_SCENES.to_vec()
+}
+
+// ---------------------------------------------------------------------------
+// Lenses
+
+/// The default sensor of the lens drawings, as `lenspath lens` draws them: 36 × 24 mm.
+const FULL_FRAME_MM: (f64, f64) = (36.0, 24.0);
+
+/// A real compound lens: its prescription, placed wide open (or stopped down).
+#[pyclass(module = "lenspath._core")]
+#[derive(Clone)]
+struct Lens {
+    prescription: LensPrescription,
+    system: LensSystem,
+    analysis: LensAnalysis,
+}
+
+impl Lens {
+    fn from_prescription(prescription: LensPrescription) -> PyResult<Lens> {
+        let system = LensSystem::new(&prescription);
+        let analysis =
+            LensAnalysis::new(&system, &AnalysisSettings::default()).map_err(|e| to_py(e, FileKind::Lens))?;
+        Ok(Lens {
+            prescription,
+            system,
+            analysis,
+        })
+    }
+}
+
+#[pymethods]
+impl Lens {
+    /// A built-in lens by name (see `builtin_lenses()`).
+    #[staticmethod]
+    fn builtin(name: &str) -> PyResult<Lens> {
+        if !BUILTIN_LENSES.iter().any(|(n, _)| *n == name) {
+            return Err(value_error(format!(
+                "unknown built-in lens '{name}'; use one of {}",
+                BUILTIN_LENSES.map(|(n, _)| n).join(", ")
+            )));
+        }
+        Lens::from_prescription(LensPrescription::load(name).map_err(|e| to_py(e, FileKind::Lens))?)
+    }
+
+    /// A lens table file (pbrt / CS184 format).
+    #[staticmethod]
+    fn load(path: PathBuf) -> PyResult<Lens> {
+        if !path.is_file() {
+            let source = std::io::Error::from(std::io::ErrorKind::NotFound);
+            return Err(to_py(Error::Io { path, source }, FileKind::Lens));
+        }
+        let name = path
+            .to_str()
+            .ok_or_else(|| value_error(format!("{}: not a UTF-8 path", path.display())))?;
+        Lens::from_prescription(LensPrescription::load(name).map_err(|e| to_py(e, FileKind::Lens))?)
+    }
+
+    /// A lens from a table (N × 4: radius, thickness to the next surface,
+    /// index, aperture diameter, all mm; radius 0 marks the stop).
+    #[staticmethod]
+    #[pyo3(signature = (table, name = "table"))]
+    fn from_table(table: PyArrayLike2<'_, f64, AllowTypeChange>, name: &str) -> PyResult<Lens> {
+        if table.shape()[1] != 4 {
+            return Err(value_error(format!(
+                "a lens table has 4 columns (radius, thickness, index, aperture), got {}",
+                table.shape()[1]
+            )));
+        }
+        let text: String = table
+            .as_array()
+            .rows()
+            .into_iter()
+            .map(|r| format!("{} {} {} {}\n", r[0], r[1], r[2], r[3]))
+            .collect();
+        let prescription = LensPrescription::parse(&text, name, TableConvention::ThicknessToNext)
+            .map_err(|e| to_py(e, FileKind::Lens))?;
+        Lens::from_prescription(prescription)
+    }
+
+    /// This lens stopped down to f-number `f_number`.
+    fn stopped_down(&self, f_number: f64) -> PyResult<Lens> {
+        let system = self
+            .system
+            .with_f_number(f_number)
+            .map_err(|e| to_py(e, FileKind::Lens))?;
+        let analysis =
+            LensAnalysis::new(&system, &AnalysisSettings::default()).map_err(|e| to_py(e, FileKind::Lens))?;
+        Ok(Lens {
+            prescription: self.prescription.clone(),
+            system,
+            analysis,
+        })
+    }
+
+    #[getter]
+    fn name(&self) -> &str {
+        self.prescription.name()
+    }
+
+    /// The table: N × 4 (radius, thickness to next, index, aperture diameter), mm.
+    #[getter]
+    fn table<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        let surfaces = self.prescription.surfaces();
+        let mut a = Array2::zeros((surfaces.len(), 4));
+        for (i, s) in surfaces.iter().enumerate() {
+            a[[i, 0]] = s.radius_mm;
+            a[[i, 1]] = s.thickness_mm;
+            a[[i, 2]] = s.ior;
+            a[[i, 3]] = s.aperture_diameter_mm;
+        }
+        a.into_pyarray(py)
+    }
+
+    /// Every figure of `lenspath lens --json`, as a dict.
+    fn analysis<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let a = &self.analysis;
+        let d = PyDict::new(py);
+        for (key, value) in [
+            ("effective_focal_length_mm", a.effective_focal_length_mm),
+            ("back_focal_distance_mm", a.back_focal_distance_mm),
+            ("front_focal_distance_mm", a.front_focal_distance_mm),
+            ("front_principal_plane_mm", a.front_principal_plane_mm),
+            ("rear_principal_plane_mm", a.rear_principal_plane_mm),
+            ("entrance_pupil_mm", a.entrance_pupil_mm),
+            ("entrance_pupil_diameter_mm", a.entrance_pupil_diameter_mm),
+            ("exit_pupil_mm", a.exit_pupil_mm),
+            ("exit_pupil_diameter_mm", a.exit_pupil_diameter_mm),
+            ("f_number", a.f_number),
+            ("diagonal_fov_deg", a.diagonal_fov_deg),
+            ("horizontal_fov_deg", a.horizontal_fov_deg),
+            ("infinity_focus_mm", a.infinity_focus_mm),
+            ("close_focus_mm", a.close_focus_mm),
+            ("close_focus_object_distance_mm", a.close_focus_object_distance_mm),
+            ("focal_length_mm", a.focal_length_mm),
+            ("ray_height_mm", a.ray_height_mm),
+            ("front_vertex_mm", a.front_vertex_mm),
+            ("rear_vertex_mm", a.rear_vertex_mm),
+        ] {
+            d.set_item(key, value)?;
+        }
+        Ok(d)
+    }
+
+    /// Real-ray focal length |P′ − F′|, mm.
+    #[getter]
+    fn focal_length_mm(&self) -> f64 {
+        self.analysis.focal_length_mm
+    }
+
+    /// Paraxial effective focal length, mm.
+    #[getter]
+    fn effective_focal_length_mm(&self) -> f64 {
+        self.analysis.effective_focal_length_mm
+    }
+
+    /// Paraxial f-number.
+    #[getter]
+    fn f_number(&self) -> f64 {
+        self.analysis.f_number
+    }
+
+    /// Sensor position (mm behind the stop) focusing infinity.
+    #[getter]
+    fn infinity_focus_mm(&self) -> f64 {
+        self.analysis.infinity_focus_mm
+    }
+
+    /// Sensor position (mm behind the stop) focusing the close-focus object.
+    #[getter]
+    fn close_focus_mm(&self) -> f64 {
+        self.analysis.close_focus_mm
+    }
+
+    /// Distance in focus (mm from the sensor plane) with the sensor at
+    /// `sensor_mm` behind the stop; None when nothing in front of the lens is.
+    #[pyo3(signature = (sensor_mm, ray_height_mm = 0.1))]
+    fn focus_distance(&self, sensor_mm: f64, ray_height_mm: f64) -> Option<f64> {
+        self.system.focus_distance_mm(sensor_mm, ray_height_mm)
+    }
+
+    /// Sensor position (mm behind the stop) focusing `distance_mm` (from the sensor plane).
+    #[pyo3(signature = (distance_mm, ray_height_mm = 0.1))]
+    fn sensor_for_distance(&self, distance_mm: f64, ray_height_mm: f64) -> PyResult<f64> {
+        self.system
+            .sensor_z_for_focus_distance(distance_mm, ray_height_mm)
+            .map_err(|e| to_py(e, FileKind::Lens))
+    }
+
+    /// Traces rays (N × 3 origins and directions, lens coordinates in mm:
+    /// z along the axis toward the sensor, the stop at 0) through every
+    /// surface, `toward` "scene" or "sensor". Returns (origins, directions,
+    /// passed): where each ray leaves the last surface, its unit direction,
+    /// and whether it got through (False rows are NaN).
+    #[pyo3(signature = (origins, directions, toward = "scene"))]
+    #[allow(clippy::type_complexity)]
+    fn trace<'py>(
+        &self,
+        py: Python<'py>,
+        origins: PyArrayLike2<'_, f64, AllowTypeChange>,
+        directions: PyArrayLike2<'_, f64, AllowTypeChange>,
+        toward: &str,
+    ) -> PyResult<(
+        Bound<'py, PyArray2<f64>>,
+        Bound<'py, PyArray2<f64>>,
+        Bound<'py, numpy::PyArray1<bool>>,
+    )> {
+        let direction = match toward {
+            "scene" => Direction::ToScene,
+            "sensor" => Direction::ToSensor,
+            other => {
+                return Err(value_error(format!(
+                    "toward must be 'scene' or 'sensor', got '{other}'"
+                )))
+            }
+        };
+        if origins.shape() != directions.shape() || origins.shape()[1] != 3 {
+            return Err(value_error(format!(
+                "origins and directions must both be N x 3, got {:?} and {:?}",
+                origins.shape(),
+                directions.shape()
+            )));
+        }
+        let (o, d) = (origins.as_array(), directions.as_array());
+        let n = o.nrows();
+        let mut out_o = Array2::from_elem((n, 3), f64::NAN);
+        let mut out_d = Array2::from_elem((n, 3), f64::NAN);
+        let mut passed = vec![false; n];
+        for i in 0..n {
+            let dir = DVec3::new(d[[i, 0]], d[[i, 1]], d[[i, 2]]);
+            if !dir.is_finite() || dir.length_squared() == 0.0 {
+                return Err(value_error(format!("direction {i} has zero length")));
+            }
+            let ray = LensRay {
+                origin: DVec3::new(o[[i, 0]], o[[i, 1]], o[[i, 2]]),
+                direction: dir.normalize(),
+            };
+            if let Some(out) = self.system.trace(&ray, direction) {
+                for c in 0..3 {
+                    out_o[[i, c]] = out.origin[c];
+                    out_d[[i, c]] = out.direction[c];
+                }
+                passed[i] = true;
+            }
+        }
+        Ok((out_o.into_pyarray(py), out_d.into_pyarray(py), passed.into_pyarray(py)))
+    }
+
+    /// The lens layout (elements, stop, marginal and chief rays) as SVG text;
+    /// the sensor `sensor_diagonal_mm` across (default: 36 × 24 mm).
+    #[pyo3(signature = (sensor_diagonal_mm = None))]
+    fn plot(&self, sensor_diagonal_mm: Option<f64>) -> String {
+        layout_svg(
+            &self.system,
+            &self.analysis,
+            sensor_diagonal_mm.unwrap_or_else(|| FULL_FRAME_MM.0.hypot(FULL_FRAME_MM.1)),
+        )
+    }
+
+    /// What `plot` draws, as arrays of (z, height) rows in mm: `elements`
+    /// (closed outlines), `stop` (two blades), `sensor`, `rays` ((field
+    /// fraction, path) pairs), `z_range_mm`, `half_height_mm`, `title`.
+    #[pyo3(signature = (sensor_diagonal_mm = None))]
+    fn layout<'py>(&self, py: Python<'py>, sensor_diagonal_mm: Option<f64>) -> PyResult<Bound<'py, PyDict>> {
+        let diagonal = sensor_diagonal_mm.unwrap_or_else(|| FULL_FRAME_MM.0.hypot(FULL_FRAME_MM.1));
+        let l = layout(&self.system, &self.analysis, diagonal);
+        let array = |line: &Polyline| {
+            let flat: Vec<f64> = line.iter().flat_map(|&(z, h)| [z, h]).collect();
+            Array2::from_shape_vec((line.len(), 2), flat)
+                .expect("two values per point")
+                .into_pyarray(py)
+        };
+        let d = PyDict::new(py);
+        d.set_item("title", &l.title)?;
+        d.set_item("elements", l.elements.iter().map(array).collect::<Vec<_>>())?;
+        d.set_item("stop", l.stop.iter().map(array).collect::<Vec<_>>())?;
+        d.set_item("sensor", array(&l.sensor))?;
+        d.set_item(
+            "rays",
+            l.rays.iter().map(|(f, path)| (*f, array(path))).collect::<Vec<_>>(),
+        )?;
+        d.set_item("z_range_mm", l.z_range_mm)?;
+        d.set_item("half_height_mm", l.half_height_mm)?;
+        Ok(d)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "<lenspath.Lens '{}': f = {:.2} mm, f/{:.2}>",
+            self.prescription.name(),
+            self.analysis.focal_length_mm,
+            self.analysis.f_number
+        )
+    }
+}
+
+/// The built-in lenses' names.
+#[pyfunction]
+fn builtin_lenses() -> Vec<&'static str> {
+    BUILTIN_LENSES.map(|(n, _)| n).to_vec()
+}
+
+// ---------------------------------------------------------------------------
+// Cameras
+
+/// How to build the camera of a render.
+#[derive(Clone)]
+enum CameraSpec {
+    Pinhole {
+        fov_deg: Option<f32>,
+    },
+    ThinLens {
+        fov_deg: Option<f32>,
+        aperture_radius: f32,
+        focus_distance: Option<f32>,
+        aperture: ApertureShape,
+    },
+    Realistic {
+        lens: Option<Box<Lens>>,
+        focus_distance: Option<f64>,
+        sensor_mm: Option<f64>,
+        sensor_width_mm: Option<f64>,
+        f_number: Option<f64>,
+        aperture: Option<ApertureShape>,
+        scene_unit_m: Option<f64>,
+    },
+}
+
+impl CameraSpec {
+    /// The realistic camera with the scene's own settings, as `lenspath render` uses.
+    fn scene_default() -> CameraSpec {
+        CameraSpec::Realistic {
+            lens: None,
+            focus_distance: None,
+            sensor_mm: None,
+            sensor_width_mm: None,
+            f_number: None,
+            aperture: None,
+            scene_unit_m: None,
+        }
+    }
+}
+
+/// A camera for `render`: `Camera.pinhole(...)`, `Camera.thin_lens(...)` or
+/// `Camera.realistic(...)`; what it leaves unset comes from the scene.
+#[pyclass(module = "lenspath._core")]
+#[derive(Clone)]
+struct Camera {
+    spec: CameraSpec,
+}
+
+fn parse_aperture(aperture: Option<&str>) -> PyResult<Option<ApertureShape>> {
+    aperture
+        .map(|a| ApertureShape::parse(a).map_err(|e| to_py(e, FileKind::Scene)))
+        .transpose()
+}
+
+#[pymethods]
+impl Camera {
+    /// An ideal pinhole; `fov_deg` (vertical) defaults to the scene's.
+    #[staticmethod]
+    #[pyo3(signature = (fov_deg = None))]
+    fn pinhole(fov_deg: Option<f32>) -> Camera {
+        Camera {
+            spec: CameraSpec::Pinhole { fov_deg },
+        }
+    }
+
+    /// An ideal thin lens of `aperture_radius` (scene units) focused at
+    /// `focus_distance` (default: the scene's subject); `aperture` a shape
+    /// such as "blades:6" or "star:5:0.4".
+    #[staticmethod]
+    #[pyo3(signature = (aperture_radius, focus_distance = None, fov_deg = None, aperture = None))]
+    fn thin_lens(
+        aperture_radius: f32,
+        focus_distance: Option<f32>,
+        fov_deg: Option<f32>,
+        aperture: Option<&str>,
+    ) -> PyResult<Camera> {
+        if !(aperture_radius >= 0.0 && aperture_radius.is_finite()) {
+            return Err(value_error(format!(
+                "aperture_radius must be zero or positive, got {aperture_radius}"
+            )));
+        }
+        Ok(Camera {
+            spec: CameraSpec::ThinLens {
+                fov_deg,
+                aperture_radius,
+                focus_distance,
+                aperture: parse_aperture(aperture)?.unwrap_or(ApertureShape::Circle),
+            },
+        })
+    }
+
+    /// A real lens (a `Lens` or a built-in name; default: the scene file's,
+    /// else dgauss50), focused at `focus_distance` (scene units from the
+    /// sensor) or with the sensor `sensor_mm` behind the stop, stopped down
+    /// to `f_number`, with a `sensor_width_mm` wide sensor and an `aperture` shape.
+    #[staticmethod]
+    #[pyo3(signature = (lens = None, *, focus_distance = None, sensor_mm = None, f_number = None,
+                        sensor_width_mm = None, aperture = None, scene_unit_m = None))]
+    #[allow(clippy::too_many_arguments)]
+    fn realistic(
+        lens: Option<&Bound<'_, PyAny>>,
+        focus_distance: Option<f64>,
+        sensor_mm: Option<f64>,
+        f_number: Option<f64>,
+        sensor_width_mm: Option<f64>,
+        aperture: Option<&str>,
+        scene_unit_m: Option<f64>,
+    ) -> PyResult<Camera> {
+        let lens = match lens {
+            None => None,
+            Some(l) => Some(match l.extract::<Lens>() {
+                Ok(lens) => lens,
+                Err(_) => Lens::builtin(
+                    &l.extract::<String>()
+                        .map_err(|_| value_error("lens must be a lenspath.Lens or a built-in lens name"))?,
+                )?,
+            }),
+        };
+        if focus_distance.is_some() && sensor_mm.is_some() {
+            return Err(value_error("give focus_distance or sensor_mm, not both"));
+        }
+        Ok(Camera {
+            spec: CameraSpec::Realistic {
+                lens: lens.map(Box::new),
+                focus_distance,
+                sensor_mm,
+                sensor_width_mm,
+                f_number,
+                aperture: parse_aperture(aperture)?,
+                scene_unit_m,
+            },
+        })
+    }
+}
+
+/// The camera `spec` (None: the realistic camera with the scene's settings,
+/// as `lenspath render` uses) for `scene` at `width` × `height`.
+fn build_camera(scene: &Scene, spec: Option<&CameraSpec>, width: u32, height: u32) -> PyResult<Box<dyn CameraTrait>> {
+    let view = scene
+        .scene
+        .view
+        .ok_or_else(|| value_error(format!("scene '{}' has no view; call look_at first", scene.name)))?;
+    let default = CameraSpec::scene_default();
+    let fov = |f: Option<f32>| f.unwrap_or(view.fov_y_deg);
+    Ok(match spec.unwrap_or(&default) {
+        CameraSpec::Pinhole { fov_deg } => {
+            Box::new(PerspectiveCamera::pinhole(view.pose, fov(*fov_deg), width, height))
+        }
+        CameraSpec::ThinLens {
+            fov_deg,
+            aperture_radius,
+            focus_distance,
+            aperture,
+        } => Box::new(
+            PerspectiveCamera::thin_lens(
+                view.pose,
+                fov(*fov_deg),
+                width,
+                height,
+                *aperture_radius,
+                focus_distance.unwrap_or(view.focus_distance),
+            )
+            .with_aperture(Arc::new(
+                Aperture::new(aperture).map_err(|e| to_py(e, FileKind::Scene))?,
+            )),
+        ),
+        realistic @ CameraSpec::Realistic { .. } => {
+            let settings = realistic_settings(scene, &view, realistic, width, height)?;
+            Box::new(RealisticCamera::new(view.pose, width, height, &settings).map_err(|e| to_py(e, FileKind::Lens))?)
+        }
+    })
+}
+
+/// The realistic camera's settings: the scene's (as `lenspath render` uses),
+/// overridden by what `spec` sets. Errors for the other cameras.
+fn realistic_settings(
+    scene: &Scene,
+    view: &SceneView,
+    spec: &CameraSpec,
+    width: u32,
+    height: u32,
+) -> PyResult<RealisticCameraSettings> {
+    let CameraSpec::Realistic {
+        lens,
+        focus_distance,
+        sensor_mm,
+        sensor_width_mm,
+        f_number,
+        aperture,
+        scene_unit_m,
+    } = spec
+    else {
+        return Err(value_error("this needs a realistic camera (Camera.realistic)"));
+    };
+    let mut settings = RealisticCameraSettings::for_scene(&scene.options, view, width, height)
+        .map_err(|e| to_py(e, FileKind::Lens))?;
+    if let Some(lens) = lens {
+        settings.lens = lens.prescription.clone();
+    }
+    if let Some(w) = sensor_width_mm {
+        settings.sensor_mm = lenspath::camera::sensor_for_image(*w, width, height);
+    }
+    if let Some(d) = focus_distance {
+        settings.focus = LensFocus::Distance(*d);
+    }
+    if let Some(mm) = sensor_mm {
+        settings.focus = LensFocus::SensorPositionMm(*mm);
+    }
+    settings.f_number = f_number.or(settings.f_number);
+    settings.scene_unit_m = scene_unit_m.unwrap_or(settings.scene_unit_m);
+    if let Some(a) = aperture {
+        settings.aperture = a.clone();
+    }
+    Ok(settings)
+}
+
+// ---------------------------------------------------------------------------
+// Rendering
+
+/// `rgb` (`width` × `height` × 3, row-major) as a float32 (H, W, 3) array.
+fn rgb_array<'py>(py: Python<'py>, image: &Image) -> Bound<'py, PyArray3<f32>> {
+    Array3::from_shape_vec((image.height as usize, image.width as usize, 3), image.rgb.clone())
+        .expect("an image holds width × height × 3 values")
+        .into_pyarray(py)
+}
+
+/// Renders `scene` through `camera` (see the stub for the arguments).
+#[pyfunction]
+#[pyo3(signature = (scene, camera = None, *, spp = 64, resolution = None, seed = 0, max_depth = 16,
+                    light_samples = 1, threads = None, aovs = None, progress = None))]
+#[allow(clippy::too_many_arguments)]
+fn render<'py>(
+    py: Python<'py>,
+    scene: &Scene,
+    camera: Option<&Camera>,
+    spp: u32,
+    resolution: Option<(u32, u32)>,
+    seed: u32,
+    max_depth: u32,
+    light_samples: u32,
+    threads: Option<usize>,
+    aovs: Option<Vec<String>>,
+    progress: Option<Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let want_depth = match aovs.as_deref() {
+        None | Some([]) => false,
+        Some(names) => {
+            if let Some(bad) = names.iter().find(|n| n.as_str() != "depth") {
+                return Err(value_error(format!("unknown AOV '{bad}'; lenspath renders 'depth'")));
+            }
+            true
+        }
+    };
+    let (width, height) = resolution.or(scene.options.resolution).unwrap_or((640, 480));
+    let settings = RenderSettings {
+        width,
+        height,
+        spp,
+        path: PathSettings {
+            max_depth,
+            light_samples,
+        },
+        seed,
+        filter: Filter::Box,
+        threads,
+        tile_size: 16,
+        crop: None,
+        depth: true,
+    };
+    settings.validate().map_err(|e| to_py(e, FileKind::Scene))?;
+    let camera = build_camera(scene, camera.map(|c| &c.spec), width, height)?;
+    let core_scene = scene.scene.clone();
+    let compiled = py
+        .detach(|| core_scene.compile(&BvhSettings::default()))
+        .map_err(|e| to_py(e, FileKind::Scene))?;
+
+    // Render on a worker thread without the GIL; this thread wakes every
+    // 50 ms to report progress and to turn Ctrl-C into a cancelled render.
+    let cancel = AtomicBool::new(false);
+    let (done, total) = (AtomicU64::new(0), AtomicU64::new(0));
+    let finished = AtomicBool::new(false);
+    let mut interrupt: Option<PyErr> = None;
+    let output = std::thread::scope(|s| {
+        let worker = s.spawn(|| {
+            let out = render_scene(
+                &compiled,
+                camera.as_ref(),
+                &settings,
+                &|d, t| {
+                    done.store(d, Ordering::Relaxed);
+                    total.store(t, Ordering::Relaxed);
+                },
+                &cancel,
+            );
+            finished.store(true, Ordering::Release);
+            out
+        });
+        while !finished.load(Ordering::Acquire) {
+            py.detach(|| std::thread::sleep(Duration::from_millis(50)));
+            if interrupt.is_none() {
+                if let Err(e) = py.check_signals() {
+                    cancel.store(true, Ordering::SeqCst);
+                    interrupt = Some(e);
+                    continue;
+                }
+                if let Some(callback) = &progress {
+                    if let Err(e) = callback.call1((done.load(Ordering::Relaxed), total.load(Ordering::Relaxed))) {
+                        cancel.store(true, Ordering::SeqCst);
+                        interrupt = Some(e);
+                    }
+                }
+            }
+        }
+        worker.join().expect("the render thread does not panic")
+    });
+    if let Some(e) = interrupt {
+        return Err(e);
+    }
+    let output = output.map_err(|e| to_py(e, FileKind::Scene))?;
+    if let Some(callback) = &progress {
+        callback.call1((output.stats.samples, output.stats.samples))?;
+    }
+    let rgb = rgb_array(py, &output.image);
+    if !want_depth {
+        return Ok(rgb.into_any());
+    }
+    let depth = Array2::from_shape_vec((height as usize, width as usize), output.image.depth.clone())
+        .expect("a depth per pixel")
+        .into_pyarray(py);
+    let d = PyDict::new(py);
+    d.set_item("rgb", rgb)?;
+    d.set_item("depth", depth)?;
+    Ok(d.into_any())
+}
+
+// ---------------------------------------------------------------------------
+// Autofocus
+
+/// What `autofocus` found and what it cost.
+#[pyclass(module = "lenspath._core", frozen, get_all)]
+struct AutofocusResult {
+    /// The chosen sensor position, mm behind the stop.
+    sensor_mm: f64,
+    /// The distance in focus there (scene units from the sensor); None beyond infinity.
+    focus_distance: Option<f64>,
+    /// The focus measure's name.
+    metric: String,
+    /// The strategy's name.
+    strategy: String,
+    /// Every patch render: (sensor_mm, score) rows, in the order rendered.
+    evaluations: Py<PyArray2<f64>>,
+    /// Camera rays traced (patch samples and probe rays).
+    camera_rays: u64,
+    /// Wall time, seconds.
+    seconds: f64,
+    /// The depth of focus at the chosen position, mm (the unit of focus errors).
+    depth_of_focus_mm: f64,
+    /// The camera given, focused there.
+    camera: Camera,
+}
+
+#[pymethods]
+impl AutofocusResult {
+    fn __repr__(&self, py: Python<'_>) -> String {
+        let distance = self
+            .focus_distance
+            .map_or_else(|| "None".to_string(), |d| format!("{d:.4}"));
+        format!(
+            "AutofocusResult(strategy='{}', metric='{}', sensor_mm={:.4}, focus_distance={distance}, \
+             renders={}, camera_rays={})",
+            self.strategy,
+            self.metric,
+            self.sensor_mm,
+            self.evaluations.bind(py).shape()[0],
+            self.camera_rays
+        )
+    }
+}
+
+/// Focuses the realistic camera on `patch` (x, y, width, height in fractions
+/// of the image) by rendering it (see the stub).
+#[pyfunction]
+#[pyo3(signature = (scene, patch, camera = None, *, metric = "tenengrad", strategy = "fast", patience = 12,
+                    spp = 16, resolution = None, seed = 0, max_depth = 8, threads = None))]
+#[allow(clippy::too_many_arguments)]
+fn autofocus(
+    py: Python<'_>,
+    scene: &Scene,
+    patch: (f64, f64, f64, f64),
+    camera: Option<&Camera>,
+    metric: &str,
+    strategy: &str,
+    patience: usize,
+    spp: u32,
+    resolution: Option<(u32, u32)>,
+    seed: u32,
+    max_depth: u32,
+    threads: Option<usize>,
+) -> PyResult<AutofocusResult> {
+    let invalid = |e: Error| to_py(e, FileKind::Scene);
+    let measure = FocusMeasure::from_name(metric).map_err(invalid)?;
+    let search = Strategy::from_name(strategy, patience).map_err(invalid)?;
+    let patch = NormalizedRect::new(patch.0, patch.1, patch.2, patch.3).map_err(invalid)?;
+    let (width, height) = resolution.or(scene.options.resolution).unwrap_or((640, 480));
+    let view = scene
+        .scene
+        .view
+        .ok_or_else(|| value_error(format!("scene '{}' has no view; call look_at first", scene.name)))?;
+    let spec = camera.map_or_else(CameraSpec::scene_default, |c| c.spec.clone());
+    let lens = realistic_settings(scene, &view, &spec, width, height)?;
+    let settings = AutofocusSettings {
+        camera: lens,
+        width,
+        height,
+        patch: patch.to_pixels(width, height),
+        measure,
+        spp,
+        path: PathSettings {
+            max_depth,
+            light_samples: 1,
+        },
+        seed,
+        threads,
+    };
+    let core_scene = scene.scene.clone();
+    let (result, depth_of_focus_mm) = py
+        .detach(|| {
+            let compiled = core_scene.compile(&BvhSettings::default())?;
+            let mut focuser = Focuser::new(&compiled, view.pose, settings)?;
+            let result = focuser.run(search)?;
+            let dof = focuser.depth_of_focus_mm(result.sensor_z_mm);
+            Ok::<_, Error>((result, dof))
+        })
+        .map_err(|e| to_py(e, FileKind::Lens))?;
+    let rows: Vec<f64> = result
+        .evaluations
+        .iter()
+        .flat_map(|e| [e.sensor_z_mm, e.score])
+        .collect();
+    let evaluations = Array2::from_shape_vec((result.evaluations.len(), 2), rows)
+        .expect("two values per evaluation")
+        .into_pyarray(py)
+        .unbind();
+    let CameraSpec::Realistic {
+        lens,
+        sensor_width_mm,
+        f_number,
+        aperture,
+        scene_unit_m,
+        ..
+    } = spec
+    else {
+        unreachable!("realistic_settings accepted only the realistic camera");
+    };
+    Ok(AutofocusResult {
+        sensor_mm: result.sensor_z_mm,
+        focus_distance: result.focus_distance,
+        metric: metric.to_string(),
+        strategy: result.strategy.to_string(),
+        evaluations,
+        camera_rays: result.camera_rays,
+        seconds: result.seconds,
+        depth_of_focus_mm,
+        camera: Camera {
+            spec: CameraSpec::Realistic {
+                lens,
+                focus_distance: None,
+                sensor_mm: Some(result.sensor_z_mm),
+                sensor_width_mm,
+                f_number,
+                aperture,
+                scene_unit_m,
+            },
+        },
+    })
+}
+
+// ---------------------------------------------------------------------------
+// Images, focus measures, bokeh
+
+/// An (H, W, 3) float32 array as a core image.
+fn image_from_array(image: &PyArrayLike3<'_, f32, AllowTypeChange>) -> PyResult<Image> {
+    let shape = image.shape();
+    if shape[2] != 3 {
+        return Err(value_error(format!("images are H x W x 3 arrays, got {shape:?}")));
+    }
+    Ok(Image {
+        width: shape[1] as u32,
+        height: shape[0] as u32,
+        rgb: image.as_array().iter().copied().collect(),
+        depth: vec![f32::INFINITY; shape[0] * shape[1]],
+        spp_min: 0,
+        spp_requested: 0,
+    })
+}
+
+/// Reads a PNG, JPEG or EXR image as linear RGB, float32 (H, W, 3).
+#[pyfunction]
+fn read<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyArray3<f32>>> {
+    let image = read_image(&path).map_err(|e| to_py(e, FileKind::Image))?;
+    Ok(rgb_array(py, &image.image))
+}
+
+/// Writes linear RGB (H, W, 3) as PNG (sRGB, `exposure` stops) or EXR, atomically.
+#[pyfunction]
+#[pyo3(signature = (path, image, exposure = 0.0))]
+fn write(path: PathBuf, image: PyArrayLike3<'_, f32, AllowTypeChange>, exposure: f32) -> PyResult<()> {
+    write_image(&path, &image_from_array(&image)?, exposure).map_err(|e| to_py(e, FileKind::Image))
+}
+
+/// A focus measure of an (H, W, 3) image (see `focus_measures()`).
+#[pyfunction]
+#[pyo3(signature = (image, metric = "tenengrad"))]
+fn focus_measure(image: PyArrayLike3<'_, f32, AllowTypeChange>, metric: &str) -> PyResult<f64> {
+    let measure = FocusMeasure::from_name(metric).map_err(|e| to_py(e, FileKind::Image))?;
+    let image = image_from_array(&image)?;
+    let patch =
+        Patch::new(image.width as usize, image.height as usize, &image.rgb).map_err(|e| to_py(e, FileKind::Image))?;
+    Ok(measure.evaluate(&patch))
+}
+
+/// The focus measures' names.
+#[pyfunction]
+fn focus_measures() -> Vec<&'static str> {
+    lenspath::autofocus::FOCUS_MEASURES.iter().map(|(n, _)| *n).collect()
+}
+
+/// Blurs an (H, W, 3) image with a bokeh kernel: `aperture` a shape
+/// ("circle", "blades:6", "star:5:0.4") `diameter_px` across, or `mask` a 2-D
+/// array (resized so its longer side is `diameter_px`, if given).
+#[pyfunction]
+#[pyo3(signature = (image, *, aperture = None, mask = None, diameter_px = None, edges = "renormalize", method = "auto"))]
+fn bokeh<'py>(
+    py: Python<'py>,
+    image: PyArrayLike3<'_, f32, AllowTypeChange>,
+    aperture: Option<&str>,
+    mask: Option<PyArrayLike2<'_, f32, AllowTypeChange>>,
+    diameter_px: Option<f64>,
+    edges: &str,
+    method: &str,
+) -> PyResult<Bound<'py, PyArray3<f32>>> {
+    let kernel = match (aperture, &mask) {
+        (Some(_), Some(_)) => return Err(value_error("give aperture or mask, not both")),
+        (None, None) => return Err(value_error("give aperture (such as 'blades:6') or mask (a 2-D array)")),
+        (Some(shape), None) => {
+            let diameter = diameter_px.ok_or_else(|| value_error("an aperture kernel needs diameter_px"))?;
+            if !(diameter >= 1.0 && diameter.is_finite()) {
+                return Err(value_error(format!("diameter_px must be at least 1, got {diameter}")));
+            }
+            let shape = ApertureShape::parse(shape).map_err(|e| to_py(e, FileKind::Image))?;
+            Kernel::from_aperture(&Aperture::new(&shape).map_err(|e| to_py(e, FileKind::Image))?, diameter)
+        }
+        (None, Some(m)) => {
+            let (h, w) = (m.shape()[0], m.shape()[1]);
+            let size = match diameter_px {
+                None => KernelSize::Native,
+                Some(d) if d >= 1.0 && d.is_finite() => KernelSize::LongerSide(d.round() as u32),
+                Some(d) => return Err(value_error(format!("diameter_px must be at least 1, got {d}"))),
+            };
+            let values: Vec<f32> = m.as_array().iter().copied().collect();
+            Kernel::from_mask(w, h, &values, size).map_err(|e| to_py(e, FileKind::Image))?
+        }
+    };
+    let edges = match edges {
+        "renormalize" => Edges::Renormalize,
+        "black" => Edges::Black,
+        other => {
+            return Err(value_error(format!(
+                "edges must be 'renormalize' or 'black', got '{other}'"
+            )))
+        }
+    };
+    let method = match method {
+        "auto" => Method::Auto,
+        "direct" => Method::Direct,
+        "fft" => Method::Fft,
+        other => {
+            return Err(value_error(format!(
+                "method must be 'auto', 'direct' or 'fft', got '{other}'"
+            )))
+        }
+    };
+    let image = image_from_array(&image)?;
+    let (w, h) = (image.width as usize, image.height as usize);
+    let planes: Vec<Vec<f32>> = (0..3)
+        .map(|c| image.rgb.iter().skip(c).step_by(3).copied().collect())
+        .collect();
+    let blurred = py.detach(|| convolve_planes(&planes, w, h, &kernel, method, edges));
+    let mut out = Array3::zeros((h, w, 3));
+    for (c, plane) in blurred.iter().enumerate() {
+        for (i, &v) in plane.iter().enumerate() {
+            out[[i / w, i % w, c]] = v;
+        }
+    }
+    Ok(out.into_pyarray(py))
+}
+
+/// The native module.
+#[pymodule]
+fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add("LenspathError", py.get_type::<LenspathError>())?;
+    m.add("SceneError", py.get_type::<SceneError>())?;
+    m.add("LensError", py.get_type::<LensError>())?;
+    m.add_class::<Scene>()?;
+    m.add_class::<Lens>()?;
+    m.add_class::<Camera>()?;
+    m.add_function(wrap_pyfunction!(load, m)?)?;
+    m.add_function(wrap_pyfunction!(builtin_scenes, m)?)?;
+    m.add_function(wrap_pyfunction!(builtin_lenses, m)?)?;
+    m.add_function(wrap_pyfunction!(render, m)?)?;
+    m.add_function(wrap_pyfunction!(read, m)?)?;
+    m.add_function(wrap_pyfunction!(write, m)?)?;
+    m.add_function(wrap_pyfunction!(focus_measure, m)?)?;
+    m.add_function(wrap_pyfunction!(focus_measures, m)?)?;
+    m.add_function(wrap_pyfunction!(bokeh, m)?)?;
+    m.add_class::<AutofocusResult>()?;
+    m.add_function(wrap_pyfunction!(autofocus, m)?)?;
+    m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    Ok(())
+}

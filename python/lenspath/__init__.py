@@ -1,0 +1,172 @@
+"""lenspath: a physically based path tracer whose camera is a real compound lens.
+
+    >>> import lenspath
+    >>> image = lenspath.render("cornell-spheres", spp=16, resolution=(320, 240))
+    >>> image.shape, image.dtype
+    ((240, 320, 3), dtype('float32'))
+
+Images are linear RGB float32 arrays of shape (height, width, 3). The native
+module ``lenspath._core`` does the work; this package adds the conveniences
+(scenes by path or name, progress bars). See ``_core.pyi`` for every signature.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from . import _core
+from ._core import (
+    AutofocusResult,
+    Camera,
+    Lens,
+    LensError,
+    LenspathError,
+    Scene,
+    SceneError,
+    bokeh,
+    builtin_lenses,
+    builtin_scenes,
+    focus_measure,
+    focus_measures,
+    load,
+    read,
+    write,
+)
+
+__version__: str = _core.__version__
+
+__all__ = [
+    "AutofocusResult",
+    "Camera",
+    "Lens",
+    "LensError",
+    "LenspathError",
+    "Scene",
+    "SceneError",
+    "autofocus",
+    "bokeh",
+    "builtin_lenses",
+    "builtin_scenes",
+    "focus_measure",
+    "focus_measures",
+    "load",
+    "read",
+    "render",
+    "write",
+]
+
+
+def _as_scene(scene: Scene | str | os.PathLike[str]) -> Scene:
+    """A Scene as given, a built-in scene by name, or a scene file by path."""
+    if isinstance(scene, Scene):
+        return scene
+    if isinstance(scene, str) and scene in builtin_scenes():
+        return Scene.builtin(scene)
+    if isinstance(scene, (str, os.PathLike)):
+        return load(scene)
+    raise TypeError(f"scene must be a lenspath.Scene, a built-in scene name or a path, not {type(scene).__name__}")
+
+
+def _tqdm_progress() -> Callable[[int, int], None] | None:
+    """A progress callback drawing a tqdm bar (the notebook one in Jupyter), or None without tqdm."""
+    try:
+        from tqdm.auto import tqdm
+    except ImportError:
+        return None
+    bar = None
+
+    def update(done: int, total: int) -> None:
+        nonlocal bar
+        if bar is None and total > 0:
+            bar = tqdm(total=total, unit="sample", unit_scale=True, desc="lenspath")
+        if bar is not None:
+            bar.update(done - bar.n)
+            if done >= total:
+                bar.close()
+
+    return update
+
+
+def render(
+    scene: Scene | str | os.PathLike[str],
+    camera: Camera | None = None,
+    *,
+    spp: int = 64,
+    resolution: tuple[int, int] | None = None,
+    seed: int = 0,
+    max_depth: int = 16,
+    light_samples: int = 1,
+    threads: int | None = None,
+    aovs: Sequence[str] | None = None,
+    progress: bool | Callable[[int, int], Any] = False,
+) -> np.ndarray | dict[str, np.ndarray]:
+    """Renders ``scene`` and returns linear RGB, float32, shape (height, width, 3).
+
+    ``scene`` is a :class:`Scene`, a built-in scene name (``"cornell-spheres"``)
+    or a scene file path. ``camera=None`` uses the realistic camera with the
+    scene's own settings, exactly as ``lenspath render`` does, so the same
+    settings and seed give the CLI's image bit for bit. ``resolution`` is
+    (width, height), default the scene file's, else (640, 480). With
+    ``aovs=["depth"]`` the result is a dict with ``"rgb"`` and ``"depth"``
+    (distance along the view axis, inf where nothing is hit). ``progress``:
+    True for a tqdm bar, or a callable ``(samples_done, samples_total)``. The
+    GIL is released while rendering; Ctrl-C stops the render and raises
+    KeyboardInterrupt.
+    """
+    callback = _tqdm_progress() if progress is True else (progress or None)
+    return _core.render(
+        _as_scene(scene),
+        camera,
+        spp=spp,
+        resolution=resolution,
+        seed=seed,
+        max_depth=max_depth,
+        light_samples=light_samples,
+        threads=threads,
+        aovs=list(aovs) if aovs is not None else None,
+        progress=callback,
+    )
+
+
+def autofocus(
+    scene: Scene | str | os.PathLike[str],
+    patch: tuple[float, float, float, float],
+    camera: Camera | None = None,
+    *,
+    metric: str = "tenengrad",
+    strategy: str = "fast",
+    patience: int = 12,
+    spp: int = 16,
+    resolution: tuple[int, int] | None = None,
+    seed: int = 0,
+    max_depth: int = 8,
+    threads: int | None = None,
+) -> AutofocusResult:
+    """Focuses a realistic camera on ``patch`` (x, y, width, height as fractions of the
+    image) by rendering it, as ``lenspath autofocus`` does; returns where and at what cost.
+
+    ``scene`` is a :class:`Scene`, a built-in scene name or a scene file path;
+    ``camera`` a ``Camera.realistic(...)`` (None: the scene's lens) whose focus is
+    ignored. ``strategy``: "sweep", "early-exit" (stops after ``patience`` steps
+    without a new best), "fast", "depth" (range finder) or "depth-refine";
+    ``metric`` one of ``focus_measures()``. ``result.camera`` is the camera
+    focused there, ready for :func:`render`; ``lenspath.plot.focus_curve(result)``
+    draws the search.
+    """
+    return _core.autofocus(
+        _as_scene(scene),
+        tuple(patch),
+        camera,
+        metric=metric,
+        strategy=strategy,
+        patience=patience,
+        spp=spp,
+        resolution=resolution,
+        seed=seed,
+        max_depth=max_depth,
+        threads=threads,
+    )

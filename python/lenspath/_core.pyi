@@ -1,0 +1,300 @@
+"""Type stub of the native module ``lenspath._core`` (crates/lenspath-py).
+
+Lengths on lenses are in mm in lens coordinates: ``z`` runs along the axis
+from the scene toward the sensor, the aperture stop at 0, so a sensor
+position is its distance behind the stop. Scene distances are in scene units
+(metres unless the scene says otherwise). Images are linear RGB float32 arrays
+of shape (height, width, 3); array arguments may be any array-like, converted.
+"""
+
+from collections.abc import Callable
+from os import PathLike
+from typing import Any, Literal, overload
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+class LenspathError(Exception):
+    """Base class of lenspath's own errors."""
+
+class SceneError(LenspathError):
+    """A scene file is broken or inconsistent; the message names the file, the element and the fault."""
+
+class LensError(LenspathError):
+    """A lens table is broken; the message names the file, the line and the fault."""
+
+class Scene:
+    """A scene: shapes, materials, lights and the view it was made for."""
+
+    def __init__(self) -> None:
+        """An empty scene; add materials, shapes and a view (``look_at``)."""
+    @staticmethod
+    def builtin(name: str, mesh_triangles: int = 1_000_000) -> Scene:
+        """A built-in scene by name (``builtin_scenes()``); ``mesh_triangles`` sizes ``cornell-mesh``."""
+    @property
+    def name(self) -> str:
+        """The built-in name or the file path."""
+    @property
+    def mesh_count(self) -> int: ...
+    @property
+    def triangle_count(self) -> int: ...
+    @property
+    def sphere_count(self) -> int: ...
+    @property
+    def material_count(self) -> int: ...
+    @property
+    def light_count(self) -> int:
+        """Point, spot, directional and environment lights plus emissive shapes."""
+    @property
+    def resolution(self) -> tuple[int, int] | None:
+        """The (width, height) the scene file asks for, or None."""
+    def add_material(
+        self,
+        kind: Literal["diffuse", "mirror", "glass", "metal"],
+        *,
+        reflectance: tuple[float, float, float] = (0.8, 0.8, 0.8),
+        eta: tuple[float, float, float] | None = None,
+        k: tuple[float, float, float] | None = None,
+        roughness: float = 0.0,
+    ) -> int:
+        """Adds a material and returns its index: ``diffuse`` and ``mirror`` use
+        ``reflectance``; ``glass`` uses ``eta[0]`` (default 1.5); ``metal`` needs
+        ``eta`` and ``k`` per channel and a GGX ``roughness`` (alpha)."""
+    def add_mesh(
+        self,
+        vertices: npt.ArrayLike,
+        indices: npt.ArrayLike,
+        material: int,
+        *,
+        emission: tuple[float, float, float] | None = None,
+    ) -> None:
+        """Adds a triangle mesh: ``vertices`` N x 3, ``indices`` M x 3 (counter-clockwise
+        front faces); ``emission`` (radiance) makes it an area light. Raises SceneError
+        for an index out of range, a NaN vertex or an unknown material."""
+    def add_sphere(
+        self,
+        center: tuple[float, float, float],
+        radius: float,
+        material: int,
+        *,
+        emission: tuple[float, float, float] | None = None,
+    ) -> None:
+        """Adds a sphere; ``emission`` makes it an area light."""
+    def add_environment(self, radiance: tuple[float, float, float]) -> None:
+        """Adds a uniform environment light: ``radiance`` from every direction the scene does not block."""
+    def look_at(
+        self,
+        eye: tuple[float, float, float],
+        target: tuple[float, float, float],
+        up: tuple[float, float, float] = (0.0, 1.0, 0.0),
+        fov_deg: float = 40.0,
+        focus_distance: float | None = None,
+    ) -> None:
+        """Sets the view: the camera at ``eye`` looking at ``target``, vertical field of
+        view ``fov_deg`` (pinhole and thin lens), subject at ``focus_distance`` (default:
+        the target's distance), which the lens cameras focus on unless told otherwise."""
+
+def load(path: str | PathLike[str]) -> Scene:
+    """Loads a scene file (COLLADA .dae, OBJ, PLY, glTF .gltf/.glb, lenspath .toml) by extension.
+    Raises SceneError for a broken file, OSError when it cannot be read."""
+
+def builtin_scenes() -> list[str]:
+    """The built-in scenes' names."""
+
+class Lens:
+    """A real compound lens placed on its axis, wide open or stopped down."""
+
+    @staticmethod
+    def builtin(name: str) -> Lens:
+        """A built-in lens (``builtin_lenses()``: dgauss50, wide22, tele250, fisheye10)."""
+    @staticmethod
+    def load(path: str | PathLike[str]) -> Lens:
+        """A lens table file (pbrt / CS184 format). Raises LensError for a broken table."""
+    @staticmethod
+    def from_table(table: npt.ArrayLike, name: str = "table") -> Lens:
+        """A lens from an N x 4 table (radius, thickness to the next surface, index,
+        aperture diameter; mm; radius 0 marks the stop). Raises LensError when invalid."""
+    def stopped_down(self, f_number: float) -> Lens:
+        """This lens with its stop closed to paraxial f-number ``f_number``."""
+    @property
+    def name(self) -> str: ...
+    @property
+    def table(self) -> npt.NDArray[np.float64]:
+        """The prescription as an N x 4 array (as ``from_table`` takes it)."""
+    def analysis(self) -> dict[str, float]:
+        """Every figure ``lenspath lens --json`` prints (focal lengths, pupils, focus range, ...)."""
+    @property
+    def focal_length_mm(self) -> float:
+        """Real-ray focal length, |P' - F'|."""
+    @property
+    def effective_focal_length_mm(self) -> float:
+        """Paraxial effective focal length."""
+    @property
+    def f_number(self) -> float:
+        """Paraxial f-number."""
+    @property
+    def infinity_focus_mm(self) -> float:
+        """Sensor position focusing infinity, mm behind the stop."""
+    @property
+    def close_focus_mm(self) -> float:
+        """Sensor position focusing the close-focus object (5 focal lengths away)."""
+    def focus_distance(self, sensor_mm: float, ray_height_mm: float = 0.1) -> float | None:
+        """Distance in focus (mm from the sensor plane) with the sensor ``sensor_mm``
+        behind the stop; None when nothing in front of the lens is in focus."""
+    def sensor_for_distance(self, distance_mm: float, ray_height_mm: float = 0.1) -> float:
+        """Sensor position (mm behind the stop) focusing ``distance_mm`` from the sensor plane."""
+    def trace(
+        self,
+        origins: npt.ArrayLike,
+        directions: npt.ArrayLike,
+        toward: Literal["scene", "sensor"] = "scene",
+    ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.bool_]]:
+        """Traces N rays (N x 3 origins and directions, lens coordinates) through every
+        surface. Returns (origins, unit directions, passed) as they leave the last surface;
+        blocked rays are NaN rows with passed False."""
+    def plot(self, sensor_diagonal_mm: float | None = None) -> str:
+        """The lens layout (elements, stop, rays) as SVG text, with a sensor
+        ``sensor_diagonal_mm`` across (default: 36 x 24 mm), as ``lenspath lens --plot`` draws it."""
+    def layout(self, sensor_diagonal_mm: float | None = None) -> dict[str, Any]:
+        """What ``plot`` draws, as arrays of (z, height) rows in mm (z along the axis from the
+        stop): ``elements`` (closed outlines), ``stop`` (two blades), ``sensor`` (at infinity
+        focus), ``rays`` ((field fraction, path) pairs), ``z_range_mm``, ``half_height_mm``,
+        ``title``. ``lenspath.plot.lens_layout`` draws it with matplotlib."""
+
+def builtin_lenses() -> list[str]:
+    """The built-in lenses' names."""
+
+class Camera:
+    """A camera for ``render``; what it leaves unset comes from the scene."""
+
+    @staticmethod
+    def pinhole(fov_deg: float | None = None) -> Camera:
+        """An ideal pinhole; ``fov_deg`` (vertical) defaults to the scene's."""
+    @staticmethod
+    def thin_lens(
+        aperture_radius: float,
+        focus_distance: float | None = None,
+        fov_deg: float | None = None,
+        aperture: str | None = None,
+    ) -> Camera:
+        """An ideal thin lens of ``aperture_radius`` (scene units) focused at ``focus_distance``
+        (default: the scene's subject); ``aperture`` a shape: "circle", "blades:N[:ROT[:CURV]]",
+        "star:N[:INNER[:ROT]]"."""
+    @staticmethod
+    def realistic(
+        lens: Lens | str | None = None,
+        *,
+        focus_distance: float | None = None,
+        sensor_mm: float | None = None,
+        f_number: float | None = None,
+        sensor_width_mm: float | None = None,
+        aperture: str | None = None,
+        scene_unit_m: float | None = None,
+    ) -> Camera:
+        """A real lens (default: the scene file's, else dgauss50) focused at ``focus_distance``
+        (scene units from the sensor) or with the sensor ``sensor_mm`` behind the stop (not
+        both), stopped down to ``f_number``, a ``sensor_width_mm`` wide sensor (default 36;
+        its height follows the image), an ``aperture`` shape, ``scene_unit_m`` metres per unit."""
+
+@overload
+def render(
+    scene: Scene,
+    camera: Camera | None = None,
+    *,
+    spp: int = 64,
+    resolution: tuple[int, int] | None = None,
+    seed: int = 0,
+    max_depth: int = 16,
+    light_samples: int = 1,
+    threads: int | None = None,
+    aovs: None = None,
+    progress: Callable[[int, int], Any] | None = None,
+) -> npt.NDArray[np.float32]: ...
+@overload
+def render(
+    scene: Scene,
+    camera: Camera | None = None,
+    *,
+    spp: int = 64,
+    resolution: tuple[int, int] | None = None,
+    seed: int = 0,
+    max_depth: int = 16,
+    light_samples: int = 1,
+    threads: int | None = None,
+    aovs: list[str],
+    progress: Callable[[int, int], Any] | None = None,
+) -> dict[str, npt.NDArray[np.float32]]: ...
+def read(path: str | PathLike[str]) -> npt.NDArray[np.float32]:
+    """Reads a PNG, JPEG (decoded from sRGB) or EXR image as linear RGB (H, W, 3)."""
+
+def write(path: str | PathLike[str], image: npt.ArrayLike, exposure: float = 0.0) -> None:
+    """Writes linear RGB (H, W, 3): .png as sRGB after ``exposure`` stops, .exr as floats;
+    atomically (a temporary file renamed)."""
+
+def focus_measure(image: npt.ArrayLike, metric: str = "tenengrad") -> float:
+    """A focus measure of an (H, W, 3) image: ``focus_measures()`` lists them
+    (variance, normalized-variance, sml, tenengrad, brenner, laplacian-energy, vollath)."""
+
+def focus_measures() -> list[str]:
+    """The focus measures' names."""
+
+def bokeh(
+    image: npt.ArrayLike,
+    *,
+    aperture: str | None = None,
+    mask: npt.ArrayLike | None = None,
+    diameter_px: float | None = None,
+    edges: Literal["renormalize", "black"] = "renormalize",
+    method: Literal["auto", "direct", "fft"] = "auto",
+) -> npt.NDArray[np.float32]:
+    """Blurs an (H, W, 3) image with a bokeh kernel: an ``aperture`` shape ``diameter_px``
+    across, or a 2-D ``mask`` (resized so its longer side is ``diameter_px``, if given)."""
+
+class AutofocusResult:
+    """What ``autofocus`` found and what it cost."""
+
+    @property
+    def sensor_mm(self) -> float:
+        """The chosen sensor position, mm behind the stop."""
+    @property
+    def focus_distance(self) -> float | None:
+        """The distance in focus there (scene units from the sensor); None beyond infinity."""
+    @property
+    def metric(self) -> str: ...
+    @property
+    def strategy(self) -> str: ...
+    @property
+    def evaluations(self) -> npt.NDArray[np.float64]:
+        """Every patch render as a (sensor_mm, score) row, in the order rendered."""
+    @property
+    def camera_rays(self) -> int:
+        """Camera rays traced (patch samples and range-finder probes)."""
+    @property
+    def seconds(self) -> float:
+        """Wall time."""
+    @property
+    def depth_of_focus_mm(self) -> float:
+        """The sensor shift that grows the blur circle to one pixel there: the unit of focus errors."""
+    @property
+    def camera(self) -> Camera:
+        """The camera given, with its sensor at ``sensor_mm``."""
+
+def autofocus(
+    scene: Scene,
+    patch: tuple[float, float, float, float],
+    camera: Camera | None = None,
+    *,
+    metric: str = "tenengrad",
+    strategy: str = "fast",
+    patience: int = 12,
+    spp: int = 16,
+    resolution: tuple[int, int] | None = None,
+    seed: int = 0,
+    max_depth: int = 8,
+    threads: int | None = None,
+) -> AutofocusResult:
+    """Focuses a realistic camera on ``patch`` (x, y, width, height in fractions of the image)
+    by rendering it (``strategy``: sweep, early-exit, fast, depth, depth-refine). Raises
+    ValueError for a bad patch, metric, strategy or a camera that is not realistic."""

@@ -1,0 +1,116 @@
+"""lenspath.autofocus: the CLI's answer for the same settings, a camera focused
+where it says, the errors; and the matplotlib drawings of lenspath.plot."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+
+import numpy as np
+import pytest
+
+import lenspath
+
+#: The README's patch: the nearer sphere of cornell-spheres.
+NEAR_SPHERE = (0.52, 0.70, 0.10, 0.12)
+
+
+@pytest.mark.parametrize("strategy", ["fast", "early-exit", "depth", "depth-refine"])
+def test_same_settings_give_the_clis_answer(cli, strategy: str) -> None:
+    args = ["--scene", "cornell-spheres", "--patch", "0.52,0.70,0.10,0.12", "--res", "160x120", "--spp", "4"]
+    out = subprocess.run(
+        [str(cli), "autofocus", *args, "--strategy", strategy, "--fstop", "2.8", "--json"],
+        check=True,
+        capture_output=True,
+        text=True,
+    )
+    theirs = json.loads(out.stdout)
+    camera = lenspath.Camera.realistic("dgauss50", f_number=2.8)
+    ours = lenspath.autofocus("cornell-spheres", NEAR_SPHERE, camera, strategy=strategy, spp=4, resolution=(160, 120))
+    assert ours.strategy == theirs["strategy"] == strategy
+    assert ours.sensor_mm == theirs["sensor_position_mm"]
+    assert ours.focus_distance == theirs["focus_distance"]
+    assert ours.camera_rays == theirs["camera_rays"]
+    assert ours.evaluations.shape == (theirs["evaluations"], 2)
+    assert ours.depth_of_focus_mm == theirs["depth_of_focus_mm"]
+
+
+def test_the_focused_camera_renders_the_patch_sharper_than_either_side_of_it() -> None:
+    camera = lenspath.Camera.realistic("dgauss50")
+    result = lenspath.autofocus("cornell-spheres", NEAR_SPHERE, camera, strategy="depth-refine", resolution=(320, 240))
+    assert result.focus_distance is not None
+    assert "sensor_mm" in repr(result)
+    rows, cols = slice(168, 197), slice(166, 198)  # the patch in pixels at 320 x 240
+
+    def sharpness(camera: lenspath.Camera) -> float:
+        image = lenspath.render("cornell-spheres", camera, spp=32, resolution=(320, 240), max_depth=4)
+        return lenspath.focus_measure(image[rows, cols], "tenengrad")
+
+    # 8 DoF either side the sphere's edge is visibly soft (the score about 0.6 of the focused one).
+    shift = 8 * result.depth_of_focus_mm
+    focused = sharpness(result.camera)
+    for z in (result.sensor_mm - shift, result.sensor_mm + shift):
+        assert focused > 1.3 * sharpness(lenspath.Camera.realistic("dgauss50", sensor_mm=z)), z
+
+
+def test_the_sweep_visits_every_pixel_pitch_and_keeps_its_best() -> None:
+    result = lenspath.autofocus("cornell-spheres", NEAR_SPHERE, strategy="sweep", spp=2, resolution=(80, 60))
+    z, score = result.evaluations[:, 0], result.evaluations[:, 1]
+    assert np.all(np.diff(z) > 0)
+    assert result.sensor_mm == z[np.argmax(score)]
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "error", "message"),
+    [
+        ({"patch": (0.9, 0.5, 0.2, 0.1)}, ValueError, "inside it"),
+        ({"patch": (0.5, 0.5, 0.0, 0.1)}, ValueError, "inside it"),
+        ({"strategy": "phase"}, ValueError, "unknown autofocus strategy 'phase'"),
+        ({"metric": "sharpness"}, ValueError, "unknown focus measure 'sharpness'"),
+        ({"camera": lenspath.Camera.pinhole()}, ValueError, "realistic camera"),
+        ({"spp": 0}, ValueError, "at least 1 sample per pixel"),
+    ],
+)
+def test_bad_arguments_raise_with_a_clear_message(kwargs, error, message) -> None:
+    args = {"patch": NEAR_SPHERE} | kwargs
+    with pytest.raises(error, match=message):
+        lenspath.autofocus("cornell-spheres", resolution=(64, 48), **args)
+
+
+@pytest.fixture
+def axes():
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    figure = plt.figure()
+    yield figure.add_subplot()
+    plt.close(figure)
+
+
+@pytest.mark.parametrize("name", lenspath.builtin_lenses())
+def test_lens_layout_draws_every_glass_element_and_the_ray_fans(axes, name: str) -> None:
+    import lenspath.plot
+
+    lens = lenspath.Lens.builtin(name)
+    layout = lens.layout()
+    table = lens.table
+    # An element is a gap filled with glass (index above 1) between two surfaces.
+    assert len(layout["elements"]) == int(np.sum(table[:-1, 2] > 1.0))
+    assert len(layout["rays"]) >= 3 * 5  # three fields, most rays of each fan pass
+    sensor = layout["sensor"]
+    assert sensor[0, 0] == pytest.approx(lens.infinity_focus_mm)
+    # Rays from infinity on axis meet at the sensor's centre, within the lens's aberration.
+    on_axis = [path for field, path in layout["rays"] if field == 0.0]
+    assert max(abs(path[-1, 1]) for path in on_axis) < 0.2
+    lenspath.plot.lens_layout(lens, ax=axes)
+    assert len(axes.patches) == len(layout["elements"])
+
+
+def test_focus_curve_draws_the_search(axes) -> None:
+    import lenspath.plot
+
+    result = lenspath.autofocus("cornell-spheres", NEAR_SPHERE, strategy="fast", spp=2, resolution=(80, 60))
+    lenspath.plot.focus_curve(result, ax=axes)
+    line = axes.lines[0]
+    assert len(line.get_xdata()) == len(result.evaluations)

@@ -1,0 +1,111 @@
+"""lenspath.Lens: the CLI's analysis, focusing, vectorised tracing, tables and their errors."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+
+import numpy as np
+import pytest
+
+import lenspath
+
+LENSES = lenspath.builtin_lenses()
+
+
+@pytest.mark.parametrize("name", LENSES)
+def test_analysis_equals_the_clis(cli, name: str) -> None:
+    out = subprocess.run([str(cli), "lens", name, "--json"], check=True, capture_output=True, text=True)
+    theirs = json.loads(out.stdout)
+    ours = lenspath.Lens.builtin(name).analysis()
+    shared = set(ours) & set(theirs)
+    assert len(shared) >= 15, sorted(theirs)
+    for key in shared:
+        assert ours[key] == theirs[key], key
+
+
+@pytest.mark.parametrize("name", LENSES)
+def test_focusing_round_trips(name: str) -> None:
+    lens = lenspath.Lens.builtin(name)
+    f = lens.focal_length_mm
+    for distance_mm in [8 * f, 40 * f, 1000 * f]:
+        sensor = lens.sensor_for_distance(distance_mm)
+        assert lens.infinity_focus_mm < sensor
+        assert lens.focus_distance(sensor) == pytest.approx(distance_mm, rel=1e-6)
+    # In front of the infinity focus nothing is in focus.
+    assert lens.focus_distance(lens.infinity_focus_mm - 0.5) is None
+
+
+@pytest.mark.parametrize("name", LENSES)
+def test_tracing_to_the_scene_and_back_returns_the_ray(name: str) -> None:
+    lens = lenspath.Lens.builtin(name)
+    rng = np.random.default_rng(1)
+    n = 500
+    sensor = lens.infinity_focus_mm
+    origins = np.column_stack([rng.uniform(-3, 3, n), rng.uniform(-3, 3, n), np.full(n, sensor)])
+    rear = lens.analysis()["rear_vertex_mm"]
+    aperture = lens.table[-1, 3] / 2
+    targets = np.column_stack([rng.uniform(-aperture, aperture, (n, 2)) * 0.7, np.full(n, rear)])
+    out_o, out_d, passed = lens.trace(origins, targets - origins, toward="scene")
+    assert 0.1 < passed.mean() <= 1.0
+    assert np.isnan(out_o[~passed]).all()
+    # Back from a point 10 mm out in the scene along each ray.
+    start = out_o[passed] + 10.0 * out_d[passed]
+    back_o, back_d, back_passed = lens.trace(start, -out_d[passed], toward="sensor")
+    assert back_passed.all()
+    # Where the returning ray meets the sensor plane is where it started.
+    t = (sensor - back_o[:, 2]) / back_d[:, 2]
+    hit = back_o + back_d * t[:, None]
+    np.testing.assert_allclose(hit, origins[passed], atol=1e-8)
+
+
+def test_a_table_round_trips_and_stopping_down_changes_the_f_number() -> None:
+    lens = lenspath.Lens.builtin("dgauss50")
+    again = lenspath.Lens.from_table(lens.table, name="copy")
+    assert again.analysis() == lens.analysis()
+    assert lens.stopped_down(8.0).f_number == pytest.approx(8.0, rel=1e-6)
+    assert "<svg" in lens.plot()
+
+
+def test_a_thin_lens_table_obeys_the_lensmakers_equation() -> None:
+    # A thin biconvex element (R = ±100 mm, n = 1.5) then the stop:
+    # 1/f = (n - 1)(1/R1 - 1/R2) = 0.5 · 0.02, f = 100 mm.
+    table = [[100.0, 0.01, 1.5, 20.0], [-100.0, 1.0, 1.0, 20.0], [0.0, 1.0, 1.0, 10.0]]
+    lens = lenspath.Lens.from_table(table)
+    assert lens.effective_focal_length_mm == pytest.approx(100.0, rel=1e-3)
+
+
+@pytest.mark.parametrize(
+    ("table", "message"),
+    [
+        ("1 2 3\n", "line 1"),
+        ("50 5 1.6 nan\n0 5 1 20\n", "line 1"),
+        ("50 5 1.6 30\n-50 5 1 30\n", "stop"),
+    ],
+    ids=["columns", "nan", "no-stop"],
+)
+def test_broken_lens_files_raise_lens_error_naming_the_file(tmp_path, table: str, message: str) -> None:
+    path = tmp_path / "broken.dat"
+    path.write_text(table)
+    with pytest.raises(lenspath.LensError, match=message) as info:
+        lenspath.Lens.load(path)
+    assert "broken.dat" in str(info.value)
+
+
+def test_lens_errors_by_kind(tmp_path) -> None:
+    with pytest.raises(ValueError, match="unknown built-in lens 'zeiss'"):
+        lenspath.Lens.builtin("zeiss")
+    with pytest.raises(OSError, match="missing.dat"):
+        lenspath.Lens.load(tmp_path / "missing.dat")
+    with pytest.raises(ValueError, match="4 columns"):
+        lenspath.Lens.from_table(np.zeros((3, 5)))
+    with pytest.raises(ValueError, match="toward must be 'scene' or 'sensor'"):
+        lenspath.Lens.builtin("dgauss50").trace([[0, 0, 0]], [[0, 0, 1]], toward="up")
+
+
+def test_shared_lens_tables_load(shared) -> None:
+    tables = sorted((shared / "lenses").glob("*.dat"))
+    assert tables, "no lens tables in ../shared/lenses"
+    for path in tables:
+        lens = lenspath.Lens.load(path)
+        assert lens.focal_length_mm > 0, path
