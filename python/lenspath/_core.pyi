@@ -84,6 +84,24 @@ class Scene:
         """Adds a sphere; ``emission`` makes it an area light."""
     def add_environment(self, radiance: tuple[float, float, float]) -> None:
         """Adds a uniform environment light: ``radiance`` from every direction the scene does not block."""
+    def add_point_light(self, position: tuple[float, float, float], intensity: tuple[float, float, float]) -> None:
+        """Adds an isotropic point light: ``intensity`` in W/sr per channel."""
+    def add_spot_light(
+        self,
+        position: tuple[float, float, float],
+        direction: tuple[float, float, float],
+        intensity: tuple[float, float, float],
+        cone_angle_deg: float,
+        exponent: float = 0.0,
+    ) -> None:
+        """Adds a spot light pointing along ``direction``: ``intensity`` (W/sr) on its axis,
+        falling off as cos^``exponent`` of the angle from it, none beyond the half angle
+        ``cone_angle_deg``."""
+    def add_directional_light(
+        self, direction: tuple[float, float, float], irradiance: tuple[float, float, float]
+    ) -> None:
+        """Adds a distant light (the sun) travelling along ``direction``: ``irradiance`` on a
+        surface facing it."""
     def look_at(
         self,
         eye: tuple[float, float, float],
@@ -177,11 +195,11 @@ class Camera:
         aperture_radius: float,
         focus_distance: float | None = None,
         fov_deg: float | None = None,
-        aperture: str | None = None,
+        aperture: str | npt.ArrayLike | None = None,
     ) -> Camera:
         """An ideal thin lens of ``aperture_radius`` (scene units) focused at ``focus_distance``
         (default: the scene's subject); ``aperture`` a shape: "circle", "blades:N[:ROT[:CURV]]",
-        "star:N[:INNER[:ROT]]"."""
+        "star:N[:INNER[:ROT]]", or a 2-D array of transmissions over the stop's bounding square."""
     @staticmethod
     def realistic(
         lens: Lens | str | None = None,
@@ -190,7 +208,7 @@ class Camera:
         sensor_mm: float | None = None,
         f_number: float | None = None,
         sensor_width_mm: float | None = None,
-        aperture: str | None = None,
+        aperture: str | npt.ArrayLike | None = None,
         scene_unit_m: float | None = None,
     ) -> Camera:
         """A real lens (default: the scene file's, else dgauss50) focused at ``focus_distance``
@@ -298,3 +316,25 @@ def autofocus(
     """Focuses a realistic camera on ``patch`` (x, y, width, height in fractions of the image)
     by rendering it (``strategy``: sweep, early-exit, fast, depth, depth-refine). Raises
     ValueError for a bad patch, metric, strategy or a camera that is not realistic."""
+
+def lens_blur(
+    image: npt.ArrayLike,
+    depth: npt.ArrayLike,
+    focus_distance: float,
+    *,
+    lens: Lens | str | None = None,
+    f_number: float | None = None,
+    focal_length_mm: float | None = None,
+    aperture_radius: float | None = None,
+    fov_deg: float | None = None,
+    sensor_width_mm: float = 36.0,
+    scene_unit_m: float = 1.0,
+    aperture: str | npt.ArrayLike | None = None,
+) -> npt.NDArray[np.float32]:
+    """Depth-aware lens blur (``lenspath bokeh --focus-distance``): each pixel of the (H, W, 3)
+    ``image`` blurred by the thin-lens circle of confusion of its (H, W) ``depth`` (distance
+    along the view axis, scene units, as ``render(..., aovs=["depth"])`` gives), in the
+    ``aperture``'s shape, the foreground not bleeding into a sharp background. The lens: ``lens``
+    (its paraxial focal length and f-number; ``f_number`` stops it down), or ``focal_length_mm``
+    with ``f_number``, both on a ``sensor_width_mm`` sensor with ``scene_unit_m`` metres per unit;
+    or the thin-lens camera's ``aperture_radius`` (scene units) with its ``fov_deg``."""

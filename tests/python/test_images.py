@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import subprocess
+
 import numpy as np
 import pytest
 
@@ -80,3 +82,92 @@ def test_bokeh_errors() -> None:
         lenspath.bokeh(image, aperture="blades:6")
     with pytest.raises(ValueError, match="edges must be"):
         lenspath.bokeh(image, aperture="circle", diameter_px=5, edges="wrap")
+
+
+def test_lens_blur_gives_the_clis_image_bit_for_bit(cli, tmp_path) -> None:
+    rendered = tmp_path / "render.exr"
+    blurred = tmp_path / "blurred.exr"
+    common = ["--res", "64x48", "--spp", "2", "--camera", "pinhole"]
+    subprocess.run([str(cli), "render", *common, "--out", str(rendered)], check=True, capture_output=True)
+    lens_flags = ["--focus-distance", "2.5", "--focal-length", "50", "--fstop", "1.4", "--mask", "blades:6"]
+    subprocess.run(
+        [str(cli), "bokeh", str(rendered), *lens_flags, "--out", str(blurred)], check=True, capture_output=True
+    )
+    out = lenspath.render("cornell-spheres", lenspath.Camera.pinhole(), spp=2, resolution=(64, 48), aovs=["depth"])
+    ours = lenspath.lens_blur(out["rgb"], out["depth"], 2.5, focal_length_mm=50, f_number=1.4, aperture="blades:6")
+    assert np.array_equal(ours, lenspath.read(blurred))
+    assert not np.array_equal(ours, out["rgb"])
+
+
+def test_lens_blur_keeps_the_focus_plane_sharp() -> None:
+    image = np.random.default_rng(3).random((40, 60, 3), dtype=np.float32)
+    sharp = lenspath.lens_blur(image, np.full((40, 60), 2.0), 2.0, lens="dgauss50")
+    np.testing.assert_allclose(sharp, image, atol=1e-6)
+
+
+def test_lens_blur_spreads_a_point_over_the_thin_lens_circle_of_confusion() -> None:
+    # One bright pixel and the black around it, all 10 m away, the lens focused at 0.6 m.
+    size, width_mm = 201, 36.0
+    image = np.zeros((size, size, 3), np.float32)
+    image[100, 100] = 1.0
+    lens = lenspath.Lens.builtin("dgauss50")
+    blurred = lenspath.lens_blur(image, np.full((size, size), 10.0), 0.6, lens=lens, sensor_width_mm=width_mm)
+    # Thin lens (Potmesil and Chakravarty 1981): c = A s (1/D - 1/z), A = f/N, 1/s = 1/f - 1/D.
+    f, n = lens.effective_focal_length_mm, lens.f_number
+    s_mm = f * 600.0 / (600.0 - f)
+    diameter_px = f / n * s_mm * (1 / 600.0 - 1 / 10_000.0) * size / width_mm
+    y, x = np.mgrid[0:size, 0:size] - 100
+    weights = blurred[:, :, 0]
+    np.testing.assert_allclose(weights.sum(), 1.0, rtol=1e-3)  # energy kept
+    # A uniform disc of diameter d has a mean squared radius of d^2 / 8.
+    mean_r2 = (weights * (x**2 + y**2)).sum() / weights.sum()
+    np.testing.assert_allclose(np.sqrt(8 * mean_r2), diameter_px, rtol=0.03)
+    assert diameter_px > 10  # wide enough for the moments to measure it
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({}, "describe one lens"),
+        ({"lens": "dgauss50", "focal_length_mm": 50}, "describe one lens"),
+        ({"focal_length_mm": 50}, "focal_length_mm needs f_number"),
+        ({"aperture_radius": 0.1}, "aperture_radius needs fov_deg"),
+        ({"focal_length_mm": 50, "f_number": 2, "scene_unit_m": 0}, "scene unit must be a positive"),
+        ({"lens": "dgauss50", "aperture": np.full((4, 4), -1.0)}, "finite and not negative"),
+        ({"lens": "dgauss50", "aperture": 7}, "aperture must be a shape name"),
+    ],
+)
+def test_lens_blur_errors(kwargs, message: str) -> None:
+    image = np.zeros((8, 8, 3), np.float32)
+    with pytest.raises(ValueError, match=message):
+        lenspath.lens_blur(image, np.ones((8, 8)), 2.0, **kwargs)
+    with pytest.raises(ValueError, match="depth must be 8 x 8 like the image"):
+        lenspath.lens_blur(image, np.ones((8, 9)), 2.0, lens="dgauss50")
+
+
+@pytest.mark.parametrize(
+    ("aperture", "open_fraction"),
+    [
+        (None, 1.0),
+        (np.ones((12, 12)), 1.0),  # all open: the circle clips it to the circle
+        (np.repeat([[1.0] * 32 + [0.0] * 32], 64, axis=0), 0.5),  # the left half
+        ("blades:6", 3 * np.sqrt(3) / (2 * np.pi)),  # a hexagon inscribed in the stop
+    ],
+    ids=["circle", "open-mask", "half-mask", "hexagon"],
+)
+def test_a_shaped_aperture_passes_its_open_fraction_of_the_light(aperture, open_fraction: float) -> None:
+    # Under a uniform sky of radiance 1 every ray brings 1 times its aperture weight.
+    scene = lenspath.Scene()
+    scene.add_environment((1.0, 1.0, 1.0))
+    scene.look_at((0, 0, 0), (0, 0, -1), fov_deg=30)
+    camera = lenspath.Camera.thin_lens(0.1, focus_distance=1.0, aperture=aperture)
+    image = lenspath.render(scene, camera, spp=64, resolution=(32, 32))
+    np.testing.assert_allclose(image.mean(), open_fraction, rtol=0.01)
+
+
+def test_a_mask_array_shapes_the_defocus_blur() -> None:
+    square = lenspath.Camera.thin_lens(0.2, focus_distance=1.0, aperture=np.ones((16, 16)))
+    disc = lenspath.Camera.thin_lens(0.2, focus_distance=1.0)
+    a = lenspath.render("cornell-spheres", square, spp=4, resolution=(48, 36))
+    b = lenspath.render("cornell-spheres", disc, spp=4, resolution=(48, 36))
+    assert not np.array_equal(a, b)

@@ -39,6 +39,24 @@ def test_example_scene_files_load(path: Path, shared) -> None:
     assert scene.light_count > 0
 
 
+@pytest.mark.parametrize(
+    ("name", "triangles"),
+    [("bun_zipper.ply", 69_451), ("dragon_100k.ply", 100_000), ("dragon_100k.obj", 100_000)],
+)
+def test_shared_meshes_load_with_their_face_counts(shared, name: str, triangles: int) -> None:
+    # The counts are ../shared/ASSETS.md's, from the files' headers and face lists.
+    scene = lenspath.load(shared / "meshes" / name)
+    assert (scene.mesh_count, scene.triangle_count) == (1, triangles)
+    image = lenspath.render(scene, lenspath.Camera.pinhole(), spp=1, resolution=(24, 18))
+    assert np.isfinite(image).all() and image.max() > 0
+
+
+@pytest.mark.parametrize("name", ["valid.gltf", "valid.glb"])
+def test_gltf_files_load(name: str) -> None:
+    scene = lenspath.load(REPO / "fuzz/seeds/gltf" / name)
+    assert (scene.mesh_count, scene.triangle_count) == (2, 2)
+
+
 @pytest.mark.parametrize("name", ["CBspheres_lambertian.dae", "CBbunny.dae"])
 def test_cs184_scenes_load_and_render(shared, name: str) -> None:
     scene = lenspath.load(shared / "scenes/cs184/sky" / name)
@@ -90,3 +108,61 @@ def test_a_scene_without_a_view_cannot_render() -> None:
     scene = lenspath.Scene()
     with pytest.raises(ValueError, match="has no view; call look_at"):
         lenspath.render(scene, spp=1, resolution=(8, 8))
+
+
+def _lit_floor(height: float = 2.0, albedo: float = 0.5) -> lenspath.Scene:
+    """A large diffuse floor (y = 0) seen straight down from ``height`` through a 4° pinhole."""
+    scene = lenspath.Scene()
+    grey = scene.add_material("diffuse", reflectance=(albedo, albedo, albedo))
+    vertices = np.array([[-50, 0, -50], [50, 0, -50], [50, 0, 50], [-50, 0, 50]], np.float32)
+    scene.add_mesh(vertices, np.array([[0, 3, 2], [0, 2, 1]]), grey)  # facing +y
+    scene.look_at((0, height, 0), (0, 0, 0), up=(0, 0, -1), fov_deg=4)
+    return scene
+
+
+def _centre(scene: lenspath.Scene) -> np.ndarray:
+    image = lenspath.render(scene, lenspath.Camera.pinhole(), spp=16, resolution=(16, 16), max_depth=1)
+    return image[6:10, 6:10].mean(axis=(0, 1))
+
+
+def test_a_point_light_lights_a_floor_by_the_inverse_square_law() -> None:
+    # Lambert: L = (albedo / pi) * I cos(theta) / r^2, here straight below (cos = 1, r = 1.5).
+    scene = _lit_floor()
+    scene.add_point_light((0, 1.5, 0), (10.0, 20.0, 30.0))
+    expected = 0.5 / np.pi * np.array([10.0, 20.0, 30.0]) / 1.5**2
+    np.testing.assert_allclose(_centre(scene), expected, rtol=0.01)
+
+
+def test_a_directional_light_gives_irradiance_times_the_cosine() -> None:
+    scene = _lit_floor()
+    # Travelling down at 60 degrees from the vertical: E cos(60) on the floor.
+    scene.add_directional_light((np.sin(np.pi / 3), -np.cos(np.pi / 3), 0), (4.0, 4.0, 4.0))
+    np.testing.assert_allclose(_centre(scene), 0.5 / np.pi * 4.0 * 0.5, rtol=0.01)
+
+
+def test_a_spot_light_lights_only_its_cone() -> None:
+    scene = _lit_floor(height=4.0)
+    # Straight down from 1 m with a 2 degree half angle: a disc of radius 3.5 cm, inside the
+    # 4 degree view of 28 cm; the view's centre gets the full on-axis intensity.
+    scene.add_spot_light((0, 1, 0), (0, -1, 0), (8.0, 8.0, 8.0), cone_angle_deg=2.0)
+    image = lenspath.render(scene, lenspath.Camera.pinhole(), spp=16, resolution=(32, 32), max_depth=1)
+    np.testing.assert_allclose(image[15:17, 15:17].mean(), 0.5 / np.pi * 8.0, rtol=0.01)
+    assert image[0:4, 0:4].max() == 0.0
+
+
+@pytest.mark.parametrize(
+    ("add", "message"),
+    [
+        (lambda s: s.add_point_light((0, np.nan, 0), (1, 1, 1)), "position must be finite"),
+        (lambda s: s.add_point_light((0, 0, 0), (1, -1, 1)), "intensity must be finite and non-negative"),
+        (lambda s: s.add_directional_light((0, 0, 0), (1, 1, 1)), "direction must be a finite, non-zero"),
+        (lambda s: s.add_spot_light((0, 0, 0), (0, -1, 0), (1, 1, 1), 0.0), r"cone_angle_deg must be in \(0, 180\]"),
+        (lambda s: s.add_sphere((0, 0, 0), 1.0, 0, emission=(1, np.inf, 1)), "emission must be finite"),
+    ],
+)
+def test_bad_lights_are_refused(add, message: str) -> None:
+    scene = lenspath.Scene()
+    scene.add_material("diffuse")
+    with pytest.raises(ValueError, match=message):
+        add(scene)
+    assert scene.light_count == 0

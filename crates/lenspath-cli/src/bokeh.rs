@@ -148,20 +148,15 @@ impl DepthFlags {
                 ))
             }
         };
-        if !(self.scene_unit > 0.0 && self.scene_unit.is_finite()) {
-            return Err(Error::InvalidArgument(format!(
-                "--scene-unit must be a positive number of metres, got {}",
-                self.scene_unit
-            )));
-        }
-        let mm = self.scene_unit * 1e3;
-        let coc = CircleOfConfusion::thin_lens(focal_length, f_number, focus * mm, self.sensor_width, width)?;
-        // Depths stay in scene units: scale the lens's lengths instead.
-        Ok(Some(CircleOfConfusion {
-            aperture_diameter: coc.aperture_diameter / mm,
-            focus_distance: focus,
-            ..coc
-        }))
+        CircleOfConfusion::thin_lens_in_scene_units(
+            focal_length,
+            f_number,
+            focus,
+            self.scene_unit,
+            self.sensor_width,
+            width,
+        )
+        .map(Some)
     }
 }
 

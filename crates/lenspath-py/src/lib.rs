@@ -15,7 +15,7 @@ use std::time::Duration;
 use glam::{DVec3, Vec3};
 use lenspath::accel::BvhSettings;
 use lenspath::autofocus::{AutofocusSettings, FocusMeasure, Focuser, Patch, Strategy};
-use lenspath::bokeh::{convolve_planes, Edges, Kernel, KernelSize, Method};
+use lenspath::bokeh::{convolve_planes, depth_blur, CircleOfConfusion, Edges, Kernel, KernelSize, Method};
 use lenspath::builtin::{builtin_scene, BUILTIN_SCENES, DEFAULT_MESH_TRIANGLES};
 use lenspath::camera::{
     Aperture, ApertureShape, Camera as CameraTrait, CameraPose, LensFocus, PerspectiveCamera, RealisticCamera,
@@ -227,7 +227,7 @@ impl Scene {
             uvs: None,
             indices: triangles,
             material,
-            emission: emission.map(|e| Vec3::new(e.0, e.1, e.2)),
+            emission: emission.map(|e| light_amount("emission", e)).transpose()?,
         });
         // Checked now, so a bad mesh is reported where it was added.
         scene.validate().map_err(|e| to_py(e, FileKind::Scene))?;
@@ -249,7 +249,7 @@ impl Scene {
             center: Vec3::new(center.0, center.1, center.2),
             radius,
             material,
-            emission: emission.map(|e| Vec3::new(e.0, e.1, e.2)),
+            emission: emission.map(|e| light_amount("emission", e)).transpose()?,
         });
         scene.validate().map_err(|e| to_py(e, FileKind::Scene))?;
         self.scene = scene;
@@ -258,13 +258,57 @@ impl Scene {
 
     /// Adds a uniform environment: `radiance` from every direction the scene does not block.
     fn add_environment(&mut self, radiance: (f32, f32, f32)) -> PyResult<()> {
-        let radiance = Vec3::from(radiance);
-        if !(radiance.is_finite() && radiance.min_element() >= 0.0) {
+        let radiance = light_amount("radiance", radiance)?;
+        self.scene.lights.push(Light::Environment { radiance });
+        Ok(())
+    }
+
+    /// Adds an isotropic point light at `position`: `intensity` in W/sr per channel.
+    fn add_point_light(&mut self, position: (f32, f32, f32), intensity: (f32, f32, f32)) -> PyResult<()> {
+        self.scene.lights.push(Light::Point {
+            position: finite_point("position", position)?,
+            intensity: light_amount("intensity", intensity)?,
+        });
+        Ok(())
+    }
+
+    /// Adds a spot light at `position` pointing along `direction`: `intensity`
+    /// (W/sr) on its axis, falling off as cos^`exponent` of the angle from it,
+    /// none beyond `cone_angle_deg` (the half angle).
+    #[pyo3(signature = (position, direction, intensity, cone_angle_deg, exponent = 0.0))]
+    fn add_spot_light(
+        &mut self,
+        position: (f32, f32, f32),
+        direction: (f32, f32, f32),
+        intensity: (f32, f32, f32),
+        cone_angle_deg: f32,
+        exponent: f32,
+    ) -> PyResult<()> {
+        if !(cone_angle_deg > 0.0 && cone_angle_deg <= 180.0) {
             return Err(value_error(format!(
-                "radiance must be finite and non-negative, got {radiance}"
+                "cone_angle_deg must be in (0, 180], got {cone_angle_deg}"
             )));
         }
-        self.scene.lights.push(Light::Environment { radiance });
+        if !(exponent >= 0.0 && exponent.is_finite()) {
+            return Err(value_error(format!("exponent must be 0 or more, got {exponent}")));
+        }
+        self.scene.lights.push(Light::Spot {
+            position: finite_point("position", position)?,
+            direction: unit_direction(direction)?,
+            intensity: light_amount("intensity", intensity)?,
+            cos_cutoff: cone_angle_deg.to_radians().cos(),
+            exponent,
+        });
+        Ok(())
+    }
+
+    /// Adds a distant light (the sun) whose light travels along `direction`:
+    /// `irradiance` (W/m² per channel) on a surface facing it.
+    fn add_directional_light(&mut self, direction: (f32, f32, f32), irradiance: (f32, f32, f32)) -> PyResult<()> {
+        self.scene.lights.push(Light::Directional {
+            direction: unit_direction(direction)?,
+            irradiance: light_amount("irradiance", irradiance)?,
+        });
         Ok(())
     }
 
@@ -673,10 +717,59 @@ struct Camera {
     spec: CameraSpec,
 }
 
-fn parse_aperture(aperture: Option<&str>) -> PyResult<Option<ApertureShape>> {
-    aperture
-        .map(|a| ApertureShape::parse(a).map_err(|e| to_py(e, FileKind::Scene)))
-        .transpose()
+/// An amount of light (radiance, intensity, irradiance): finite, not negative.
+fn light_amount(what: &str, value: (f32, f32, f32)) -> PyResult<Vec3> {
+    let v = Vec3::from(value);
+    if !(v.is_finite() && v.min_element() >= 0.0) {
+        return Err(value_error(format!("{what} must be finite and non-negative, got {v}")));
+    }
+    Ok(v)
+}
+
+/// A point with finite coordinates.
+fn finite_point(what: &str, value: (f32, f32, f32)) -> PyResult<Vec3> {
+    let v = Vec3::from(value);
+    if !v.is_finite() {
+        return Err(value_error(format!("{what} must be finite, got {v}")));
+    }
+    Ok(v)
+}
+
+/// A direction, normalised; not zero.
+fn unit_direction(value: (f32, f32, f32)) -> PyResult<Vec3> {
+    let v = Vec3::from(value);
+    v.try_normalize()
+        .ok_or_else(|| value_error(format!("direction must be a finite, non-zero vector, got {v}")))
+}
+
+/// A `Lens`, or a built-in lens by name.
+fn lens_from_py(lens: &Bound<'_, PyAny>) -> PyResult<Lens> {
+    match lens.extract::<Lens>() {
+        Ok(lens) => Ok(lens),
+        Err(_) => Lens::builtin(
+            &lens
+                .extract::<String>()
+                .map_err(|_| value_error("lens must be a lenspath.Lens or a built-in lens name"))?,
+        ),
+    }
+}
+
+/// An aperture shape from Python: a name such as "blades:6" or "star:5:0.4",
+/// or a 2-D array of transmissions (a mask over the stop's bounding square).
+fn parse_aperture(aperture: Option<&Bound<'_, PyAny>>) -> PyResult<Option<ApertureShape>> {
+    let Some(aperture) = aperture else {
+        return Ok(None);
+    };
+    let invalid = |e: Error| to_py(e, FileKind::Image);
+    if let Ok(name) = aperture.extract::<String>() {
+        return ApertureShape::parse(&name).map(Some).map_err(invalid);
+    }
+    let mask = aperture
+        .extract::<PyArrayLike2<'_, f32, AllowTypeChange>>()
+        .map_err(|_| value_error("aperture must be a shape name (such as 'blades:6') or a 2-D array (a mask)"))?;
+    let (height, width) = (mask.shape()[0], mask.shape()[1]);
+    let values = mask.as_array().iter().copied().collect();
+    ApertureShape::mask(width, height, values).map(Some).map_err(invalid)
 }
 
 #[pymethods]
@@ -699,7 +792,7 @@ impl Camera {
         aperture_radius: f32,
         focus_distance: Option<f32>,
         fov_deg: Option<f32>,
-        aperture: Option<&str>,
+        aperture: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Camera> {
         if !(aperture_radius >= 0.0 && aperture_radius.is_finite()) {
             return Err(value_error(format!(
@@ -730,19 +823,10 @@ impl Camera {
         sensor_mm: Option<f64>,
         f_number: Option<f64>,
         sensor_width_mm: Option<f64>,
-        aperture: Option<&str>,
+        aperture: Option<&Bound<'_, PyAny>>,
         scene_unit_m: Option<f64>,
     ) -> PyResult<Camera> {
-        let lens = match lens {
-            None => None,
-            Some(l) => Some(match l.extract::<Lens>() {
-                Ok(lens) => lens,
-                Err(_) => Lens::builtin(
-                    &l.extract::<String>()
-                        .map_err(|_| value_error("lens must be a lenspath.Lens or a built-in lens name"))?,
-                )?,
-            }),
-        };
+        let lens = lens.map(lens_from_py).transpose()?;
         if focus_distance.is_some() && sensor_mm.is_some() {
             return Err(value_error("give focus_distance or sensor_mm, not both"));
         }
@@ -1222,6 +1306,69 @@ fn bokeh<'py>(
     Ok(out.into_pyarray(py))
 }
 
+/// Depth-aware lens blur of an (H, W, 3) image by its (H, W) depths (see the stub).
+#[pyfunction]
+#[pyo3(signature = (image, depth, focus_distance, *, lens = None, f_number = None, focal_length_mm = None,
+                    aperture_radius = None, fov_deg = None, sensor_width_mm = 36.0, scene_unit_m = 1.0,
+                    aperture = None))]
+#[allow(clippy::too_many_arguments)]
+fn lens_blur<'py>(
+    py: Python<'py>,
+    image: PyArrayLike3<'_, f32, AllowTypeChange>,
+    depth: PyArrayLike2<'_, f32, AllowTypeChange>,
+    focus_distance: f64,
+    lens: Option<&Bound<'_, PyAny>>,
+    f_number: Option<f64>,
+    focal_length_mm: Option<f64>,
+    aperture_radius: Option<f64>,
+    fov_deg: Option<f64>,
+    sensor_width_mm: f64,
+    scene_unit_m: f64,
+    aperture: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Bound<'py, PyArray3<f32>>> {
+    let image = image_from_array(&image)?;
+    let (width, height) = (image.width, image.height);
+    if depth.shape() != [height as usize, width as usize] {
+        return Err(value_error(format!(
+            "depth must be {height} x {width} like the image, got {:?}",
+            depth.shape()
+        )));
+    }
+    let invalid = |e: Error| to_py(e, FileKind::Lens);
+    let coc = match (lens, focal_length_mm, aperture_radius) {
+        (None, None, Some(radius)) => {
+            let fov = fov_deg.ok_or_else(|| value_error("aperture_radius needs fov_deg (the thin-lens camera's)"))?;
+            CircleOfConfusion::thin_lens_camera(radius, focus_distance, fov, height).map_err(invalid)?
+        }
+        (Some(lens), None, None) => {
+            let lens = lens_from_py(lens)?;
+            let paraxial = lens.system.paraxial().map_err(invalid)?;
+            let n = f_number.unwrap_or(paraxial.f_number);
+            let f = paraxial.effective_focal_length_mm;
+            CircleOfConfusion::thin_lens_in_scene_units(f, n, focus_distance, scene_unit_m, sensor_width_mm, width)
+                .map_err(invalid)?
+        }
+        (None, Some(f), None) => {
+            let n = f_number.ok_or_else(|| value_error("focal_length_mm needs f_number"))?;
+            CircleOfConfusion::thin_lens_in_scene_units(f, n, focus_distance, scene_unit_m, sensor_width_mm, width)
+                .map_err(invalid)?
+        }
+        _ => {
+            return Err(value_error(
+                "describe one lens: lens (with f_number to stop it down), focal_length_mm with f_number, \
+                 or aperture_radius with fov_deg",
+            ))
+        }
+    };
+    let shape = parse_aperture(aperture)?.unwrap_or(ApertureShape::Circle);
+    let aperture = Aperture::new(&shape).map_err(|e| to_py(e, FileKind::Image))?;
+    let depth: Vec<f32> = depth.as_array().iter().copied().collect();
+    let blurred = py
+        .detach(|| depth_blur(&image.rgb, &depth, width as usize, height as usize, &coc, &aperture))
+        .map_err(|e| to_py(e, FileKind::Image))?;
+    Ok(rgb_array(py, &Image { rgb: blurred, ..image }))
+}
+
 /// The native module.
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -1241,6 +1388,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(focus_measure, m)?)?;
     m.add_function(wrap_pyfunction!(focus_measures, m)?)?;
     m.add_function(wrap_pyfunction!(bokeh, m)?)?;
+    m.add_function(wrap_pyfunction!(lens_blur, m)?)?;
     m.add_class::<AutofocusResult>()?;
     m.add_function(wrap_pyfunction!(autofocus, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;

@@ -68,6 +68,37 @@ impl CircleOfConfusion {
         })
     }
 
+    /// [`CircleOfConfusion::thin_lens`] for depths in scene units of
+    /// `scene_unit_m` metres: `focus_distance` in scene units too.
+    pub fn thin_lens_in_scene_units(
+        focal_length_mm: f64,
+        f_number: f64,
+        focus_distance: f64,
+        scene_unit_m: f64,
+        sensor_width_mm: f64,
+        width_px: u32,
+    ) -> Result<CircleOfConfusion> {
+        if !(scene_unit_m > 0.0 && scene_unit_m.is_finite()) {
+            return Err(Error::InvalidArgument(format!(
+                "the scene unit must be a positive number of metres, got {scene_unit_m}"
+            )));
+        }
+        let mm = scene_unit_m * 1e3;
+        let coc = CircleOfConfusion::thin_lens(
+            focal_length_mm,
+            f_number,
+            focus_distance * mm,
+            sensor_width_mm,
+            width_px,
+        )?;
+        // The depths stay in scene units: scale the lens's lengths instead.
+        Ok(CircleOfConfusion {
+            aperture_diameter: coc.aperture_diameter / mm,
+            focus_distance,
+            ..coc
+        })
+    }
+
     /// The thin-lens camera of pbrt and lenspath (`--camera thin-lens`):
     /// aperture radius and focus distance in scene units, vertical field of
     /// view, image height in pixels.

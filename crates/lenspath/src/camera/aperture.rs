@@ -71,18 +71,22 @@ impl ApertureShape {
     /// (read by [`crate::io::image::read_gray`]; values above 1 count as 1).
     pub fn load_mask(path: &std::path::Path) -> Result<ApertureShape> {
         let (width, height, values) = crate::io::image::read_gray(path)?;
-        if values.iter().any(|v| !v.is_finite() || *v < 0.0) {
-            return Err(Error::Parse {
-                path: path.to_path_buf(),
-                message: "aperture mask values must be finite and not negative".into(),
-            });
-        }
-        let values = values.into_iter().map(|v| v.min(1.0)).collect();
-        let mask = ApertureMask::new(width, height, values).map_err(|e| Error::Parse {
+        ApertureShape::mask(width, height, values).map_err(|e| Error::Parse {
             path: path.to_path_buf(),
             message: e.to_string(),
-        })?;
-        Ok(ApertureShape::Mask(Arc::new(mask)))
+        })
+    }
+
+    /// A [`ApertureShape::Mask`] from `width` × `height` transmissions, row
+    /// by row from the top (values above 1 count as 1).
+    pub fn mask(width: usize, height: usize, values: Vec<f32>) -> Result<ApertureShape> {
+        if values.iter().any(|v| !v.is_finite() || *v < 0.0) {
+            return Err(Error::InvalidArgument(
+                "aperture mask values must be finite and not negative".into(),
+            ));
+        }
+        let values = values.into_iter().map(|v| v.min(1.0)).collect();
+        Ok(ApertureShape::Mask(Arc::new(ApertureMask::new(width, height, values)?)))
     }
 }
 
@@ -214,7 +218,11 @@ enum Sampler {
     Raster {
         width: usize,
         height: usize,
+        /// Transmission integrated over the part of each pixel inside the
+        /// stop's circle, over the pixel's area: what is sampled.
         values: Vec<f32>,
+        /// The fraction of each pixel inside the stop's circle.
+        circle_coverage: Vec<f32>,
         rows: Distribution1D,
         columns: Vec<Distribution1D>,
         /// ∑ value · pixel area.
@@ -260,7 +268,7 @@ impl Aperture {
                 // The stop's circle clips the mask: each pixel's value is
                 // weighted by how much of it lies inside.
                 let (w, h) = (mask.width, mask.height);
-                let inside = coverage_raster(w, h, |p| p.length_squared() <= 1.0);
+                let inside = circle_coverage(w, h);
                 let values = mask.values.iter().zip(inside).map(|(v, c)| v * c).collect();
                 raster(w, h, values)?
             }
@@ -366,24 +374,38 @@ impl Aperture {
                     0.0
                 }
             }
-            Sampler::Raster { .. } => self.raster_value(p),
+            Sampler::Raster { circle_coverage, .. } => {
+                // The pixel's transmission where it is inside the circle: its
+                // value spread over that part alone. (Its value as such would
+                // count an edge pixel's coverage twice, once in the sampling
+                // and once in the weight, and darken the shape's rim.)
+                match self.raster_index(p) {
+                    Some(i) if circle_coverage[i] > 0.0 => self.raster_value(p) / f64::from(circle_coverage[i]),
+                    _ => 0.0,
+                }
+            }
         }
     }
 
-    /// The raster's value at `p` (nearest pixel), 0 off the square.
-    fn raster_value(&self, p: DVec2) -> f64 {
-        let Sampler::Raster {
-            width, height, values, ..
-        } = &self.sampler
-        else {
-            return 0.0;
+    /// The raster pixel holding `p`, if it is on the square and the sampler a raster.
+    fn raster_index(&self, p: DVec2) -> Option<usize> {
+        let Sampler::Raster { width, height, .. } = &self.sampler else {
+            return None;
         };
         let column = ((p.x + 1.0) * 0.5 * *width as f64).floor();
         let row = ((1.0 - p.y) * 0.5 * *height as f64).floor();
         if column < 0.0 || row < 0.0 || column >= *width as f64 || row >= *height as f64 {
-            return 0.0;
+            return None;
         }
-        f64::from(values[row as usize * width + column as usize])
+        Some(row as usize * width + column as usize)
+    }
+
+    /// The raster's value at `p` (nearest pixel), 0 off the square.
+    fn raster_value(&self, p: DVec2) -> f64 {
+        match (&self.sampler, self.raster_index(p)) {
+            (Sampler::Raster { values, .. }, Some(i)) => f64::from(values[i]),
+            _ => 0.0,
+        }
     }
 
     /// The transmission averaged over each pixel of a `width`×`height`
@@ -485,6 +507,13 @@ fn coverage_raster(w: usize, h: usize, inside: impl Fn(DVec2) -> bool) -> Vec<f3
     pixel_averages(w, h, |p| f64::from(u8::from(inside(p))))
 }
 
+/// The fraction of each pixel inside the stop's (unit) circle.
+fn circle_coverage(w: usize, h: usize) -> Vec<f32> {
+    coverage_raster(w, h, |p| p.length_squared() <= 1.0)
+}
+
+/// A raster sampler of `values` (transmission integrated over each pixel's
+/// part inside the circle, over the pixel area).
 fn raster(width: usize, height: usize, values: Vec<f32>) -> Result<Sampler> {
     let pixel_area = 4.0 / (width * height) as f64;
     let row_sums: Vec<f32> = values.chunks_exact(width).map(|r| r.iter().sum()).collect();
@@ -511,6 +540,7 @@ fn raster(width: usize, height: usize, values: Vec<f32>) -> Result<Sampler> {
         height,
         rows: Distribution1D::new(&row_sums),
         columns,
+        circle_coverage: circle_coverage(width, height),
         values,
         open_area,
     })
@@ -535,7 +565,23 @@ mod tests {
                 ApertureShape::Mask(Arc::new(ApertureMask::new(64, 64, half_open).unwrap())),
                 0.5,
             ),
+            // All open, coarse: most of its pixels are cut by the circle.
+            (
+                ApertureShape::Mask(Arc::new(ApertureMask::new(12, 12, vec![1.0; 144]).unwrap())),
+                1.0,
+            ),
         ]
+    }
+
+    /// ∫ f over the unit disk's square [-1, 1]², by the midpoint rule on an `m` × `m` grid.
+    fn square_integral(m: u32, f: impl Fn(DVec2) -> f64) -> f64 {
+        let cell = 2.0 / f64::from(m);
+        (0..m * m)
+            .map(|k| {
+                let (i, j) = (f64::from(k % m), f64::from(k / m));
+                f(DVec2::new(-1.0 + (i + 0.5) * cell, -1.0 + (j + 0.5) * cell)) * cell * cell
+            })
+            .sum()
     }
 
     /// The open fractions are the shapes' areas over π (a curved iris of
@@ -579,18 +625,40 @@ mod tests {
                 estimate += g(p) * a.transmission(p) / pdf;
             }
             estimate /= f64::from(n);
-            let m = 1000;
-            let cell = 2.0 / f64::from(m);
-            let mut exact = 0.0;
-            for j in 0..m {
-                for i in 0..m {
-                    let p = DVec2::new(-1.0 + (f64::from(i) + 0.5) * cell, -1.0 + (f64::from(j) + 0.5) * cell);
-                    exact += g(p) * a.transmission(p) * cell * cell;
-                }
-            }
+            let exact = square_integral(1000, |p| g(p) * a.transmission(p));
             assert!(
                 (estimate - exact).abs() < 0.01 * exact,
                 "{shape:?}: {estimate} vs {exact}"
+            );
+        }
+    }
+
+    /// The transmission is the shape: its integral is the open area, and
+    /// the cameras' aperture weight T / (π pdf) averages the open fraction,
+    /// also where the circle cuts a mask's pixels (an all-open mask must
+    /// pass as much light as the circle).
+    #[test]
+    fn transmission_integrates_to_the_open_area() {
+        for (shape, expected) in shapes() {
+            let a = Aperture::new(&shape).unwrap();
+            let area = square_integral(1200, |p| a.transmission(p));
+            assert!(
+                (area / PI - expected).abs() < 0.01 * expected,
+                "{shape:?}: {}",
+                area / PI
+            );
+            let mut rng = Rng::new(5);
+            let n = 400_000;
+            let weight: f64 = (0..n)
+                .map(|_| {
+                    let (p, pdf) = a.sample(Vec2::new(rng.uniform(), rng.uniform()));
+                    a.transmission(p) / (PI * pdf)
+                })
+                .sum::<f64>()
+                / f64::from(n);
+            assert!(
+                (weight - expected).abs() < 0.01 * expected,
+                "{shape:?}: mean weight {weight}"
             );
         }
     }
