@@ -50,7 +50,8 @@ def srgb8(linear: np.ndarray) -> np.ndarray:
     """Linear RGB to 8-bit sRGB (IEC 61966-2-1), as lenspath writes PNG."""
     c = np.clip(linear, 0.0, 1.0)
     encoded = np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1 / 2.4) - 0.055)
-    return np.round(encoded * 255.0).astype(np.uint8)
+    values: np.ndarray = np.round(encoded * 255.0).astype(np.uint8)
+    return values
 
 
 def contact_sheet(out_dir: Path, spp: int, columns: int = 6) -> Path | None:

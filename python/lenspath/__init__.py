@@ -14,9 +14,10 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import Any, overload
 
 import numpy as np
+import numpy.typing as npt
 
 from . import _core
 from ._core import (
@@ -76,7 +77,7 @@ def _as_scene(scene: Scene | str | os.PathLike[str]) -> Scene:
 def _tqdm_progress() -> Callable[[int, int], None] | None:
     """A progress callback drawing a tqdm bar (the notebook one in Jupyter), or None without tqdm."""
     try:
-        from tqdm.auto import tqdm
+        from tqdm.auto import tqdm  # type: ignore[import-untyped, unused-ignore]
     except ImportError:
         return None
     bar = None
@@ -93,6 +94,34 @@ def _tqdm_progress() -> Callable[[int, int], None] | None:
     return update
 
 
+@overload
+def render(
+    scene: Scene | str | os.PathLike[str],
+    camera: Camera | None = None,
+    *,
+    spp: int = 64,
+    resolution: tuple[int, int] | None = None,
+    seed: int = 0,
+    max_depth: int = 16,
+    light_samples: int = 1,
+    threads: int | None = None,
+    aovs: None = None,
+    progress: bool | Callable[[int, int], Any] = False,
+) -> npt.NDArray[np.float32]: ...
+@overload
+def render(
+    scene: Scene | str | os.PathLike[str],
+    camera: Camera | None = None,
+    *,
+    spp: int = 64,
+    resolution: tuple[int, int] | None = None,
+    seed: int = 0,
+    max_depth: int = 16,
+    light_samples: int = 1,
+    threads: int | None = None,
+    aovs: Sequence[str],
+    progress: bool | Callable[[int, int], Any] = False,
+) -> dict[str, npt.NDArray[np.float32]]: ...
 def render(
     scene: Scene | str | os.PathLike[str],
     camera: Camera | None = None,
@@ -105,7 +134,7 @@ def render(
     threads: int | None = None,
     aovs: Sequence[str] | None = None,
     progress: bool | Callable[[int, int], Any] = False,
-) -> np.ndarray | dict[str, np.ndarray]:
+) -> npt.NDArray[np.float32] | dict[str, npt.NDArray[np.float32]]:
     """Renders ``scene`` and returns linear RGB, float32, shape (height, width, 3).
 
     ``scene`` is a :class:`Scene`, a built-in scene name (``"cornell-spheres"``)
@@ -120,6 +149,18 @@ def render(
     KeyboardInterrupt.
     """
     callback = _tqdm_progress() if progress is True else (progress or None)
+    if aovs is None:
+        return _core.render(
+            _as_scene(scene),
+            camera,
+            spp=spp,
+            resolution=resolution,
+            seed=seed,
+            max_depth=max_depth,
+            light_samples=light_samples,
+            threads=threads,
+            progress=callback,
+        )
     return _core.render(
         _as_scene(scene),
         camera,
@@ -129,7 +170,7 @@ def render(
         max_depth=max_depth,
         light_samples=light_samples,
         threads=threads,
-        aovs=list(aovs) if aovs is not None else None,
+        aovs=list(aovs),
         progress=callback,
     )
 
@@ -159,9 +200,10 @@ def autofocus(
     focused there, ready for :func:`render`; ``lenspath.plot.focus_curve(result)``
     draws the search.
     """
+    x, y, width, height = patch
     return _core.autofocus(
         _as_scene(scene),
-        tuple(patch),
+        (x, y, width, height),
         camera,
         metric=metric,
         strategy=strategy,

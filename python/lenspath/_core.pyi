@@ -9,12 +9,33 @@ of shape (height, width, 3); array arguments may be any array-like, converted.
 
 from collections.abc import Callable
 from os import PathLike
-from typing import Any, Literal, overload
+from typing import Any, Literal, final, overload
 
 import numpy as np
 import numpy.typing as npt
 
 __version__: str
+__all__ = [
+    "LenspathError",
+    "SceneError",
+    "LensError",
+    "Scene",
+    "Lens",
+    "Camera",
+    "load",
+    "builtin_scenes",
+    "builtin_lenses",
+    "render",
+    "read",
+    "write",
+    "focus_measure",
+    "focus_measures",
+    "bokeh",
+    "lens_blur",
+    "AutofocusResult",
+    "autofocus",
+    "__version__",
+]
 
 class LenspathError(Exception):
     """Base class of lenspath's own errors."""
@@ -25,6 +46,7 @@ class SceneError(LenspathError):
 class LensError(LenspathError):
     """A lens table is broken; the message names the file, the line and the fault."""
 
+@final
 class Scene:
     """A scene: shapes, materials, lights and the view it was made for."""
 
@@ -37,13 +59,17 @@ class Scene:
     def name(self) -> str:
         """The built-in name or the file path."""
     @property
-    def mesh_count(self) -> int: ...
+    def mesh_count(self) -> int:
+        """Triangle meshes."""
     @property
-    def triangle_count(self) -> int: ...
+    def triangle_count(self) -> int:
+        """Triangles over all meshes."""
     @property
-    def sphere_count(self) -> int: ...
+    def sphere_count(self) -> int:
+        """Spheres."""
     @property
-    def material_count(self) -> int: ...
+    def material_count(self) -> int:
+        """Materials (``add_material`` returns their indices)."""
     @property
     def light_count(self) -> int:
         """Point, spot, directional and environment lights plus emissive shapes."""
@@ -121,6 +147,7 @@ def load(path: str | PathLike[str]) -> Scene:
 def builtin_scenes() -> list[str]:
     """The built-in scenes' names."""
 
+@final
 class Lens:
     """A real compound lens placed on its axis, wide open or stopped down."""
 
@@ -137,7 +164,8 @@ class Lens:
     def stopped_down(self, f_number: float) -> Lens:
         """This lens with its stop closed to paraxial f-number ``f_number``."""
     @property
-    def name(self) -> str: ...
+    def name(self) -> str:
+        """The built-in name or the table file's."""
     @property
     def table(self) -> npt.NDArray[np.float64]:
         """The prescription as an N x 4 array (as ``from_table`` takes it)."""
@@ -184,6 +212,7 @@ class Lens:
 def builtin_lenses() -> list[str]:
     """The built-in lenses' names."""
 
+@final
 class Camera:
     """A camera for ``render``; what it leaves unset comes from the scene."""
 
@@ -270,6 +299,7 @@ def bokeh(
     """Blurs an (H, W, 3) image with a bokeh kernel: an ``aperture`` shape ``diameter_px``
     across, or a 2-D ``mask`` (resized so its longer side is ``diameter_px``, if given)."""
 
+@final
 class AutofocusResult:
     """What ``autofocus`` found and what it cost."""
 
@@ -280,9 +310,11 @@ class AutofocusResult:
     def focus_distance(self) -> float | None:
         """The distance in focus there (scene units from the sensor); None beyond infinity."""
     @property
-    def metric(self) -> str: ...
+    def metric(self) -> str:
+        """The focus measure's name."""
     @property
-    def strategy(self) -> str: ...
+    def strategy(self) -> str:
+        """The search strategy's name."""
     @property
     def evaluations(self) -> npt.NDArray[np.float64]:
         """Every patch render as a (sensor_mm, score) row, in the order rendered."""

@@ -109,7 +109,8 @@ impl Scene {
 
     /// A built-in scene by name (see `builtin_scenes()`).
     #[staticmethod]
-    #[pyo3(signature = (name, mesh_triangles = DEFAULT_MESH_TRIANGLES))]
+    #[pyo3(signature = (name, mesh_triangles = DEFAULT_MESH_TRIANGLES),
+           text_signature = "(name, mesh_triangles=1000000)")]
     fn builtin(name: &str, mesh_triangles: usize) -> PyResult<Self> {
         Ok(Scene {
             name: name.into(),
@@ -158,7 +159,8 @@ impl Scene {
 
     /// Adds a material: `kind` is "diffuse" (reflectance), "mirror"
     /// (reflectance), "glass" (eta) or "metal" (eta, k, roughness); returns its index.
-    #[pyo3(signature = (kind, *, reflectance = (0.8, 0.8, 0.8), eta = None, k = None, roughness = 0.0))]
+    #[pyo3(signature = (kind, *, reflectance = (0.8, 0.8, 0.8), eta = None, k = None, roughness = 0.0),
+           text_signature = "($self, kind, *, reflectance=(0.8, 0.8, 0.8), eta=None, k=None, roughness=0.0)")]
     fn add_material(
         &mut self,
         kind: &str,
@@ -314,7 +316,8 @@ impl Scene {
 
     /// Sets the view: a camera at `eye` looking at `target`, vertical field
     /// of view `fov_deg` (pinhole), subject at `focus_distance` (default: the target).
-    #[pyo3(signature = (eye, target, up = (0.0, 1.0, 0.0), fov_deg = 40.0, focus_distance = None))]
+    #[pyo3(signature = (eye, target, up = (0.0, 1.0, 0.0), fov_deg = 40.0, focus_distance = None),
+           text_signature = "($self, eye, target, up=(0.0, 1.0, 0.0), fov_deg=40.0, focus_distance=None)")]
     fn look_at(
         &mut self,
         eye: (f32, f32, f32),
