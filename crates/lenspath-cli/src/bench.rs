@@ -1,15 +1,15 @@
 //! `lenspath bench bvh`: BVH build time and traversal throughput on a mesh.
 //! Loading the mesh and generating rays are not timed.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use clap::Args;
 use glam::Vec3;
 use lenspath::accel::{Bvh, BvhSettings, PrimGeometry};
 use lenspath::builtin::torus_knot;
-use lenspath::io::load_mesh;
 use lenspath::io::ply::write_ply;
+use lenspath::io::{load_mesh, write_bytes};
 use lenspath::ray::Ray;
 use lenspath::raysets::{coherent_rays, incoherent_rays};
 use lenspath::{Error, Result};
@@ -44,9 +44,41 @@ pub struct BvhArgs {
     /// Also write the benchmarked mesh as binary PLY (to run other BVH builders on the same triangles).
     #[arg(long, value_name = "FILE")]
     save_mesh: Option<PathBuf>,
+    /// Also write the ray sets and lenspath's closest-hit distances into this folder, as raw
+    /// little-endian float32 (to run other tracers on the same rays and compare): `coherent_rays.f32`
+    /// and `incoherent_rays.f32` (N x 6: origin, direction), `coherent_t.f32` and `incoherent_t.f32`
+    /// (N; inf where nothing is hit).
+    #[arg(long, value_name = "DIR")]
+    save_rays: Option<PathBuf>,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     json: bool,
+}
+
+/// Millions of any-hit (shadow) rays per second, and the count of blocked rays.
+fn trace_any<T: Copy + Send + Sync>(bvh: &Bvh<T>, rays: &[Ray], pool: &rayon::ThreadPool) -> (f64, usize) {
+    let started = Instant::now();
+    let blocked = pool.install(|| {
+        rays.par_chunks(4096)
+            .map(|chunk| chunk.iter().filter(|r| bvh.intersect_any(r, f32::INFINITY)).count())
+            .sum()
+    });
+    (rays.len() as f64 / started.elapsed().as_secs_f64() / 1e6, blocked)
+}
+
+/// Writes `rays` (origin, direction) and their closest-hit distances under `dir` as `NAME_rays.f32` and `NAME_t.f32`.
+fn save_rays<T: Copy + Send + Sync>(bvh: &Bvh<T>, rays: &[Ray], dir: &Path, name: &str) -> Result<()> {
+    let rays_f32: Vec<f32> = rays
+        .iter()
+        .flat_map(|r| r.origin.to_array().into_iter().chain(r.direction.to_array()))
+        .collect();
+    let t: Vec<f32> = rays
+        .par_iter()
+        .map(|r| bvh.intersect(r, f32::INFINITY).map_or(f32::INFINITY, |h| h.t))
+        .collect();
+    let bytes = |v: &[f32]| v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>();
+    write_bytes(&dir.join(format!("{name}_rays.f32")), &bytes(&rays_f32))?;
+    write_bytes(&dir.join(format!("{name}_t.f32")), &bytes(&t))
 }
 
 /// Millions of closest-hit rays per second, and the hit count.
@@ -116,7 +148,18 @@ pub fn run_bvh(args: BvhArgs) -> Result<Outcome> {
     let incoherent = incoherent_rays(lo, hi, args.rays);
     let (coherent_mrays, coherent_hits) = trace(&bvh, &coherent, &pool);
     let (incoherent_mrays, incoherent_hits) = trace(&bvh, &incoherent, &pool);
+    let (coherent_any_mrays, _) = trace_any(&bvh, &coherent, &pool);
+    let (incoherent_any_mrays, incoherent_blocked) = trace_any(&bvh, &incoherent, &pool);
+    debug_assert_eq!(incoherent_blocked, incoherent_hits);
     let threads = pool.current_num_threads();
+    if let Some(dir) = &args.save_rays {
+        std::fs::create_dir_all(dir).map_err(|e| Error::Io {
+            path: dir.clone(),
+            source: e,
+        })?;
+        save_rays(&bvh, &coherent, dir, "coherent")?;
+        save_rays(&bvh, &incoherent, dir, "incoherent")?;
+    }
 
     if args.json {
         let json = serde_json::json!({
@@ -134,6 +177,8 @@ pub fn run_bvh(args: BvhArgs) -> Result<Outcome> {
             "coherent_hit_fraction": coherent_hits as f64 / args.rays as f64,
             "incoherent_mrays_s": incoherent_mrays,
             "incoherent_hit_fraction": incoherent_hits as f64 / args.rays as f64,
+            "coherent_any_hit_mrays_s": coherent_any_mrays,
+            "incoherent_any_hit_mrays_s": incoherent_any_mrays,
         });
         println!("{json}");
     } else {
@@ -155,6 +200,9 @@ pub fn run_bvh(args: BvhArgs) -> Result<Outcome> {
         println!(
             "incoherent rays     {incoherent_mrays:.2} M rays/s on {threads} threads ({:.0}% hit)",
             100.0 * incoherent_hits as f64 / args.rays as f64
+        );
+        println!(
+            "any-hit rays        {coherent_any_mrays:.2} (coherent), {incoherent_any_mrays:.2} (incoherent) M rays/s"
         );
     }
     Ok(Outcome::Done)

@@ -109,3 +109,8 @@ pub fn check_writable(path: &Path) -> Result<()> {
 pub fn write_text(path: &Path, contents: &str) -> Result<()> {
     write_atomically(path, |tmp| std::fs::write(tmp, contents).map_err(|e| io_error(path, e)))
 }
+
+/// Writes `bytes` to `path` atomically (a temporary file renamed into place).
+pub fn write_bytes(path: &Path, bytes: &[u8]) -> Result<()> {
+    write_atomically(path, |tmp| std::fs::write(tmp, bytes).map_err(|e| io_error(path, e)))
+}

@@ -1,0 +1,195 @@
+#!/usr/bin/env python3
+"""lenspath's BVH against Embree (the `embreex` binding from PyPI) on the same
+triangles and the same rays, in one run: build time, closest-hit and any-hit
+Mrays/s on 1 M coherent camera rays and 1 M incoherent random rays, one thread;
+lenspath on all threads too; and whether the two agree on every hit distance.
+
+    python3 bench/peers/bvh_vs_embree.py [--rays 1000000] [--rounds 3] [--json out.json]
+
+Makes its virtual environment in bench/.venv-peers (numpy, embreex) the first
+time and reruns itself there; builds lenspath with cargo. The meshes are
+../shared/meshes/dragon_100k.ply and lucy_100k.obj and the 1 M-triangle
+procedural torus knot.
+
+Fairness notes: embreex traces in a Cython loop of rtcIntersect1 / rtcOccluded1
+calls, one ray at a time on one thread (its per-ray Python-free overhead is
+included; lenspath's timing is of its own loop). Embree's build uses its default
+(multi-threaded TBB) builder; lenspath's build is single-threaded.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+VENV = ROOT / "bench" / ".venv-peers"
+SHARED = ROOT.parent / "shared" / "meshes"
+MESHES = [("dragon_100k", [str(SHARED / "dragon_100k.ply")]), ("lucy_100k", [str(SHARED / "lucy_100k.obj")])]
+PROCEDURAL = ("knot_1m", ["--procedural", "1000000"])
+
+
+def in_venv() -> None:
+    """Reruns this script inside bench/.venv-peers, made and filled on first use."""
+    if Path(sys.prefix).resolve() == VENV.resolve():
+        return
+    if not (VENV / "bin" / "python").exists():
+        subprocess.run([sys.executable, "-m", "venv", str(VENV)], check=True)
+        subprocess.run([str(VENV / "bin" / "python"), "-m", "pip", "install", "-q", "numpy", "embreex"], check=True)
+    os.execv(str(VENV / "bin" / "python"), [str(VENV / "bin" / "python"), *sys.argv])
+
+
+def read_binary_ply(path: Path):
+    """Vertices (N x 3 float32) and faces (M x 3 int32) of the binary PLY `lenspath bench bvh --save-mesh` writes."""
+    import numpy as np
+
+    data = path.read_bytes()
+    end = data.index(b"end_header\n") + len(b"end_header\n")
+    header = data[:end].decode().splitlines()
+    counts = {line.split()[1]: int(line.split()[2]) for line in header if line.startswith("element")}
+    nv, nf = counts["vertex"], counts["face"]
+    vertices = np.frombuffer(data, np.float32, 3 * nv, end).reshape(nv, 3)
+    faces = np.frombuffer(data[end + 12 * nv :], np.dtype([("n", "u1"), ("i", "<i4", 3)]), nf)
+    assert (faces["n"] == 3).all()
+    return vertices, faces["i"].astype(np.int32)
+
+
+def lenspath_bench(binary: Path, mesh_args: list[str], rays: int, threads: int | None, out: Path | None) -> dict:
+    command = [str(binary), "bench", "bvh", "--json", "--rays", str(rays)]
+    if threads:
+        command += ["--threads", str(threads)]
+    if out is not None:
+        command += ["--save-rays", str(out), "--save-mesh", str(out / "mesh.ply")]
+    command += mesh_args
+    return json.loads(subprocess.run(command, check=True, capture_output=True, text=True).stdout)
+
+
+def embree_measure(vertices, faces, ray_sets: dict, rounds: int) -> dict:
+    import numpy as np
+    from embreex import rtcore, rtcore_scene
+    from embreex.mesh_construction import TriangleMesh
+
+    one = (np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32))
+    # One device for every build, made outside the timing (it starts Embree's thread pool).
+    device = rtcore.EmbreeDevice()
+    builds = []
+    for _ in range(rounds):
+        started = time.perf_counter()
+        scene = rtcore_scene.EmbreeScene(device)
+        TriangleMesh(scene, vertices, faces)
+        scene.run(*one)  # embreex commits (builds) the scene on its first query
+        builds.append(time.perf_counter() - started)
+    result = {"build_ms": 1e3 * min(builds)}
+    for name, (origins, directions, _) in ray_sets.items():
+        for query, key in (("INTERSECT", "closest"), ("OCCLUDED", "any_hit")):
+            times = []
+            for _ in range(rounds):
+                started = time.perf_counter()
+                scene.run(origins, directions, query=query)
+                times.append(time.perf_counter() - started)
+            result[f"{name}_{key}_mrays_s"] = len(origins) / min(times) / 1e6
+    result["scene"] = scene
+    return result
+
+
+def agreement(scene, origins, directions, lenspath_t) -> dict:
+    """How often Embree and lenspath agree: both miss, or both hit within 1e-4 relative distance."""
+    import numpy as np
+
+    tfar = scene.run(origins, directions, output=1)["tfar"]
+    embree_hit = tfar < 1e30
+    lenspath_hit = np.isfinite(lenspath_t)
+    both = embree_hit & lenspath_hit
+    close = np.abs(tfar[both] - lenspath_t[both]) <= 1e-4 * np.maximum(1.0, tfar[both])
+    return {
+        "hit_mismatch": int((embree_hit != lenspath_hit).sum()),
+        "distance_mismatch": int((~close).sum()),
+        "agree_fraction": float(((embree_hit == lenspath_hit).sum() - (~close).sum()) / len(tfar)),
+    }
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--rays", type=int, default=1_000_000)
+    parser.add_argument("--rounds", type=int, default=3, help="best of this many timings each")
+    parser.add_argument("--json", type=Path, help="also write every figure here")
+    parser.add_argument("--meshes", nargs="*", help="only these (dragon_100k, lucy_100k, knot_1m)")
+    args = parser.parse_args()
+    in_venv()
+    import numpy as np
+
+    subprocess.run(["cargo", "build", "--release", "--quiet"], cwd=ROOT, check=True)
+    binary = ROOT / "target" / "release" / "lenspath"
+    meshes = [m for m in [*MESHES, PROCEDURAL] if not args.meshes or m[0] in args.meshes]
+    if not SHARED.is_dir():
+        print(f"{SHARED} is absent: only the procedural mesh", file=sys.stderr)
+        meshes = [m for m in meshes if m is PROCEDURAL]
+    rows = []
+    for name, mesh_args in meshes:
+        with tempfile.TemporaryDirectory() as tmp:
+            out = Path(tmp)
+            ours = [
+                lenspath_bench(binary, mesh_args, args.rays, 1, out if r == 0 else None) for r in range(args.rounds)
+            ]
+            ours_all = lenspath_bench(binary, mesh_args, args.rays, None, None)
+            vertices, faces = read_binary_ply(out / "mesh.ply")
+            ray_sets = {}
+            for kind in ("coherent", "incoherent"):
+                raw = np.fromfile(out / f"{kind}_rays.f32", np.float32).reshape(-1, 6)
+                t = np.fromfile(out / f"{kind}_t.f32", np.float32)
+                ray_sets[kind] = (np.ascontiguousarray(raw[:, :3]), np.ascontiguousarray(raw[:, 3:]), t)
+            embree = embree_measure(vertices, faces, ray_sets, args.rounds)
+            checks = {k: agreement(embree["scene"], o, d, t) for k, (o, d, t) in ray_sets.items()}
+
+        def best(key: str, runs: list[dict] = ours) -> float:
+            return max(r[key] for r in runs)
+
+        row = {
+            "mesh": name,
+            "triangles": len(faces),
+            "lenspath_build_ms": min(r["build_ms"] for r in ours),
+            "embree_build_ms": embree["build_ms"],
+            "agreement": checks,
+            "lenspath_threads": ours_all["threads"],
+        }
+        for kind in ("coherent", "incoherent"):
+            row[f"{kind}_closest"] = (best(f"{kind}_mrays_s"), embree[f"{kind}_closest_mrays_s"])
+            row[f"{kind}_any_hit"] = (best(f"{kind}_any_hit_mrays_s"), embree[f"{kind}_any_hit_mrays_s"])
+            row[f"{kind}_closest_all_threads"] = ours_all[f"{kind}_mrays_s"]
+        rows.append(row)
+        print_row(row)
+    if args.json:
+        args.json.write_text(json.dumps(rows, indent=2))
+    return 0
+
+
+def print_row(row: dict) -> None:
+    print(f"\n{row['mesh']} ({row['triangles']:,} triangles)")
+    build_ratio = row["embree_build_ms"] / row["lenspath_build_ms"]
+    print(
+        f"  build            lenspath {row['lenspath_build_ms']:8.1f} ms (1 thread)   "
+        f"Embree {row['embree_build_ms']:8.1f} ms (default builder)   lenspath speed {build_ratio:.2f}x Embree's"
+    )
+    for key in ("coherent_closest", "incoherent_closest", "coherent_any_hit", "incoherent_any_hit"):
+        ours, theirs = row[key]
+        print(f"  {key:<19}lenspath {ours:6.2f} Mrays/s   Embree {theirs:6.2f} Mrays/s   ratio {ours / theirs:.2f}")
+    for kind in ("coherent", "incoherent"):
+        print(
+            f"  {kind} closest-hit, lenspath on {row['lenspath_threads']} threads: "
+            f"{row[f'{kind}_closest_all_threads']:.2f} Mrays/s"
+        )
+    for kind, check in row["agreement"].items():
+        print(
+            f"  agreement ({kind}): {100 * check['agree_fraction']:.4f}% of rays "
+            f"({check['hit_mismatch']} hit/miss and {check['distance_mismatch']} distance mismatches)"
+        )
+
+
+if __name__ == "__main__":
+    sys.exit(main())
