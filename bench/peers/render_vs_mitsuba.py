@@ -1,0 +1,206 @@
+#!/usr/bin/env python3
+"""lenspath's renderer against Mitsuba 3 (PyPI `mitsuba`) on the same scene, in one
+run: wall time at equal samples per pixel, and whether the images agree.
+
+    python3 bench/peers/render_vs_mitsuba.py [--res 480 360] [--spp 16] [--max-depth 16]
+                                             [--check-spp 1024] [--check-res 120 90]
+
+The scene is lenspath's built-in `cornell-spheres` (white, red and blue diffuse
+walls, two diffuse spheres, a one-sided square light under the ceiling), built
+here once for each renderer from the same numbers (crates/lenspath/src/builtin.rs),
+seen through the same pinhole camera. Mitsuba renders it with its `path`
+integrator in `scalar_rgb` and, when it runs here, `llvm_ad_rgb`; lenspath on all
+threads with one light sample. Mitsuba's `max_depth` counts the camera segment,
+so it is lenspath's plus one.
+
+Agreement: both rendered with `--check-spp` samples at `--check-res`, averaged
+over 6 x 6-pixel blocks (so Monte Carlo noise is well below 1%); the mean absolute
+relative difference of the blocks must be under 2% for the two to render the same
+scene with unbiased integrators.
+
+Makes its virtual environment in bench/.venv-peers (numpy, mitsuba) on first use
+and installs lenspath there with `pip install .` (a release build). The walls are
+handed to Mitsuba as OBJ files in a temporary folder, loaded inside the timing.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+VENV = ROOT / "bench" / ".venv-peers"
+
+WHITE, RED, BLUE = (0.73, 0.73, 0.73), (0.63, 0.065, 0.05), (0.08, 0.16, 0.62)
+SPHERE_WHITE = (0.75, 0.75, 0.75)
+LIGHT = (15.0, 12.5, 9.0)
+# Quads counter-clockwise seen from the side they face (into the box; the light faces down).
+QUADS = [
+    ([(-1, 0, 1), (1, 0, 1), (1, 0, -1), (-1, 0, -1)], WHITE, None),  # floor
+    ([(-1, 2, -1), (1, 2, -1), (1, 2, 1), (-1, 2, 1)], WHITE, None),  # ceiling
+    ([(-1, 0, -1), (1, 0, -1), (1, 2, -1), (-1, 2, -1)], WHITE, None),  # back
+    ([(-1, 0, 1), (-1, 0, -1), (-1, 2, -1), (-1, 2, 1)], RED, None),  # left
+    ([(1, 0, -1), (1, 0, 1), (1, 2, 1), (1, 2, -1)], BLUE, None),  # right
+    ([(-0.25, 1.98, -0.25), (0.25, 1.98, -0.25), (0.25, 1.98, 0.25), (-0.25, 1.98, 0.25)], WHITE, LIGHT),
+]
+SPHERES = [((-0.42, 0.33, -0.3), 0.33), ((0.45, 0.33, 0.25), 0.33)]
+EYE, TARGET, FOV_Y = (0.0, 1.0, 3.85), (0.0, 0.92, 0.0), 29.0
+
+
+def in_venv() -> None:
+    """Reruns this script inside bench/.venv-peers, with mitsuba and this lenspath installed."""
+    if Path(sys.prefix).resolve() == VENV.resolve():
+        return
+    python = VENV / "bin" / "python"
+    if not python.exists():
+        subprocess.run([sys.executable, "-m", "venv", str(VENV)], check=True)
+    subprocess.run([str(python), "-m", "pip", "install", "-q", "numpy", "mitsuba"], check=True)
+    subprocess.run([str(python), "-m", "pip", "install", "-q", str(ROOT)], check=True)
+    os.execv(str(python), [str(python), *sys.argv])
+
+
+def lenspath_scene():
+    import numpy as np
+
+    import lenspath
+
+    scene = lenspath.Scene()
+    materials = {}
+    for corners, colour, emission in QUADS:
+        if colour not in materials:
+            materials[colour] = scene.add_material("diffuse", reflectance=colour)
+        scene.add_mesh(
+            np.array(corners, np.float32), np.array([[0, 1, 2], [0, 2, 3]]), materials[colour], emission=emission
+        )
+    white = scene.add_material("diffuse", reflectance=SPHERE_WHITE)
+    for center, radius in SPHERES:
+        scene.add_sphere(center, radius, white)
+    scene.look_at(EYE, TARGET, fov_deg=FOV_Y)
+    return scene
+
+
+def mitsuba_scene(mi, folder: Path, width: int, height: int, spp: int, max_depth: int):
+
+    def rgb(c):
+        return {"type": "rgb", "value": list(c)}
+
+    shapes = {}
+    for k, (corners, colour, emission) in enumerate(QUADS):
+        obj = folder / f"quad{k}.obj"
+        obj.write_text("".join(f"v {x} {y} {z}\n" for x, y, z in corners) + "f 1 2 3\nf 1 3 4\n")
+        shape = {"type": "obj", "filename": str(obj), "bsdf": {"type": "diffuse", "reflectance": rgb(colour)}}
+        if emission:
+            shape["emitter"] = {"type": "area", "radiance": rgb(emission)}
+        shapes[f"quad{k}"] = shape
+    for k, (center, radius) in enumerate(SPHERES):
+        shapes[f"sphere{k}"] = {
+            "type": "sphere",
+            "center": list(center),
+            "radius": radius,
+            "bsdf": {"type": "diffuse", "reflectance": rgb(SPHERE_WHITE)},
+        }
+    return mi.load_dict(
+        {
+            "type": "scene",
+            "integrator": {"type": "path", "max_depth": max_depth + 1},
+            "sensor": {
+                "type": "perspective",
+                "fov": FOV_Y,
+                "fov_axis": "y",
+                "to_world": mi.ScalarTransform4f().look_at(origin=EYE, target=TARGET, up=(0, 1, 0)),
+                "sampler": {"type": "independent", "sample_count": spp},
+                "film": {
+                    "type": "hdrfilm",
+                    "width": width,
+                    "height": height,
+                    "rfilter": {"type": "box"},
+                    "pixel_format": "rgb",
+                },
+            },
+            **shapes,
+        }
+    )
+
+
+def render_lenspath(width: int, height: int, spp: int, max_depth: int):
+    import lenspath
+
+    started = time.perf_counter()
+    scene = lenspath_scene()
+    image = lenspath.render(scene, lenspath.Camera.pinhole(), spp=spp, resolution=(width, height), max_depth=max_depth)
+    return image, time.perf_counter() - started
+
+
+def render_mitsuba(variant: str, width: int, height: int, spp: int, max_depth: int):
+    import mitsuba as mi
+    import numpy as np
+
+    mi.set_variant(variant)
+    with tempfile.TemporaryDirectory() as folder:
+        started = time.perf_counter()
+        scene = mitsuba_scene(mi, Path(folder), width, height, spp, max_depth)
+        image = np.array(mi.render(scene, spp=spp))
+    return image[:, :, :3], time.perf_counter() - started
+
+
+def variant_runs(variant: str) -> bool:
+    """Whether a Mitsuba variant renders here: tried in a child process, since a JIT
+    backend that cannot compile (an old libLLVM) aborts the process."""
+    probe = f"import mitsuba as mi; mi.set_variant({variant!r}); mi.render(mi.load_dict(mi.cornell_box()), spp=1)"
+    return subprocess.run([sys.executable, "-c", probe], capture_output=True).returncode == 0
+
+
+def block_mard(a, b, block: int = 6) -> float:
+    """Mean absolute relative difference of block means (noise averages out in blocks)."""
+    h, w = (a.shape[0] // block) * block, (a.shape[1] // block) * block
+
+    def blocks(x):
+        return x[:h, :w].reshape(h // block, block, w // block, block, 3).mean(axis=(1, 3))
+
+    ba, bb = blocks(a), blocks(b)
+    return float(abs(ba - bb).mean() / ((ba + bb) / 2).mean())
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--res", type=int, nargs=2, default=(480, 360), metavar=("W", "H"))
+    parser.add_argument("--spp", type=int, default=16)
+    parser.add_argument("--max-depth", type=int, default=16)
+    parser.add_argument("--rounds", type=int, default=3, help="best of this many timings")
+    parser.add_argument("--check-spp", type=int, default=1024)
+    parser.add_argument("--check-res", type=int, nargs=2, default=(120, 90), metavar=("W", "H"))
+    args = parser.parse_args()
+    in_venv()
+    variants = ["scalar_rgb"]
+    if variant_runs("llvm_ad_rgb"):
+        variants.append("llvm_ad_rgb")
+    else:
+        print("llvm_ad_rgb does not run here (it needs a newer libLLVM); scalar_rgb only", file=sys.stderr)
+    (w, h), spp, depth = args.res, args.spp, args.max_depth
+    print(f"cornell-spheres, {w}x{h}, {spp} spp, max depth {depth} (lenspath's; Mitsuba's {depth + 1}), pinhole")
+    ours = min(render_lenspath(w, h, spp, depth)[1] for _ in range(args.rounds))
+    print(f"  lenspath              {ours:7.2f} s")
+    for variant in variants:
+        theirs = min(render_mitsuba(variant, w, h, spp, depth)[1] for _ in range(args.rounds))
+        print(f"  Mitsuba {variant:<13} {theirs:7.2f} s   lenspath time / Mitsuba's: {ours / theirs:.2f}")
+    (cw, ch), cspp = args.check_res, args.check_spp
+    reference, _ = render_lenspath(cw, ch, cspp, depth)
+    for variant in variants:
+        image, _ = render_mitsuba(variant, cw, ch, cspp, depth)
+        mard = block_mard(reference, image)
+        ratio = reference.mean() / image.mean()
+        verdict = "agree" if mard < 0.02 else "DISAGREE"
+        print(
+            f"  agreement with {variant} at {cw}x{ch}, {cspp} spp: block MARD {100 * mard:.2f}%, "
+            f"mean ratio {ratio:.4f}: {verdict}"
+        )
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
