@@ -21,43 +21,17 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
-VENV = ROOT / "bench" / ".venv-peers"
+from common import ROOT, in_venv, read_binary_ply
+
 SHARED = ROOT.parent / "shared" / "meshes"
 MESHES = [("dragon_100k", [str(SHARED / "dragon_100k.ply")]), ("lucy_100k", [str(SHARED / "lucy_100k.obj")])]
 PROCEDURAL = ("knot_1m", ["--procedural", "1000000"])
-
-
-def in_venv() -> None:
-    """Reruns this script inside bench/.venv-peers, made and filled on first use."""
-    if Path(sys.prefix).resolve() == VENV.resolve():
-        return
-    if not (VENV / "bin" / "python").exists():
-        subprocess.run([sys.executable, "-m", "venv", str(VENV)], check=True)
-        subprocess.run([str(VENV / "bin" / "python"), "-m", "pip", "install", "-q", "numpy", "embreex"], check=True)
-    os.execv(str(VENV / "bin" / "python"), [str(VENV / "bin" / "python"), *sys.argv])
-
-
-def read_binary_ply(path: Path):
-    """Vertices (N x 3 float32) and faces (M x 3 int32) of the binary PLY `lenspath bench bvh --save-mesh` writes."""
-    import numpy as np
-
-    data = path.read_bytes()
-    end = data.index(b"end_header\n") + len(b"end_header\n")
-    header = data[:end].decode().splitlines()
-    counts = {line.split()[1]: int(line.split()[2]) for line in header if line.startswith("element")}
-    nv, nf = counts["vertex"], counts["face"]
-    vertices = np.frombuffer(data, np.float32, 3 * nv, end).reshape(nv, 3)
-    faces = np.frombuffer(data[end + 12 * nv :], np.dtype([("n", "u1"), ("i", "<i4", 3)]), nf)
-    assert (faces["n"] == 3).all()
-    return vertices, faces["i"].astype(np.int32)
 
 
 def lenspath_bench(binary: Path, mesh_args: list[str], rays: int, threads: int | None, out: Path | None) -> dict:
@@ -121,7 +95,7 @@ def main() -> int:
     parser.add_argument("--json", type=Path, help="also write every figure here")
     parser.add_argument("--meshes", nargs="*", help="only these (dragon_100k, lucy_100k, knot_1m)")
     args = parser.parse_args()
-    in_venv()
+    in_venv(["numpy", "embreex"])
     import numpy as np
 
     subprocess.run(["cargo", "build", "--release", "--quiet"], cwd=ROOT, check=True)

@@ -4,11 +4,14 @@ run: wall time at equal samples per pixel, and whether the images agree.
 
     python3 bench/peers/render_vs_mitsuba.py [--res 480 360] [--spp 16] [--max-depth 16]
                                              [--check-spp 1024] [--check-res 120 90]
+                                             [--scene cornell-spheres|cornell-dragon]
 
 The scene is lenspath's built-in `cornell-spheres` (white, red and blue diffuse
 walls, two diffuse spheres, a one-sided square light under the ceiling), built
 here once for each renderer from the same numbers (crates/lenspath/src/builtin.rs),
-seen through the same pinhole camera. Mitsuba renders it with its `path`
+seen through the same pinhole camera; or, with `--scene cornell-dragon`, the same
+box with the Stanford dragon (../shared/meshes/dragon_100k.ply, 100 k triangles,
+1.2 units long) on its floor instead of the spheres. Mitsuba renders it with its `path`
 integrator in `scalar_rgb` and, when it runs here, `llvm_ad_rgb`; lenspath on all
 threads with one light sample. Mitsuba's `max_depth` counts the camera segment,
 so it is lenspath's plus one.
@@ -26,15 +29,16 @@ handed to Mitsuba as OBJ files in a temporary folder, loaded inside the timing.
 from __future__ import annotations
 
 import argparse
-import os
 import subprocess
 import sys
 import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[2]
-VENV = ROOT / "bench" / ".venv-peers"
+from common import ROOT, in_venv, read_binary_ply
+
+SHARED = ROOT.parent / "shared"
 
 WHITE, RED, BLUE = (0.73, 0.73, 0.73), (0.63, 0.065, 0.05), (0.08, 0.16, 0.62)
 SPHERE_WHITE = (0.75, 0.75, 0.75)
@@ -52,52 +56,93 @@ SPHERES = [((-0.42, 0.33, -0.3), 0.33), ((0.45, 0.33, 0.25), 0.33)]
 EYE, TARGET, FOV_Y = (0.0, 1.0, 3.85), (0.0, 0.92, 0.0), 29.0
 
 
-def in_venv() -> None:
-    """Reruns this script inside bench/.venv-peers, with mitsuba and this lenspath installed."""
-    if Path(sys.prefix).resolve() == VENV.resolve():
-        return
-    python = VENV / "bin" / "python"
-    if not python.exists():
-        subprocess.run([sys.executable, "-m", "venv", str(VENV)], check=True)
-    subprocess.run([str(python), "-m", "pip", "install", "-q", "numpy", "mitsuba"], check=True)
-    subprocess.run([str(python), "-m", "pip", "install", "-q", str(ROOT)], check=True)
-    os.execv(str(python), [str(python), *sys.argv])
+def dragon():
+    """The Stanford dragon (../shared/meshes/dragon_100k.ply) 1.2 units long, on the box's floor
+    at its centre: vertices and triangles."""
+    vertices, faces = read_binary_ply(SHARED / "meshes" / "dragon_100k.ply")
+    lo, hi = vertices.min(axis=0), vertices.max(axis=0)
+    scale = 1.2 / (hi - lo).max()
+    centre = (lo + hi) / 2
+    placed = (vertices - [centre[0], lo[1], centre[2]]) * scale
+    return placed.astype("float32"), faces
 
 
-def lenspath_scene():
+@dataclass
+class Job:
+    """One render: the scene (its extra meshes ready as arrays) and the settings."""
+
+    scene: str
+    meshes: list  # (vertices, faces, colour) beside the box's walls
+    width: int
+    height: int
+    spp: int
+    max_depth: int
+
+    @property
+    def spheres(self):
+        return SPHERES if self.scene == "cornell-spheres" else []
+
+
+def lenspath_scene(job: Job):
     import numpy as np
 
     import lenspath
 
     scene = lenspath.Scene()
     materials = {}
-    for corners, colour, emission in QUADS:
+
+    def material(colour):
         if colour not in materials:
             materials[colour] = scene.add_material("diffuse", reflectance=colour)
-        scene.add_mesh(
-            np.array(corners, np.float32), np.array([[0, 1, 2], [0, 2, 3]]), materials[colour], emission=emission
-        )
-    white = scene.add_material("diffuse", reflectance=SPHERE_WHITE)
-    for center, radius in SPHERES:
-        scene.add_sphere(center, radius, white)
+        return materials[colour]
+
+    for corners, colour, emission in QUADS:
+        quad = np.array(corners, np.float32)
+        scene.add_mesh(quad, np.array([[0, 1, 2], [0, 2, 3]]), material(colour), emission=emission)
+    for vertices, faces, colour in job.meshes:
+        scene.add_mesh(vertices, faces, material(colour))
+    for center, radius in job.spheres:
+        scene.add_sphere(center, radius, material(SPHERE_WHITE))
     scene.look_at(EYE, TARGET, fov_deg=FOV_Y)
     return scene
 
 
-def mitsuba_scene(mi, folder: Path, width: int, height: int, spp: int, max_depth: int):
+def write_ply(path: Path, vertices, faces) -> None:
+    """A binary PLY of float x y z and uchar-counted int triangles."""
+    import numpy as np
 
+    header = (
+        f"ply\nformat binary_little_endian 1.0\nelement vertex {len(vertices)}\n"
+        "property float x\nproperty float y\nproperty float z\n"
+        f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n"
+    )
+    records = np.empty(len(faces), np.dtype([("n", "u1"), ("i", "<i4", 3)]))
+    records["n"], records["i"] = 3, faces
+    path.write_bytes(header.encode() + vertices.astype("<f4").tobytes() + records.tobytes())
+
+
+def mitsuba_scene(mi, folder: Path, job: Job):
     def rgb(c):
         return {"type": "rgb", "value": list(c)}
+
+    def mesh(path: Path, colour, emission=None):
+        # Face normals: lenspath shades triangles flat (the arrays carry no normals).
+        shape = {"type": path.suffix[1:], "filename": str(path), "face_normals": True}
+        shape["bsdf"] = {"type": "diffuse", "reflectance": rgb(colour)}
+        if emission:
+            shape["emitter"] = {"type": "area", "radiance": rgb(emission)}
+        return shape
 
     shapes = {}
     for k, (corners, colour, emission) in enumerate(QUADS):
         obj = folder / f"quad{k}.obj"
         obj.write_text("".join(f"v {x} {y} {z}\n" for x, y, z in corners) + "f 1 2 3\nf 1 3 4\n")
-        shape = {"type": "obj", "filename": str(obj), "bsdf": {"type": "diffuse", "reflectance": rgb(colour)}}
-        if emission:
-            shape["emitter"] = {"type": "area", "radiance": rgb(emission)}
-        shapes[f"quad{k}"] = shape
-    for k, (center, radius) in enumerate(SPHERES):
+        shapes[f"quad{k}"] = mesh(obj, colour, emission)
+    for k, (vertices, faces, colour) in enumerate(job.meshes):
+        ply = folder / f"mesh{k}.ply"
+        write_ply(ply, vertices, faces)
+        shapes[f"mesh{k}"] = mesh(ply, colour)
+    for k, (center, radius) in enumerate(job.spheres):
         shapes[f"sphere{k}"] = {
             "type": "sphere",
             "center": list(center),
@@ -107,17 +152,17 @@ def mitsuba_scene(mi, folder: Path, width: int, height: int, spp: int, max_depth
     return mi.load_dict(
         {
             "type": "scene",
-            "integrator": {"type": "path", "max_depth": max_depth + 1},
+            "integrator": {"type": "path", "max_depth": job.max_depth + 1},
             "sensor": {
                 "type": "perspective",
                 "fov": FOV_Y,
                 "fov_axis": "y",
                 "to_world": mi.ScalarTransform4f().look_at(origin=EYE, target=TARGET, up=(0, 1, 0)),
-                "sampler": {"type": "independent", "sample_count": spp},
+                "sampler": {"type": "independent", "sample_count": job.spp},
                 "film": {
                     "type": "hdrfilm",
-                    "width": width,
-                    "height": height,
+                    "width": job.width,
+                    "height": job.height,
                     "rfilter": {"type": "box"},
                     "pixel_format": "rgb",
                 },
@@ -127,24 +172,27 @@ def mitsuba_scene(mi, folder: Path, width: int, height: int, spp: int, max_depth
     )
 
 
-def render_lenspath(width: int, height: int, spp: int, max_depth: int):
+def render_lenspath(job: Job):
     import lenspath
 
     started = time.perf_counter()
-    scene = lenspath_scene()
-    image = lenspath.render(scene, lenspath.Camera.pinhole(), spp=spp, resolution=(width, height), max_depth=max_depth)
+    scene = lenspath_scene(job)
+    resolution = (job.width, job.height)
+    image = lenspath.render(
+        scene, lenspath.Camera.pinhole(), spp=job.spp, resolution=resolution, max_depth=job.max_depth
+    )
     return image, time.perf_counter() - started
 
 
-def render_mitsuba(variant: str, width: int, height: int, spp: int, max_depth: int):
+def render_mitsuba(variant: str, job: Job):
     import mitsuba as mi
     import numpy as np
 
     mi.set_variant(variant)
     with tempfile.TemporaryDirectory() as folder:
         started = time.perf_counter()
-        scene = mitsuba_scene(mi, Path(folder), width, height, spp, max_depth)
-        image = np.array(mi.render(scene, spp=spp))
+        scene = mitsuba_scene(mi, Path(folder), job)
+        image = np.array(mi.render(scene, spp=job.spp))
     return image[:, :, :3], time.perf_counter() - started
 
 
@@ -168,6 +216,7 @@ def block_mard(a, b, block: int = 6) -> float:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--scene", choices=["cornell-spheres", "cornell-dragon"], default="cornell-spheres")
     parser.add_argument("--res", type=int, nargs=2, default=(480, 360), metavar=("W", "H"))
     parser.add_argument("--spp", type=int, default=16)
     parser.add_argument("--max-depth", type=int, default=16)
@@ -175,29 +224,33 @@ def main() -> int:
     parser.add_argument("--check-spp", type=int, default=1024)
     parser.add_argument("--check-res", type=int, nargs=2, default=(120, 90), metavar=("W", "H"))
     args = parser.parse_args()
-    in_venv()
+    in_venv(["numpy", "mitsuba"], install_lenspath=True)
     variants = ["scalar_rgb"]
     if variant_runs("llvm_ad_rgb"):
         variants.append("llvm_ad_rgb")
     else:
         print("llvm_ad_rgb does not run here (it needs a newer libLLVM); scalar_rgb only", file=sys.stderr)
-    (w, h), spp, depth = args.res, args.spp, args.max_depth
-    print(f"cornell-spheres, {w}x{h}, {spp} spp, max depth {depth} (lenspath's; Mitsuba's {depth + 1}), pinhole")
-    ours = min(render_lenspath(w, h, spp, depth)[1] for _ in range(args.rounds))
+    extra = [(*dragon(), SPHERE_WHITE)] if args.scene == "cornell-dragon" else []
+    job = Job(args.scene, extra, *args.res, args.spp, args.max_depth)
+    print(
+        f"{job.scene}, {job.width}x{job.height}, {job.spp} spp, max depth {job.max_depth} "
+        f"(lenspath's; Mitsuba's {job.max_depth + 1}), pinhole"
+    )
+    ours = min(render_lenspath(job)[1] for _ in range(args.rounds))
     print(f"  lenspath              {ours:7.2f} s")
     for variant in variants:
-        theirs = min(render_mitsuba(variant, w, h, spp, depth)[1] for _ in range(args.rounds))
+        theirs = min(render_mitsuba(variant, job)[1] for _ in range(args.rounds))
         print(f"  Mitsuba {variant:<13} {theirs:7.2f} s   lenspath time / Mitsuba's: {ours / theirs:.2f}")
-    (cw, ch), cspp = args.check_res, args.check_spp
-    reference, _ = render_lenspath(cw, ch, cspp, depth)
+    check = Job(args.scene, extra, *args.check_res, args.check_spp, args.max_depth)
+    reference, _ = render_lenspath(check)
     for variant in variants:
-        image, _ = render_mitsuba(variant, cw, ch, cspp, depth)
+        image, _ = render_mitsuba(variant, check)
         mard = block_mard(reference, image)
         ratio = reference.mean() / image.mean()
         verdict = "agree" if mard < 0.02 else "DISAGREE"
         print(
-            f"  agreement with {variant} at {cw}x{ch}, {cspp} spp: block MARD {100 * mard:.2f}%, "
-            f"mean ratio {ratio:.4f}: {verdict}"
+            f"  agreement with {variant} at {check.width}x{check.height}, {check.spp} spp: "
+            f"block MARD {100 * mard:.2f}%, mean ratio {ratio:.4f}: {verdict}"
         )
     return 0
 

@@ -1,0 +1,62 @@
+"""What the peer benchmarks share: their virtual environment and a PLY reader."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[2]
+VENV = ROOT / "bench" / ".venv-peers"
+
+_PLY_TYPES = {"char": "i1", "uchar": "u1", "short": "<i2", "ushort": "<u2", "int": "<i4", "uint": "<u4"}
+_PLY_TYPES |= {"float": "<f4", "double": "<f8"}
+
+
+def in_venv(packages: list[str], install_lenspath: bool = False) -> None:
+    """Reruns the calling script inside bench/.venv-peers with `packages` (and this
+    lenspath, by `pip install .`) installed; returns at once when already there."""
+    if Path(sys.prefix).resolve() == VENV.resolve():
+        return
+    python = VENV / "bin" / "python"
+    if not python.exists():
+        subprocess.run([sys.executable, "-m", "venv", str(VENV)], check=True)
+    subprocess.run([str(python), "-m", "pip", "install", "-q", *packages], check=True)
+    if install_lenspath:
+        subprocess.run([str(python), "-m", "pip", "install", "-q", str(ROOT)], check=True)
+    os.execv(str(python), [str(python), *sys.argv])
+
+
+def read_binary_ply(path: Path):
+    """Vertices (N x 3 float32) and triangles (M x 3 int32) of a binary little-endian PLY
+    whose faces are all triangles, whatever other properties it carries."""
+    import numpy as np
+
+    data = path.read_bytes()
+    end = data.index(b"end_header\n") + len(b"end_header\n")
+    elements: list[tuple[str, int, list[tuple[str, ...]]]] = []
+    for line in data[:end].decode("ascii").splitlines():
+        words = line.split()
+        if words[:1] == ["format"] and words[1] != "binary_little_endian":
+            raise ValueError(f"{path}: only binary_little_endian PLY is read here, not {words[1]}")
+        if words[:1] == ["element"]:
+            elements.append((words[1], int(words[2]), []))
+        elif words[:1] == ["property"]:
+            elements[-1][2].append(tuple(words[1:]))
+    offset, arrays = end, {}
+    for name, count, properties in elements:
+        fields = []
+        for p in properties:
+            if p[0] == "list":  # the faces: a uchar count of 3, then three indices
+                fields += [(p[3] + "_n", _PLY_TYPES[p[1]]), (p[3], _PLY_TYPES[p[2]], 3)]
+            else:
+                fields.append((p[1], _PLY_TYPES[p[0]]))
+        records = np.frombuffer(data, np.dtype(fields), count, offset)
+        offset += records.nbytes
+        arrays[name] = records
+    vertex, face = arrays["vertex"], arrays["face"]
+    if not (face["vertex_indices_n"] == 3).all():
+        raise ValueError(f"{path}: not all faces are triangles")
+    vertices = np.stack([vertex["x"], vertex["y"], vertex["z"]], axis=1).astype(np.float32)
+    return vertices, face["vertex_indices"].astype(np.int32)
