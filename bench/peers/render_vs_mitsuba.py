@@ -29,6 +29,7 @@ handed to Mitsuba as OBJ files in a temporary folder, loaded inside the timing.
 from __future__ import annotations
 
 import argparse
+import json
 import subprocess
 import sys
 import tempfile
@@ -223,6 +224,7 @@ def main() -> int:
     parser.add_argument("--rounds", type=int, default=3, help="best of this many timings")
     parser.add_argument("--check-spp", type=int, default=1024)
     parser.add_argument("--check-res", type=int, nargs=2, default=(120, 90), metavar=("W", "H"))
+    parser.add_argument("--json", type=Path, help="also write the figures here")
     args = parser.parse_args()
     in_venv(["numpy", "mitsuba"], install_lenspath=True)
     variants = ["scalar_rgb"]
@@ -238,8 +240,10 @@ def main() -> int:
     )
     ours = min(render_lenspath(job)[1] for _ in range(args.rounds))
     print(f"  lenspath              {ours:7.2f} s")
+    figures: dict = {"scene": job.scene, "lenspath_s": ours, "mitsuba_s": {}, "agreement": {}}
     for variant in variants:
         theirs = min(render_mitsuba(variant, job)[1] for _ in range(args.rounds))
+        figures["mitsuba_s"][variant] = theirs
         print(f"  Mitsuba {variant:<13} {theirs:7.2f} s   lenspath time / Mitsuba's: {ours / theirs:.2f}")
     check = Job(args.scene, extra, *args.check_res, args.check_spp, args.max_depth)
     reference, _ = render_lenspath(check)
@@ -248,10 +252,13 @@ def main() -> int:
         mard = block_mard(reference, image)
         ratio = reference.mean() / image.mean()
         verdict = "agree" if mard < 0.02 else "DISAGREE"
+        figures["agreement"][variant] = {"block_mard": mard, "mean_ratio": float(ratio)}
         print(
             f"  agreement with {variant} at {check.width}x{check.height}, {check.spp} spp: "
             f"block MARD {100 * mard:.2f}%, mean ratio {ratio:.4f}: {verdict}"
         )
+    if args.json:
+        args.json.write_text(json.dumps(figures, indent=2))
     return 0
 
 
