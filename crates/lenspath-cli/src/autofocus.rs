@@ -14,7 +14,7 @@ use lenspath::camera::{CameraPose, LensFocus, RealisticCamera, RealisticCameraSe
 use lenspath::integrator::PathSettings;
 use lenspath::io::image::{check_output_path, write_image};
 use lenspath::io::{check_writable, write_text};
-use lenspath::render::{render, NormalizedRect, RenderSettings};
+use lenspath::render::{render, NormalizedRect, RenderSettings, DEFAULT_IMAGE_SIZE};
 use lenspath::scene::CompiledScene;
 use lenspath::{Error, Result};
 use serde_json::json;
@@ -152,7 +152,7 @@ pub fn run(args: AutofocusArgs) -> Result<Outcome> {
         .res
         .map(|r| (r.width, r.height))
         .or(options.resolution)
-        .unwrap_or((640, 480));
+        .unwrap_or(DEFAULT_IMAGE_SIZE);
     let view = scene
         .view
         .ok_or_else(|| Error::InvalidArgument("the scene has no camera".into()))?;
@@ -323,7 +323,7 @@ fn repo_root() -> PathBuf {
 
 /// Every strategy on every evaluation patch, against ground truth.
 fn evaluate(args: &AutofocusArgs, measure: FocusMeasure) -> Result<Outcome> {
-    let (width, height) = args.res.map_or((640, 480), |r| (r.width, r.height));
+    let (width, height) = args.res.map_or(DEFAULT_IMAGE_SIZE, |r| (r.width, r.height));
     let mut rows = Vec::new();
     let mut patches_run = 0;
     let wanted = |id: &str, scene: &str| args.only.is_empty() || args.only.iter().any(|o| o == id || o == scene);

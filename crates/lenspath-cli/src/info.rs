@@ -86,8 +86,7 @@ fn summarize(loaded: &LoadedScene) -> serde_json::Value {
     let count = |f: &dyn Fn(&Material) -> bool| s.materials.iter().filter(|m| f(m)).count();
     let lights = |f: &dyn Fn(&Light) -> bool| s.lights.iter().filter(|l| f(l)).count();
     let bounds = scene_bounds(s);
-    let emitters = s.meshes.iter().filter(|m| m.emission.is_some()).count()
-        + s.spheres.iter().filter(|m| m.emission.is_some()).count();
+    let emitters = s.emitter_count();
     json!({
         "format": loaded.format,
         "meshes": s.meshes.len(),

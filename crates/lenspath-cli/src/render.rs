@@ -16,7 +16,7 @@ use lenspath::integrator::PathSettings;
 use lenspath::io::image::{check_output_path, write_image};
 use lenspath::io::{load_scene, SceneOptions};
 use lenspath::lens::LensPrescription;
-use lenspath::render::{render, NormalizedRect, PixelRect, RenderSettings};
+use lenspath::render::{render, NormalizedRect, PixelRect, RenderSettings, DEFAULT_IMAGE_SIZE};
 use lenspath::scene::{Scene, SceneView};
 use lenspath::{Error, Result};
 
@@ -349,7 +349,7 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
         .res
         .map(|r| (r.width, r.height))
         .or(options.resolution)
-        .unwrap_or((640, 480));
+        .unwrap_or(DEFAULT_IMAGE_SIZE);
     let settings = RenderSettings {
         width,
         height,

@@ -15,7 +15,7 @@ use std::time::Duration;
 use glam::{DVec3, Vec3};
 use lenspath::accel::BvhSettings;
 use lenspath::autofocus::{AutofocusSettings, FocusMeasure, Focuser, Patch, Strategy};
-use lenspath::bokeh::{convolve_planes, depth_blur, CircleOfConfusion, Edges, Kernel, KernelSize, Method};
+use lenspath::bokeh::{convolve_rgb, depth_blur, CircleOfConfusion, Edges, Kernel, KernelSize, Method};
 use lenspath::builtin::{builtin_scene, BUILTIN_SCENES, DEFAULT_MESH_TRIANGLES};
 use lenspath::camera::{
     Aperture, ApertureShape, Camera as CameraTrait, CameraPose, LensFocus, PerspectiveCamera, RealisticCamera,
@@ -31,7 +31,7 @@ use lenspath::lens::{
 };
 use lenspath::lights::Light;
 use lenspath::materials::Material;
-use lenspath::render::{render as render_scene, NormalizedRect, RenderSettings};
+use lenspath::render::{render as render_scene, NormalizedRect, RenderSettings, DEFAULT_IMAGE_SIZE};
 use lenspath::scene::{Scene as CoreScene, SceneView};
 use lenspath::shapes::{Sphere, TriangleMesh};
 use lenspath::Error;
@@ -146,9 +146,7 @@ impl Scene {
 
     #[getter]
     fn light_count(&self) -> usize {
-        self.scene.lights.len()
-            + self.scene.meshes.iter().filter(|m| m.emission.is_some()).count()
-            + self.scene.spheres.iter().filter(|s| s.emission.is_some()).count()
+        self.scene.lights.len() + self.scene.emitter_count()
     }
 
     /// The image size the scene file asks for, or None.
@@ -355,6 +353,20 @@ impl Scene {
     }
 }
 
+impl Scene {
+    /// The view it was made for, or the error a render without one gets.
+    fn view(&self) -> PyResult<SceneView> {
+        self.scene
+            .view
+            .ok_or_else(|| value_error(format!("scene '{}' has no view; call look_at first", self.name)))
+    }
+
+    /// The image size: `resolution` if given, else the scene file's, else the default.
+    fn image_size(&self, resolution: Option<(u32, u32)>) -> (u32, u32) {
+        resolution.or(self.options.resolution).unwrap_or(DEFAULT_IMAGE_SIZE)
+    }
+}
+
 /// Loads a scene file (COLLADA, OBJ, PLY, glTF or lenspath TOML) by extension.
 #[pyfunction]
 fn load(py: Python<'_>, path: PathBuf) -> PyResult<Scene> {
@@ -390,6 +402,11 @@ struct Lens {
 impl Lens {
     fn from_prescription(prescription: LensPrescription) -> PyResult<Lens> {
         let system = LensSystem::new(&prescription);
+        Lens::placed(prescription, system)
+    }
+
+    /// `prescription` placed as `system` (wide open or stopped down), analysed.
+    fn placed(prescription: LensPrescription, system: LensSystem) -> PyResult<Lens> {
         let analysis =
             LensAnalysis::new(&system, &AnalysisSettings::default()).map_err(|e| to_py(e, FileKind::Lens))?;
         Ok(Lens {
@@ -398,6 +415,12 @@ impl Lens {
             analysis,
         })
     }
+}
+
+/// The sensor diagonal of the lens drawings: `sensor_diagonal_mm`, else a
+/// 36 × 24 mm sensor's, as `lenspath lens` draws them.
+fn drawing_diagonal_mm(sensor_diagonal_mm: Option<f64>) -> f64 {
+    sensor_diagonal_mm.unwrap_or_else(|| FULL_FRAME_MM.0.hypot(FULL_FRAME_MM.1))
 }
 
 #[pymethods]
@@ -455,13 +478,7 @@ impl Lens {
             .system
             .with_f_number(f_number)
             .map_err(|e| to_py(e, FileKind::Lens))?;
-        let analysis =
-            LensAnalysis::new(&system, &AnalysisSettings::default()).map_err(|e| to_py(e, FileKind::Lens))?;
-        Ok(Lens {
-            prescription: self.prescription.clone(),
-            system,
-            analysis,
-        })
+        Lens::placed(self.prescription.clone(), system)
     }
 
     #[getter]
@@ -621,11 +638,7 @@ impl Lens {
     /// the sensor `sensor_diagonal_mm` across (default: 36 × 24 mm).
     #[pyo3(signature = (sensor_diagonal_mm = None))]
     fn plot(&self, sensor_diagonal_mm: Option<f64>) -> String {
-        layout_svg(
-            &self.system,
-            &self.analysis,
-            sensor_diagonal_mm.unwrap_or_else(|| FULL_FRAME_MM.0.hypot(FULL_FRAME_MM.1)),
-        )
+        layout_svg(&self.system, &self.analysis, drawing_diagonal_mm(sensor_diagonal_mm))
     }
 
     /// What `plot` draws, as arrays of (z, height) rows in mm: `elements`
@@ -633,8 +646,7 @@ impl Lens {
     /// fraction, path) pairs), `z_range_mm`, `half_height_mm`, `title`.
     #[pyo3(signature = (sensor_diagonal_mm = None))]
     fn layout<'py>(&self, py: Python<'py>, sensor_diagonal_mm: Option<f64>) -> PyResult<Bound<'py, PyDict>> {
-        let diagonal = sensor_diagonal_mm.unwrap_or_else(|| FULL_FRAME_MM.0.hypot(FULL_FRAME_MM.1));
-        let l = layout(&self.system, &self.analysis, diagonal);
+        let l = layout(&self.system, &self.analysis, drawing_diagonal_mm(sensor_diagonal_mm));
         let array = |line: &Polyline| {
             let flat: Vec<f64> = line.iter().flat_map(|&(z, h)| [z, h]).collect();
             Array2::from_shape_vec((line.len(), 2), flat)
@@ -850,10 +862,7 @@ impl Camera {
 /// The camera `spec` (None: the realistic camera with the scene's settings,
 /// as `lenspath render` uses) for `scene` at `width` × `height`.
 fn build_camera(scene: &Scene, spec: Option<&CameraSpec>, width: u32, height: u32) -> PyResult<Box<dyn CameraTrait>> {
-    let view = scene
-        .scene
-        .view
-        .ok_or_else(|| value_error(format!("scene '{}' has no view; call look_at first", scene.name)))?;
+    let view = scene.view()?;
     let default = CameraSpec::scene_default();
     let fov = |f: Option<f32>| f.unwrap_or(view.fov_y_deg);
     Ok(match spec.unwrap_or(&default) {
@@ -965,7 +974,7 @@ fn render<'py>(
             true
         }
     };
-    let (width, height) = resolution.or(scene.options.resolution).unwrap_or((640, 480));
+    let (width, height) = scene.image_size(resolution);
     let settings = RenderSettings {
         width,
         height,
@@ -1115,11 +1124,8 @@ fn autofocus(
     let measure = FocusMeasure::from_name(metric).map_err(invalid)?;
     let search = Strategy::from_name(strategy, patience).map_err(invalid)?;
     let patch = NormalizedRect::new(patch.0, patch.1, patch.2, patch.3).map_err(invalid)?;
-    let (width, height) = resolution.or(scene.options.resolution).unwrap_or((640, 480));
-    let view = scene
-        .scene
-        .view
-        .ok_or_else(|| value_error(format!("scene '{}' has no view; call look_at first", scene.name)))?;
+    let (width, height) = scene.image_size(resolution);
+    let view = scene.view()?;
     let spec = camera.map_or_else(CameraSpec::scene_default, |c| c.spec.clone());
     let lens = realistic_settings(scene, &view, &spec, width, height)?;
     let settings = AutofocusSettings {
@@ -1294,19 +1300,10 @@ fn bokeh<'py>(
             )))
         }
     };
-    let image = image_from_array(&image)?;
+    let mut image = image_from_array(&image)?;
     let (w, h) = (image.width as usize, image.height as usize);
-    let planes: Vec<Vec<f32>> = (0..3)
-        .map(|c| image.rgb.iter().skip(c).step_by(3).copied().collect())
-        .collect();
-    let blurred = py.detach(|| convolve_planes(&planes, w, h, &kernel, method, edges));
-    let mut out = Array3::zeros((h, w, 3));
-    for (c, plane) in blurred.iter().enumerate() {
-        for (i, &v) in plane.iter().enumerate() {
-            out[[i / w, i % w, c]] = v;
-        }
-    }
-    Ok(out.into_pyarray(py))
+    py.detach(|| convolve_rgb(&mut image.rgb, w, h, &kernel, method, edges));
+    Ok(rgb_array(py, &image))
 }
 
 /// Depth-aware lens blur of an (H, W, 3) image by its (H, W) depths (see the stub).

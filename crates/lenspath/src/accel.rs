@@ -516,15 +516,15 @@ impl<T: Copy> Bvh<T> {
     /// unvisited.
     #[inline(always)]
     fn traverse_wide<const ANY: bool>(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        if self.wide.is_empty() {
+            return None;
+        }
         let tr = TraversalRay::new(ray);
         let mut t_max = t_max;
         let mut closest: Option<Hit> = None;
         let mut stack = [(0u32, 0f32); WIDE_STACK];
         let mut sp = 0usize;
         let mut current = 0usize;
-        if self.wide.is_empty() {
-            return None;
-        }
         loop {
             let node = &self.wide[current];
             let (mut mask, t_near) = tr.wide_entries(node, t_max);
@@ -807,8 +807,9 @@ fn collapse(nodes: &[Node]) -> Vec<WideNode> {
                 .iter()
                 .enumerate()
                 .filter(|(_, &c)| nodes[c].count == 0)
-                .max_by(|a, b| bounds(*a.1).surface_area().total_cmp(&bounds(*b.1).surface_area()));
-            let Some((k, &c)) = widest else { break };
+                .map(|(k, &c)| (k, c, bounds(c).surface_area()))
+                .max_by(|a, b| a.2.total_cmp(&b.2));
+            let Some((k, c, _)) = widest else { break };
             children.swap_remove(k);
             children.extend([c + 1, nodes[c].offset as usize]);
         }

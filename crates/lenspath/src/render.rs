@@ -51,6 +51,10 @@ pub struct RenderSettings {
     pub depth: bool,
 }
 
+/// The image size, pixels (width, height), when neither the caller nor the
+/// scene file gives one.
+pub const DEFAULT_IMAGE_SIZE: (u32, u32) = (640, 480);
+
 /// A rectangle in fractions of the image (0 to 1): the top-left corner `x`,
 /// `y` and the size; how autofocus patches are given, whatever the resolution.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -99,6 +99,12 @@ impl Scene {
         self.meshes.iter().map(|m| m.indices.len()).sum()
     }
 
+    /// Meshes and spheres that emit light (area lights).
+    pub fn emitter_count(&self) -> usize {
+        self.meshes.iter().filter(|m| m.emission.is_some()).count()
+            + self.spheres.iter().filter(|s| s.emission.is_some()).count()
+    }
+
     /// Checks the description for errors a loader or user could make.
     pub fn validate(&self) -> Result<()> {
         let check_material = |what: String, id: MaterialId| {

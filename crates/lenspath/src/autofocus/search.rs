@@ -374,11 +374,16 @@ impl<'a> Focuser<'a> {
         })
     }
 
+    /// How many sensor positions `step` apart fit from infinity to close focus.
+    fn steps(&self, step: f64) -> usize {
+        let (near, far) = self.range_mm;
+        ((far - near) / step).floor() as usize + 1
+    }
+
     /// Sensor positions from infinity to close focus, `step` apart.
     fn grid(&self, step: f64) -> Vec<f64> {
-        let (near, far) = self.range_mm;
-        let n = ((far - near) / step).floor() as usize + 1;
-        (0..n).map(|i| near + i as f64 * step).collect()
+        let near = self.range_mm.0;
+        (0..self.steps(step)).map(|i| near + i as f64 * step).collect()
     }
 
     /// The pixel-pitch sweep; with `patience`, it stops after that many steps without a new best.
@@ -450,7 +455,7 @@ impl<'a> Focuser<'a> {
         // are 1.5× the scan's, less if its seven renders at most would take
         // the search past its budget.
         let spent: u32 = self.evaluations.iter().map(|e| e.spp).sum();
-        let budget = FAST_BUDGET_OF_SWEEP * (self.grid(self.pitch_mm).len() as u32 * spp) as f64;
+        let budget = FAST_BUDGET_OF_SWEEP * (self.steps(self.pitch_mm) as u32 * spp) as f64;
         let affordable = ((budget - f64::from(spent)) / 7.0).floor().max(1.0) as u32;
         let (fine_spp, dof) = ((spp + spp / 2).min(affordable), self.depth_of_focus_mm(z0));
         let mut points: Vec<(f64, f64)> = Vec::new();
@@ -458,9 +463,8 @@ impl<'a> Focuser<'a> {
             let z = (z0 + f64::from(k) * dof).clamp(near, far);
             points.push((z, self.measure_at(z, fine_spp, seed, Detail::Fine)?));
         }
-        let best = |p: &[(f64, f64)]| (0..p.len()).max_by(|&a, &b| p[a].1.total_cmp(&p[b].1)).unwrap_or(0);
         let last = points.len() - 1;
-        let beyond: Option<f64> = match best(&points) {
+        let beyond: Option<f64> = match peak_index(&points) {
             0 => Some(-dof),
             b if b == last => Some(dof),
             _ => None,
@@ -472,7 +476,7 @@ impl<'a> Focuser<'a> {
                 points.push((z, self.measure_at(z, fine_spp, seed, Detail::Fine)?));
             }
         }
-        let peak = points[best(&points)].0;
+        let peak = points[peak_index(&points)].0;
         Ok(log_parabola_peak(&points, peak, 2.5 * dof))
     }
 
@@ -599,8 +603,7 @@ impl<'a> Focuser<'a> {
         for z in [z0 - step, z0, z0 + step] {
             points.push((z, self.measure_at(z, spp, seed, Detail::Fine)?));
         }
-        let best = |p: &[(f64, f64)]| (0..p.len()).max_by(|&a, &b| p[a].1.total_cmp(&p[b].1)).unwrap_or(0);
-        match best(&points) {
+        match peak_index(&points) {
             0 => points.insert(
                 0,
                 (
@@ -614,16 +617,23 @@ impl<'a> Focuser<'a> {
             )),
             _ => {}
         }
-        let i = best(&points).clamp(1, points.len() - 2);
+        let i = peak_index(&points).clamp(1, points.len() - 2);
         let three = &points[i - 1..=i + 1];
         if three.iter().any(|p| p.1 <= 0.0) {
-            return Ok(points[best(&points)].0);
+            return Ok(points[peak_index(&points)].0);
         }
         Ok(parabola_vertex(
             [three[0].0, three[1].0, three[2].0],
             [three[0].1.ln(), three[1].1.ln(), three[2].1.ln()],
         )
-        .unwrap_or(points[best(&points)].0))
+        .unwrap_or(points[peak_index(&points)].0))
+    }
+
+    /// `(z, score)` at each sensor position of `zs`, scored at the fine scale.
+    fn scan(&mut self, zs: &[f64], spp: u32, seed: u32) -> Result<Vec<(f64, f64)>> {
+        zs.iter()
+            .map(|&z| Ok((z, self.measure_at(z, spp, seed, Detail::Fine)?)))
+            .collect()
     }
 
     /// The reference focus: the peak of a fine sweep (half-pitch steps over
@@ -656,13 +666,7 @@ impl<'a> Focuser<'a> {
         // The coarse scan can miss the peak by a step or two: while the fine
         // scan's maximum is within two steps of an end, widen it there by ten.
         loop {
-            let scores: Vec<f64> = fine
-                .iter()
-                .map(|&z| self.measure_at(z, spp, seed ^ 0xf1e1d, Detail::Fine))
-                .collect::<Result<_>>()?;
-            let i = (0..scores.len())
-                .max_by(|&a, &b| scores[a].total_cmp(&scores[b]))
-                .unwrap_or(0);
+            let i = peak_index(&self.scan(&fine, spp, seed ^ 0xf1e1d)?);
             let (first, last) = (fine[0], fine[fine.len() - 1]);
             if i <= 1 && first - half_pitch >= near - 1e-9 {
                 fine.splice(
@@ -686,17 +690,11 @@ impl<'a> Focuser<'a> {
             let mut peaks = [0.0; 2];
             for (k, peak) in peaks.iter_mut().enumerate() {
                 let seed = seed.wrapping_add(1000 + k as u32);
-                let scores: Vec<f64> = fine
-                    .iter()
-                    .map(|&z| self.measure_at(z, spp, seed, Detail::Fine))
-                    .collect::<Result<_>>()?;
-                let i = (0..scores.len())
-                    .max_by(|&a, &b| scores[a].total_cmp(&scores[b]))
-                    .unwrap_or(0);
+                let points = self.scan(&fine, spp, seed)?;
+                let i = peak_index(&points);
                 // A least-squares fit over ±1.5 DoF (about 15 half-pitch
                 // steps), not the three points around the maximum: those
                 // are a fifth of a DoF apart, and noise tilts their parabola.
-                let points: Vec<(f64, f64)> = fine.iter().copied().zip(scores).collect();
                 *peak = log_parabola_peak(&points, fine[i], 1.5 * self.depth_of_focus_mm(fine[i]));
             }
             let z = 0.5 * (peaks[0] + peaks[1]);
@@ -750,6 +748,16 @@ fn gaussian_blur(rgb: &[f32], width: usize, sigma: f64) -> Vec<f32> {
         out
     };
     pass(&pass(rgb, true), false)
+}
+
+/// The index of the highest-scoring `(z, score)` point (the last of equal
+/// ones; 0 for none).
+fn peak_index(points: &[(f64, f64)]) -> usize {
+    points
+        .iter()
+        .enumerate()
+        .max_by(|a, b| a.1 .1.total_cmp(&b.1 .1))
+        .map_or(0, |(i, _)| i)
 }
 
 /// The vertex of the least-squares parabola through the log-scores of the

@@ -56,6 +56,27 @@ pub fn choose_method(width: usize, height: usize, kernel: &Kernel) -> Method {
     }
 }
 
+/// The three channel planes of an interleaved RGB image (3 floats a pixel).
+pub fn rgb_planes(rgb: &[f32]) -> Vec<Vec<f32>> {
+    (0..3).map(|c| rgb.chunks_exact(3).map(|px| px[c]).collect()).collect()
+}
+
+/// Writes three channel planes back into an interleaved RGB image.
+pub fn interleave_planes(planes: &[Vec<f32>], rgb: &mut [f32]) {
+    for (c, plane) in planes.iter().enumerate() {
+        for (px, &v) in rgb.chunks_exact_mut(3).zip(plane) {
+            px[c] = v;
+        }
+    }
+}
+
+/// Convolves an interleaved RGB image (`width`×`height`, 3 floats a pixel,
+/// row-major) with `kernel`, channel by channel, in place.
+pub fn convolve_rgb(rgb: &mut [f32], width: usize, height: usize, kernel: &Kernel, method: Method, edges: Edges) {
+    let blurred = convolve_planes(&rgb_planes(rgb), width, height, kernel, method, edges);
+    interleave_planes(&blurred, rgb);
+}
+
 /// Convolves `channels` planes (each `width`×`height`, row-major) with `kernel`.
 pub fn convolve_planes(
     planes: &[Vec<f32>],

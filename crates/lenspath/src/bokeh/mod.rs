@@ -8,7 +8,9 @@ mod convolve;
 mod depth;
 mod kernel;
 
-pub use convolve::{choose_method, convolve_planes, direct, Edges, Method};
+pub use convolve::{
+    choose_method, convolve_planes, convolve_rgb, direct, interleave_planes, rgb_planes, Edges, Method,
+};
 pub use depth::{depth_blur, CircleOfConfusion};
 pub use kernel::{Kernel, KernelSize};
 
