@@ -106,6 +106,7 @@ def render(
     light_samples: int = 1,
     threads: int | None = None,
     aovs: None = None,
+    crop: tuple[int, int, int, int] | None = None,
     progress: bool | Callable[[int, int], Any] = False,
 ) -> npt.NDArray[np.float32]: ...
 @overload
@@ -120,6 +121,7 @@ def render(
     light_samples: int = 1,
     threads: int | None = None,
     aovs: Sequence[str],
+    crop: tuple[int, int, int, int] | None = None,
     progress: bool | Callable[[int, int], Any] = False,
 ) -> dict[str, npt.NDArray[np.float32]]: ...
 def render(
@@ -133,6 +135,7 @@ def render(
     light_samples: int = 1,
     threads: int | None = None,
     aovs: Sequence[str] | None = None,
+    crop: tuple[int, int, int, int] | None = None,
     progress: bool | Callable[[int, int], Any] = False,
 ) -> npt.NDArray[np.float32] | dict[str, npt.NDArray[np.float32]]:
     """Renders ``scene`` and returns linear RGB, float32, shape (height, width, 3).
@@ -143,7 +146,9 @@ def render(
     settings and seed give the CLI's image bit for bit. ``resolution`` is
     (width, height), default the scene file's, else (640, 480). With
     ``aovs=["depth"]`` the result is a dict with ``"rgb"`` and ``"depth"``
-    (distance along the view axis, inf where nothing is hit). ``progress``:
+    (distance along the view axis, inf where nothing is hit). ``crop=(x, y,
+    width, height)`` renders only that rectangle of pixels, each exactly as in
+    the full image (``lenspath.distributed`` renders tiles so). ``progress``:
     True for a tqdm bar, or a callable ``(samples_done, samples_total)``. The
     GIL is released while rendering; Ctrl-C stops the render and raises
     KeyboardInterrupt.
@@ -159,6 +164,7 @@ def render(
             max_depth=max_depth,
             light_samples=light_samples,
             threads=threads,
+            crop=crop,
             progress=callback,
         )
     return _core.render(
@@ -171,6 +177,7 @@ def render(
         light_samples=light_samples,
         threads=threads,
         aovs=list(aovs),
+        crop=crop,
         progress=callback,
     )
 

@@ -59,6 +59,13 @@ class Scene:
     def name(self) -> str:
         """The built-in name or the file path."""
     @property
+    def source(self) -> str | None:
+        """The file it was loaded from or the built-in scene's name; None once built or changed in Python."""
+    def compile(self) -> None:
+        """Builds its BVH now; otherwise the first render does. Renders share it until the scene changes."""
+    def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
+        """Pickles as ``Scene.builtin(...)`` or ``load(path)``; TypeError for a scene built in Python."""
+    @property
     def mesh_count(self) -> int:
         """Triangle meshes."""
     @property
@@ -163,6 +170,11 @@ class Lens:
         aperture diameter; mm; radius 0 marks the stop). Raises LensError when invalid."""
     def stopped_down(self, f_number: float) -> Lens:
         """This lens with its stop closed to paraxial f-number ``f_number``."""
+    def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
+        """Pickles as its name, table and stop."""
+    @staticmethod
+    def _from_state(name: str, table: npt.ArrayLike, stopped_to: float | None) -> Lens:
+        """The lens ``__reduce__`` describes."""
     @property
     def name(self) -> str:
         """The built-in name or the table file's."""
@@ -216,6 +228,11 @@ def builtin_lenses() -> list[str]:
 class Camera:
     """A camera for ``render``; what it leaves unset comes from the scene."""
 
+    def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
+        """Pickles as its kind and settings."""
+    @staticmethod
+    def _from_state(state: tuple[Any, ...], realistic: tuple[float | None, ...]) -> Camera:
+        """The camera ``__reduce__`` describes."""
     @staticmethod
     def pinhole(fov_deg: float | None = None) -> Camera:
         """An ideal pinhole; ``fov_deg`` (vertical) defaults to the scene's."""
@@ -257,6 +274,7 @@ def render(
     light_samples: int = 1,
     threads: int | None = None,
     aovs: None = None,
+    crop: tuple[int, int, int, int] | None = None,
     progress: Callable[[int, int], Any] | None = None,
 ) -> npt.NDArray[np.float32]: ...
 @overload
@@ -271,6 +289,7 @@ def render(
     light_samples: int = 1,
     threads: int | None = None,
     aovs: list[str],
+    crop: tuple[int, int, int, int] | None = None,
     progress: Callable[[int, int], Any] | None = None,
 ) -> dict[str, npt.NDArray[np.float32]]: ...
 def read(path: str | PathLike[str]) -> npt.NDArray[np.float32]:

@@ -1,8 +1,9 @@
 //! `lenspath render`.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
+use std::time::Duration;
 
 use clap::{Args, ValueEnum};
 use lenspath::accel::BvhSettings;
@@ -13,12 +14,17 @@ use lenspath::camera::{
 };
 use lenspath::film::Filter;
 use lenspath::integrator::PathSettings;
+use lenspath::io::checkpoint::{read_checkpoint, write_checkpoint};
 use lenspath::io::image::{check_output_path, write_image};
 use lenspath::io::{load_scene, SceneOptions};
 use lenspath::lens::LensPrescription;
-use lenspath::render::{render, NormalizedRect, PixelRect, RenderSettings, DEFAULT_IMAGE_SIZE};
+use lenspath::render::{
+    render_from, Accumulation, Checkpoints, NormalizedRect, PixelRect, RenderSettings, DEFAULT_IMAGE_SIZE,
+};
 use lenspath::scene::{Scene, SceneView};
 use lenspath::{Error, Result};
+
+use sha2::{Digest, Sha256};
 
 use crate::progress::Progress;
 use crate::Outcome;
@@ -118,6 +124,21 @@ fn parse_crop(s: &str) -> std::result::Result<PixelRect, String> {
         _ => Err(format!(
             "expected X,Y,WIDTH,HEIGHT in pixels such as 100,80,64,48, got '{s}'"
         )),
+    }
+}
+
+/// Parses a duration such as 90s, 5m, 1h or 1.5 (seconds).
+fn parse_duration(s: &str) -> std::result::Result<Duration, String> {
+    let t = s.trim();
+    let (number, unit_s) = match t.char_indices().last() {
+        Some((i, 's')) => (&t[..i], 1.0),
+        Some((i, 'm')) => (&t[..i], 60.0),
+        Some((i, 'h')) => (&t[..i], 3600.0),
+        _ => (t, 1.0),
+    };
+    match number.trim().parse::<f64>() {
+        Ok(v) if v >= 0.0 && (v * unit_s).is_finite() => Ok(Duration::from_secs_f64(v * unit_s)),
+        _ => Err(format!("expected a duration such as 60s, 5m or 1h, got '{s}'")),
     }
 }
 
@@ -335,6 +356,91 @@ pub struct RenderArgs {
     /// those of the full render.
     #[arg(long, value_name = "X,Y,W,H", value_parser = parse_crop)]
     crop: Option<PixelRect>,
+    /// Save the render's state to FILE every --checkpoint-every, when it ends and when it is
+    /// stopped, so that --resume can continue it after a crash or a kill.
+    #[arg(long, value_name = "FILE")]
+    checkpoint: Option<PathBuf>,
+    /// How often to save the checkpoint, such as 60s, 5m or 1h [default: 60s].
+    #[arg(long, value_name = "DURATION", value_parser = parse_duration)]
+    checkpoint_every: Option<Duration>,
+    /// Continue the render saved in FILE (by --checkpoint; same scene, camera and settings) up to
+    /// --spp; the image is the uninterrupted render's, bit for bit. Saves go on to FILE unless
+    /// --checkpoint names another.
+    #[arg(long, value_name = "FILE")]
+    resume: Option<PathBuf>,
+}
+
+/// A hash of the scene's content: every mesh array, material, light and the
+/// view (what [`fingerprint`] starts from).
+fn scene_hasher(scene: &Scene) -> Sha256 {
+    let mut hasher = Sha256::new();
+    for mesh in &scene.meshes {
+        let mut bytes = Vec::with_capacity(12 * mesh.positions.len() + 12 * mesh.indices.len());
+        let floats = mesh
+            .positions
+            .iter()
+            .chain(mesh.normals.iter().flatten())
+            .flat_map(|v| v.to_array())
+            .chain(mesh.uvs.iter().flatten().flat_map(|v| v.to_array()));
+        for f in floats {
+            bytes.extend_from_slice(&f.to_le_bytes());
+        }
+        for i in mesh.indices.iter().flatten() {
+            bytes.extend_from_slice(&i.to_le_bytes());
+        }
+        hasher.update(&bytes);
+        hasher.update(format!("{:?} {:?}", mesh.material, mesh.emission));
+    }
+    hasher.update(format!(
+        "{:?} {:?} {:?} {:?}",
+        scene.spheres, scene.materials, scene.lights, scene.view
+    ));
+    hasher
+}
+
+/// What a render's image depends on, except its sample count: the scene's
+/// content ([`scene_hasher`]), the settings and the camera. A readable head
+/// and a SHA-256 of it all; checkpoints carry it so that `--resume` never
+/// continues another render.
+fn fingerprint(
+    mut hasher: Sha256,
+    scene_name: &str,
+    settings: &RenderSettings,
+    camera: &str,
+    aperture: &ApertureShape,
+) -> String {
+    // A mask's Debug form gives only its size: its values go in as bytes.
+    if let ApertureShape::Mask(mask) = aperture {
+        let bytes: Vec<u8> = mask.values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        hasher.update(&bytes);
+    }
+    let described = RenderSettings {
+        spp: 0,
+        threads: None,
+        ..*settings
+    };
+    hasher.update(format!("{described:?} {camera}"));
+    let digest: String = hasher.finalize().iter().map(|b| format!("{b:02x}")).collect();
+    format!(
+        "lenspath {} render of {scene_name}, {}x{}, seed {}; sha256 {digest}",
+        env!("CARGO_PKG_VERSION"),
+        settings.width,
+        settings.height,
+        settings.seed
+    )
+}
+
+/// The state saved in `path`, checked to be of the render `fingerprint` describes.
+fn resume_state(path: &Path, fingerprint: &str) -> Result<Accumulation> {
+    let (saved, state) = read_checkpoint(path)?;
+    if saved != fingerprint {
+        return Err(Error::InvalidArgument(format!(
+            "{} is the checkpoint of another render (the scene, camera or settings differ, or \
+             another lenspath made it):\n  saved:    {saved}\n  this one: {fingerprint}",
+            path.display()
+        )));
+    }
+    Ok(state)
 }
 
 /// Runs `lenspath render`.
@@ -393,14 +499,28 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
             "--blades, --star and --aperture-mask shape a lens's aperture; a pinhole has none (use --camera thin-lens or realistic)".into(),
         ));
     }
+    let checkpoint_path = args.checkpoint.clone().or_else(|| args.resume.clone());
+    if args.checkpoint_every.is_some() && checkpoint_path.is_none() {
+        return Err(Error::InvalidArgument(
+            "--checkpoint-every needs --checkpoint FILE (or --resume FILE)".into(),
+        ));
+    }
+    if let Some(path) = &args.checkpoint {
+        lenspath::io::check_writable(path)?;
+    }
+    // Hashed only for checkpoints: a million triangles take a tenth of a second.
+    let scene_hash = checkpoint_path.is_some().then(|| scene_hasher(&scene));
     let compiled = scene.compile(&BvhSettings::default())?;
-    let camera: Box<dyn Camera> = match args.camera {
-        CameraKind::Pinhole => Box::new(PerspectiveCamera::pinhole(
-            view.pose,
-            fov,
-            settings.width,
-            settings.height,
-        )),
+    let (camera, camera_description): (Box<dyn Camera>, String) = match args.camera {
+        CameraKind::Pinhole => (
+            Box::new(PerspectiveCamera::pinhole(
+                view.pose,
+                fov,
+                settings.width,
+                settings.height,
+            )),
+            format!("pinhole, fov {fov}"),
+        ),
         CameraKind::ThinLens => {
             let focus = args.focus_distance.unwrap_or(view.focus_distance);
             if !(args.aperture_radius >= 0.0 && args.aperture_radius.is_finite()) {
@@ -414,16 +534,22 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
                     "--focus-distance must be positive, got {focus}"
                 )));
             }
-            Box::new(
-                PerspectiveCamera::thin_lens(
-                    view.pose,
-                    fov,
-                    settings.width,
-                    settings.height,
-                    args.aperture_radius,
-                    focus,
-                )
-                .with_aperture(Arc::new(Aperture::new(&aperture)?)),
+            (
+                Box::new(
+                    PerspectiveCamera::thin_lens(
+                        view.pose,
+                        fov,
+                        settings.width,
+                        settings.height,
+                        args.aperture_radius,
+                        focus,
+                    )
+                    .with_aperture(Arc::new(Aperture::new(&aperture)?)),
+                ),
+                format!(
+                    "thin lens, fov {fov}, radius {}, focus {focus}, {aperture:?}",
+                    args.aperture_radius
+                ),
             )
         }
         CameraKind::Realistic => {
@@ -445,9 +571,24 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
                 )?);
             }
             let camera = RealisticCamera::new(view.pose, settings.width, settings.height, &lens_settings)?;
-            Box::new(camera)
+            (Box::new(camera), format!("{lens_settings:?}"))
         }
     };
+    let fingerprint = scene_hash
+        .map(|hash| fingerprint(hash, &scene_name, &settings, &camera_description, &aperture))
+        .unwrap_or_default();
+    let start = args
+        .resume
+        .as_deref()
+        .map(|p| resume_state(p, &fingerprint))
+        .transpose()?;
+    if let Some(state) = &start {
+        eprintln!(
+            "resuming {} from {} samples per pixel",
+            args.resume.as_deref().unwrap_or(Path::new("")).display(),
+            state.spp_min()
+        );
+    }
 
     let cancel = Arc::new(AtomicBool::new(false));
     {
@@ -461,10 +602,20 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
     }
     let total = u64::from(settings.width) * u64::from(settings.height) * u64::from(settings.spp);
     let progress = Progress::new(&format!("render {scene_name}"), total);
-    let output = render(
+    let mut save = |state: &Accumulation| match &checkpoint_path {
+        Some(path) => write_checkpoint(path, &fingerprint, state),
+        None => Ok(()),
+    };
+    let checkpoints = checkpoint_path.as_ref().map(|_| Checkpoints {
+        every: args.checkpoint_every.unwrap_or(Duration::from_secs(60)),
+        save: &mut save,
+    });
+    let output = render_from(
         &compiled,
         camera.as_ref(),
         &settings,
+        start,
+        checkpoints,
         &|d, t| progress.update(d, t),
         &cancel,
     )?;
@@ -475,10 +626,13 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
     let interrupted = s.cancelled;
     if interrupted {
         eprintln!(
-            "interrupted: saved {} with {} of {} samples per pixel",
+            "interrupted: saved {} with {} of {} samples per pixel{}",
             args.out.display(),
             output.image.spp_min,
-            settings.spp
+            settings.spp,
+            checkpoint_path
+                .as_ref()
+                .map_or(String::new(), |p| format!("; continue with --resume {}", p.display()))
         );
     }
     if s.invalid_samples > 0 {

@@ -86,6 +86,18 @@ fn bad_input_gives_one_error_line_and_exit_code_2() {
         ),
         (vec!["render", "--crop", "1,2,3", "--out", ok], "X,Y,WIDTH,HEIGHT"),
         (
+            vec!["render", "--checkpoint-every", "5s", "--out", ok],
+            "--checkpoint-every needs --checkpoint FILE",
+        ),
+        (
+            vec!["render", "--checkpoint", "x", "--checkpoint-every", "soon", "--out", ok],
+            "expected a duration such as 60s",
+        ),
+        (
+            vec!["render", "--resume", "/no/such.ckpt", "--out", ok],
+            "/no/such.ckpt",
+        ),
+        (
             vec!["lens", "dgauss50", "--ray-height-mm", "-1"],
             "--ray-height-mm must be positive",
         ),
@@ -142,6 +154,79 @@ fn failed_write_keeps_the_previous_image() {
     let o = lenspath(&["render", "--spp", "0", "--out", out.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2));
     assert_eq!(std::fs::read(&out).unwrap(), b"previous");
+}
+
+/// `kill -9` during a render with `--checkpoint`, then `--resume`: the image
+/// is the uninterrupted render's, byte for byte (EXR and PNG).
+#[test]
+fn a_killed_render_resumes_to_the_uninterrupted_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let args = |out: &str| -> Vec<String> {
+        ["render", "--res", "64x48", "--spp", "1500", "--out", out]
+            .map(String::from)
+            .to_vec()
+    };
+    let ckpt = path("render.ckpt");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_lenspath"))
+        .args(args(&path("resumed.exr")))
+        .args(["--checkpoint", &ckpt, "--checkpoint-every", "0.2s"])
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let started = Instant::now();
+    while !Path::new(&ckpt).exists() {
+        assert!(started.elapsed() < Duration::from_secs(60), "no checkpoint was written");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    let killed = Command::new("kill")
+        .args(["-9", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    child.wait().unwrap();
+    let (_, saved) = lenspath::io::checkpoint::read_checkpoint(Path::new(&ckpt)).unwrap();
+    assert!(
+        saved.spp_min() > 0 && saved.spp_min() < 1500,
+        "killed with {} of 1500 samples per pixel saved",
+        saved.spp_min()
+    );
+
+    // Another seed is another render: refused, and the checkpoint is kept.
+    let o = Command::new(env!("CARGO_BIN_EXE_lenspath"))
+        .args(args(&path("other.exr")))
+        .args(["--seed", "1", "--resume", &ckpt])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("is the checkpoint of another render"),
+        "{}",
+        stderr(&o)
+    );
+
+    for out in ["resumed.exr", "resumed.png"] {
+        let o = Command::new(env!("CARGO_BIN_EXE_lenspath"))
+            .args(args(&path(out)))
+            .args(["--resume", &ckpt])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(stderr(&o).contains("resuming"), "{}", stderr(&o));
+    }
+    for out in ["straight.exr", "straight.png"] {
+        let o = lenspath(&args(&path(out)).iter().map(String::as_str).collect::<Vec<_>>());
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    for ext in ["exr", "png"] {
+        let resumed = std::fs::read(path(&format!("resumed.{ext}"))).unwrap();
+        let straight = std::fs::read(path(&format!("straight.{ext}"))).unwrap();
+        assert!(
+            resumed == straight,
+            "the resumed {ext} differs from the uninterrupted one"
+        );
+    }
 }
 
 #[test]

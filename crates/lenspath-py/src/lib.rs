@@ -9,7 +9,7 @@
 
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 use std::time::Duration;
 
 use glam::{DVec3, Vec3};
@@ -31,16 +31,16 @@ use lenspath::lens::{
 };
 use lenspath::lights::Light;
 use lenspath::materials::Material;
-use lenspath::render::{render as render_scene, NormalizedRect, RenderSettings, DEFAULT_IMAGE_SIZE};
-use lenspath::scene::{Scene as CoreScene, SceneView};
+use lenspath::render::{render as render_scene, NormalizedRect, PixelRect, RenderSettings, DEFAULT_IMAGE_SIZE};
+use lenspath::scene::{CompiledScene, Scene as CoreScene, SceneView};
 use lenspath::shapes::{Sphere, TriangleMesh};
 use lenspath::Error;
 use numpy::ndarray::{Array2, Array3};
 use numpy::{AllowTypeChange, IntoPyArray, PyArray2, PyArray3, PyArrayLike2, PyArrayLike3, PyUntypedArrayMethods};
 use pyo3::create_exception;
-use pyo3::exceptions::{PyException, PyOSError, PyValueError};
+use pyo3::exceptions::{PyException, PyOSError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyTuple};
 
 create_exception!(
     lenspath,
@@ -86,6 +86,18 @@ fn value_error(message: impl Into<String>) -> PyErr {
 // ---------------------------------------------------------------------------
 // Scenes
 
+/// Where a [`Scene`] came from: how to make it again (pickling it, and
+/// `lenspath.distributed`'s workers, need that).
+#[derive(Clone, Debug)]
+enum SceneOrigin {
+    /// `Scene.builtin(name, mesh_triangles)`.
+    Builtin(String, usize),
+    /// `load(path)`.
+    File(PathBuf),
+    /// Built or changed in Python.
+    Python,
+}
+
 /// A scene: shapes, materials, lights and the view it was made for.
 #[pyclass(module = "lenspath._core")]
 #[derive(Clone)]
@@ -93,6 +105,9 @@ struct Scene {
     name: String,
     scene: CoreScene,
     options: SceneOptions,
+    origin: SceneOrigin,
+    /// Its BVH, built by the first render and kept for the next ones until the scene changes.
+    compiled: OnceLock<Arc<CompiledScene>>,
 }
 
 #[pymethods]
@@ -104,6 +119,8 @@ impl Scene {
             name: "scene".into(),
             scene: CoreScene::default(),
             options: SceneOptions::default(),
+            origin: SceneOrigin::Python,
+            compiled: OnceLock::new(),
         }
     }
 
@@ -116,7 +133,41 @@ impl Scene {
             name: name.into(),
             scene: builtin_scene(name, mesh_triangles).map_err(|e| to_py(e, FileKind::Scene))?,
             options: SceneOptions::default(),
+            origin: SceneOrigin::Builtin(name.into(), mesh_triangles),
+            compiled: OnceLock::new(),
         })
+    }
+
+    /// The file it was loaded from, or the built-in scene's name; None once changed in Python.
+    #[getter]
+    fn source(&self) -> Option<String> {
+        match &self.origin {
+            SceneOrigin::Builtin(name, _) => Some(name.clone()),
+            SceneOrigin::File(path) => Some(path.display().to_string()),
+            SceneOrigin::Python => None,
+        }
+    }
+
+    /// Builds its BVH now; otherwise the first render does. Kept until the scene changes.
+    fn compile(&self, py: Python<'_>) -> PyResult<()> {
+        self.compiled(py).map(|_| ())
+    }
+
+    /// Pickles as the way to make it again: `Scene.builtin(...)` or `load(path)`.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        let module = py.import("lenspath._core")?;
+        match &self.origin {
+            SceneOrigin::Builtin(name, triangles) => Ok((
+                module.getattr("Scene")?.getattr("builtin")?,
+                (name.clone(), *triangles).into_pyobject(py)?,
+            )),
+            SceneOrigin::File(path) => Ok((module.getattr("load")?, (path.clone(),).into_pyobject(py)?)),
+            SceneOrigin::Python => Err(PyTypeError::new_err(format!(
+                "scene '{}' was built or changed in Python and cannot be pickled; save it as a scene file \
+                 and load that (lenspath.load) to send it to other processes",
+                self.name
+            ))),
+        }
     }
 
     #[getter]
@@ -167,6 +218,7 @@ impl Scene {
         k: Option<(f32, f32, f32)>,
         roughness: f32,
     ) -> PyResult<u32> {
+        self.changed();
         let rgb = |c: (f32, f32, f32)| Vec3::new(c.0, c.1, c.2);
         let material = match kind {
             "diffuse" => Material::Diffuse {
@@ -201,6 +253,7 @@ impl Scene {
         material: u32,
         emission: Option<(f32, f32, f32)>,
     ) -> PyResult<()> {
+        self.changed();
         if vertices.shape()[1] != 3 || indices.shape()[1] != 3 {
             return Err(value_error(format!(
                 "vertices and indices must be N x 3 arrays, got {:?} and {:?}",
@@ -244,6 +297,7 @@ impl Scene {
         material: u32,
         emission: Option<(f32, f32, f32)>,
     ) -> PyResult<()> {
+        self.changed();
         let mut scene = self.scene.clone();
         scene.spheres.push(Sphere {
             center: Vec3::new(center.0, center.1, center.2),
@@ -258,6 +312,7 @@ impl Scene {
 
     /// Adds a uniform environment: `radiance` from every direction the scene does not block.
     fn add_environment(&mut self, radiance: (f32, f32, f32)) -> PyResult<()> {
+        self.changed();
         let radiance = light_amount("radiance", radiance)?;
         self.scene.lights.push(Light::Environment { radiance });
         Ok(())
@@ -265,6 +320,7 @@ impl Scene {
 
     /// Adds an isotropic point light at `position`: `intensity` in W/sr per channel.
     fn add_point_light(&mut self, position: (f32, f32, f32), intensity: (f32, f32, f32)) -> PyResult<()> {
+        self.changed();
         self.scene.lights.push(Light::Point {
             position: finite_point("position", position)?,
             intensity: light_amount("intensity", intensity)?,
@@ -284,6 +340,7 @@ impl Scene {
         cone_angle_deg: f32,
         exponent: f32,
     ) -> PyResult<()> {
+        self.changed();
         if !(cone_angle_deg > 0.0 && cone_angle_deg <= 180.0) {
             return Err(value_error(format!(
                 "cone_angle_deg must be in (0, 180], got {cone_angle_deg}"
@@ -305,6 +362,7 @@ impl Scene {
     /// Adds a distant light (the sun) whose light travels along `direction`:
     /// `irradiance` (W/m² per channel) on a surface facing it.
     fn add_directional_light(&mut self, direction: (f32, f32, f32), irradiance: (f32, f32, f32)) -> PyResult<()> {
+        self.changed();
         self.scene.lights.push(Light::Directional {
             direction: unit_direction(direction)?,
             irradiance: light_amount("irradiance", irradiance)?,
@@ -324,6 +382,7 @@ impl Scene {
         fov_deg: f32,
         focus_distance: Option<f32>,
     ) -> PyResult<()> {
+        self.changed();
         let (eye, target, up) = (Vec3::from(eye), Vec3::from(target), Vec3::from(up));
         if (target - eye).length() <= 0.0 || (target - eye).cross(up).length() <= 1e-6 {
             return Err(value_error(
@@ -354,6 +413,26 @@ impl Scene {
 }
 
 impl Scene {
+    /// Called by every method that changes the scene: the BVH must be built
+    /// again, and the scene can no longer be made from its origin.
+    fn changed(&mut self) {
+        self.compiled.take();
+        self.origin = SceneOrigin::Python;
+    }
+
+    /// Its compiled form (BVH and lights), built once and shared by later renders.
+    fn compiled(&self, py: Python<'_>) -> PyResult<Arc<CompiledScene>> {
+        if let Some(c) = self.compiled.get() {
+            return Ok(c.clone());
+        }
+        let scene = self.scene.clone();
+        let compiled = Arc::new(
+            py.detach(|| scene.compile(&BvhSettings::default()))
+                .map_err(|e| to_py(e, FileKind::Scene))?,
+        );
+        Ok(self.compiled.get_or_init(|| compiled).clone())
+    }
+
     /// The view it was made for, or the error a render without one gets.
     fn view(&self) -> PyResult<SceneView> {
         self.scene
@@ -375,6 +454,8 @@ fn load(py: Python<'_>, path: PathBuf) -> PyResult<Scene> {
         name: path.display().to_string(),
         scene: loaded.scene,
         options: loaded.options,
+        origin: SceneOrigin::File(path),
+        compiled: OnceLock::new(),
     })
 }
 
@@ -397,6 +478,8 @@ struct Lens {
     prescription: LensPrescription,
     system: LensSystem,
     analysis: LensAnalysis,
+    /// The f-number it was stopped down to (None: wide open).
+    stopped_to: Option<f64>,
 }
 
 impl Lens {
@@ -413,6 +496,7 @@ impl Lens {
             prescription,
             system,
             analysis,
+            stopped_to: None,
         })
     }
 }
@@ -478,7 +562,32 @@ impl Lens {
             .system
             .with_f_number(f_number)
             .map_err(|e| to_py(e, FileKind::Lens))?;
-        Lens::placed(self.prescription.clone(), system)
+        Ok(Lens {
+            stopped_to: Some(f_number),
+            ..Lens::placed(self.prescription.clone(), system)?
+        })
+    }
+
+    /// Pickles as its name, table and stop (`Lens._from_state`).
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        Ok((
+            py.get_type::<Lens>().getattr("_from_state")?,
+            (self.name().to_string(), self.table(py), self.stopped_to).into_pyobject(py)?,
+        ))
+    }
+
+    /// The lens `__reduce__` describes.
+    #[staticmethod]
+    fn _from_state(
+        name: &str,
+        table: PyArrayLike2<'_, f64, AllowTypeChange>,
+        stopped_to: Option<f64>,
+    ) -> PyResult<Lens> {
+        let lens = Lens::from_table(table, name)?;
+        match stopped_to {
+            Some(f_number) => lens.stopped_down(f_number),
+            None => Ok(lens),
+        }
     }
 
     #[getter]
@@ -787,8 +896,120 @@ fn parse_aperture(aperture: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Apertu
     ApertureShape::mask(width, height, values).map(Some).map_err(invalid)
 }
 
+/// An aperture shape as Python gives it: its name (such as "blades:6:0:0.5") or its mask array.
+fn aperture_to_py<'py>(py: Python<'py>, shape: &ApertureShape) -> PyResult<Bound<'py, PyAny>> {
+    Ok(match shape {
+        ApertureShape::Circle => "circle".into_pyobject(py)?.into_any(),
+        ApertureShape::Blades {
+            count,
+            rotation_deg,
+            curvature,
+        } => format!("blades:{count}:{rotation_deg}:{curvature}")
+            .into_pyobject(py)?
+            .into_any(),
+        ApertureShape::Star {
+            points,
+            inner_ratio,
+            rotation_deg,
+        } => format!("star:{points}:{inner_ratio}:{rotation_deg}")
+            .into_pyobject(py)?
+            .into_any(),
+        ApertureShape::Mask(mask) => Array2::from_shape_vec((mask.height, mask.width), mask.values.clone())
+            .expect("a mask holds width × height values")
+            .into_pyarray(py)
+            .into_any(),
+    })
+}
+
 #[pymethods]
 impl Camera {
+    /// Pickles as its kind and settings (`Camera._from_state`).
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        let none = || py.None().into_bound(py);
+        let state = match &self.spec {
+            CameraSpec::Pinhole { fov_deg } => ("pinhole", *fov_deg, 0.0f32, None::<f64>, none(), none()),
+            CameraSpec::ThinLens {
+                fov_deg,
+                aperture_radius,
+                focus_distance,
+                aperture,
+            } => (
+                "thin_lens",
+                *fov_deg,
+                *aperture_radius,
+                focus_distance.map(f64::from),
+                aperture_to_py(py, aperture)?,
+                none(),
+            ),
+            CameraSpec::Realistic {
+                lens,
+                focus_distance,
+                aperture,
+                ..
+            } => (
+                "realistic",
+                None,
+                0.0,
+                *focus_distance,
+                aperture
+                    .as_ref()
+                    .map_or_else(|| Ok(none()), |a| aperture_to_py(py, a))?,
+                lens.as_deref().cloned().into_pyobject(py)?.into_any(),
+            ),
+        };
+        let realistic = match &self.spec {
+            CameraSpec::Realistic {
+                sensor_mm,
+                sensor_width_mm,
+                f_number,
+                scene_unit_m,
+                ..
+            } => (*sensor_mm, *sensor_width_mm, *f_number, *scene_unit_m),
+            _ => (None, None, None, None),
+        };
+        Ok((
+            py.get_type::<Camera>().getattr("_from_state")?,
+            (state, realistic).into_pyobject(py)?,
+        ))
+    }
+
+    /// The camera `__reduce__` describes.
+    #[staticmethod]
+    #[allow(clippy::type_complexity)]
+    fn _from_state(
+        state: (
+            String,
+            Option<f32>,
+            f32,
+            Option<f64>,
+            Option<Bound<'_, PyAny>>,
+            Option<Bound<'_, PyAny>>,
+        ),
+        realistic: (Option<f64>, Option<f64>, Option<f64>, Option<f64>),
+    ) -> PyResult<Camera> {
+        let (kind, fov_deg, aperture_radius, focus_distance, aperture, lens) = state;
+        let (aperture, lens) = (aperture.filter(|a| !a.is_none()), lens.filter(|l| !l.is_none()));
+        let (sensor_mm, sensor_width_mm, f_number, scene_unit_m) = realistic;
+        match kind.as_str() {
+            "pinhole" => Ok(Camera::pinhole(fov_deg)),
+            "thin_lens" => Camera::thin_lens(
+                aperture_radius,
+                focus_distance.map(|d| d as f32),
+                fov_deg,
+                aperture.as_ref(),
+            ),
+            _ => Camera::realistic(
+                lens.as_ref(),
+                focus_distance,
+                sensor_mm,
+                f_number,
+                sensor_width_mm,
+                aperture.as_ref(),
+                scene_unit_m,
+            ),
+        }
+    }
+
     /// An ideal pinhole; `fov_deg` (vertical) defaults to the scene's.
     #[staticmethod]
     #[pyo3(signature = (fov_deg = None))]
@@ -950,7 +1171,7 @@ fn rgb_array<'py>(py: Python<'py>, image: &Image) -> Bound<'py, PyArray3<f32>> {
 /// Renders `scene` through `camera` (see the stub for the arguments).
 #[pyfunction]
 #[pyo3(signature = (scene, camera = None, *, spp = 64, resolution = None, seed = 0, max_depth = 16,
-                    light_samples = 1, threads = None, aovs = None, progress = None))]
+                    light_samples = 1, threads = None, aovs = None, crop = None, progress = None))]
 #[allow(clippy::too_many_arguments)]
 fn render<'py>(
     py: Python<'py>,
@@ -963,6 +1184,7 @@ fn render<'py>(
     light_samples: u32,
     threads: Option<usize>,
     aovs: Option<Vec<String>>,
+    crop: Option<(u32, u32, u32, u32)>,
     progress: Option<Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let want_depth = match aovs.as_deref() {
@@ -987,15 +1209,12 @@ fn render<'py>(
         filter: Filter::Box,
         threads,
         tile_size: 16,
-        crop: None,
+        crop: crop.map(|(x0, y0, width, height)| PixelRect { x0, y0, width, height }),
         depth: true,
     };
     settings.validate().map_err(|e| to_py(e, FileKind::Scene))?;
     let camera = build_camera(scene, camera.map(|c| &c.spec), width, height)?;
-    let core_scene = scene.scene.clone();
-    let compiled = py
-        .detach(|| core_scene.compile(&BvhSettings::default()))
-        .map_err(|e| to_py(e, FileKind::Scene))?;
+    let compiled = scene.compiled(py)?;
 
     // Render on a worker thread without the GIL; this thread wakes every
     // 50 ms to report progress and to turn Ctrl-C into a cancelled render.
@@ -1006,7 +1225,7 @@ fn render<'py>(
     let output = std::thread::scope(|s| {
         let worker = s.spawn(|| {
             let out = render_scene(
-                &compiled,
+                compiled.as_ref(),
                 camera.as_ref(),
                 &settings,
                 &|d, t| {
@@ -1047,7 +1266,8 @@ fn render<'py>(
     if !want_depth {
         return Ok(rgb.into_any());
     }
-    let depth = Array2::from_shape_vec((height as usize, width as usize), output.image.depth.clone())
+    let image = &output.image;
+    let depth = Array2::from_shape_vec((image.height as usize, image.width as usize), image.depth.clone())
         .expect("a depth per pixel")
         .into_pyarray(py);
     let d = PyDict::new(py);
@@ -1142,10 +1362,9 @@ fn autofocus(
         seed,
         threads,
     };
-    let core_scene = scene.scene.clone();
+    let compiled = scene.compiled(py)?;
     let (result, depth_of_focus_mm) = py
         .detach(|| {
-            let compiled = core_scene.compile(&BvhSettings::default())?;
             let mut focuser = Focuser::new(&compiled, view.pose, settings)?;
             let result = focuser.run(search)?;
             let dof = focuser.depth_of_focus_mm(result.sensor_z_mm);

@@ -2,7 +2,7 @@
 //! in progressive passes, reports progress and stops early when asked.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use glam::{DVec3, Vec2};
 use rayon::prelude::*;
@@ -190,7 +190,7 @@ impl RenderSettings {
 pub struct RenderStats {
     /// Wall time in seconds.
     pub seconds: f64,
-    /// Camera samples taken.
+    /// Camera samples taken (by this run, when it continued a saved one).
     pub samples: u64,
     /// Rays traced: camera, bounce and shadow rays.
     pub rays: u64,
@@ -209,13 +209,49 @@ pub struct RenderOutput {
     pub stats: RenderStats,
 }
 
+/// The state of a render between two samples, enough to continue it: for
+/// each pixel of the rendered region (row-major), the sum of its samples'
+/// radiance, how many samples it has, and its depth. A pixel's sum is added to
+/// in sample order whatever the passes, so a render continued from this state
+/// ends bit-identical to one that never stopped.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Accumulation {
+    /// The pixels it covers: the whole image, or the crop.
+    pub region: PixelRect,
+    /// Sum of each pixel's sample radiance.
+    pub sum: Vec<DVec3>,
+    /// Samples each pixel has (its sample indices `0..count`).
+    pub count: Vec<u32>,
+    /// Depth along the view axis (infinite: nothing hit, or not yet computed).
+    pub depth: Vec<f32>,
+}
+
+impl Accumulation {
+    /// Samples every pixel has.
+    pub fn spp_min(&self) -> u32 {
+        self.count.iter().copied().min().unwrap_or(0)
+    }
+}
+
+/// Periodic saving of a render's [`Accumulation`], so a stopped or killed
+/// render can continue ([`render_from`]).
+pub struct Checkpoints<'a> {
+    /// Least time between two saves. Passes are kept short enough (about half
+    /// of it) that a save is seldom late.
+    pub every: Duration,
+    /// Saves the state; called at most every `every`, and once more when the
+    /// render finishes or is stopped. An error stops the render.
+    pub save: &'a mut (dyn FnMut(&Accumulation) -> Result<()> + Send),
+}
+
 struct Tile {
     x0: u32,
     y0: u32,
     width: u32,
     height: u32,
+    /// Samples each of its pixels has: a pass renders a tile whole or not at all.
+    spp_done: u32,
     sum: Vec<DVec3>,
-    count: Vec<u32>,
     depth: Vec<f32>,
 }
 
@@ -230,158 +266,285 @@ pub fn render(
     progress: &(dyn Fn(u64, u64) + Sync),
     cancel: &AtomicBool,
 ) -> Result<RenderOutput> {
+    render_from(scene, camera, settings, None, None, progress, cancel)
+}
+
+/// [`render`], continuing from `start` (a saved [`Accumulation`] of the same
+/// scene, camera and settings, with at most `settings.spp` samples) and
+/// saving its state through `checkpoints`. The image is bit-identical to an
+/// uninterrupted render's.
+pub fn render_from(
+    scene: &CompiledScene,
+    camera: &dyn Camera,
+    settings: &RenderSettings,
+    start: Option<Accumulation>,
+    checkpoints: Option<Checkpoints<'_>>,
+    progress: &(dyn Fn(u64, u64) + Sync),
+    cancel: &AtomicBool,
+) -> Result<RenderOutput> {
     settings.validate()?;
+    let tiles = tiles(settings, start)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(settings.threads.unwrap_or(0))
         .build()
         .map_err(|e| Error::InvalidArgument(format!("cannot start worker threads: {e}")))?;
-    Ok(pool.install(|| render_in_pool(scene, camera, settings, progress, cancel)))
+    pool.install(|| render_in_pool(scene, camera, settings, tiles, checkpoints, progress, cancel))
 }
 
-fn render_in_pool(
-    scene: &CompiledScene,
-    camera: &dyn Camera,
-    settings: &RenderSettings,
-    progress: &(dyn Fn(u64, u64) + Sync),
-    cancel: &AtomicBool,
-) -> RenderOutput {
-    let started = Instant::now();
-    let ts = settings.tile_size;
-    let region = settings.crop.unwrap_or(PixelRect {
+/// The region a render covers: its crop, else the whole image.
+fn region(settings: &RenderSettings) -> PixelRect {
+    settings.crop.unwrap_or(PixelRect {
         x0: 0,
         y0: 0,
         width: settings.width,
         height: settings.height,
-    });
+    })
+}
+
+/// The region cut into tiles, empty or filled from `start`.
+fn tiles(settings: &RenderSettings, start: Option<Accumulation>) -> Result<Vec<Tile>> {
+    let ts = settings.tile_size;
+    let region = region(settings);
+    if let Some(a) = &start {
+        let n = region.width as usize * region.height as usize;
+        if a.region != region || a.sum.len() != n || a.count.len() != n || a.depth.len() != n {
+            return Err(Error::InvalidArgument(format!(
+                "the saved render covers {}x{} pixels at ({}, {}), this one {}x{} at ({}, {})",
+                a.region.width,
+                a.region.height,
+                a.region.x0,
+                a.region.y0,
+                region.width,
+                region.height,
+                region.x0,
+                region.y0
+            )));
+        }
+        let most = a.count.iter().copied().max().unwrap_or(0);
+        if most > settings.spp {
+            return Err(Error::InvalidArgument(format!(
+                "the saved render already has {most} samples per pixel, more than the {} asked for",
+                settings.spp
+            )));
+        }
+    }
     let (region_x1, region_y1) = (region.x0 + region.width, region.y0 + region.height);
     let mut tiles: Vec<Tile> = Vec::new();
     for y0 in (region.y0..region_y1).step_by(ts as usize) {
         for x0 in (region.x0..region_x1).step_by(ts as usize) {
             let (width, height) = (ts.min(region_x1 - x0), ts.min(region_y1 - y0));
             let n = (width * height) as usize;
-            tiles.push(Tile {
+            let mut tile = Tile {
                 x0,
                 y0,
                 width,
                 height,
+                spp_done: 0,
                 sum: vec![DVec3::ZERO; n],
-                count: vec![0; n],
                 depth: vec![f32::INFINITY; n],
-            });
+            };
+            if let Some(a) = &start {
+                let mut counts = Vec::with_capacity(n);
+                for ty in 0..height {
+                    for tx in 0..width {
+                        let i = (ty * width + tx) as usize;
+                        let o = (y0 + ty - region.y0) as usize * region.width as usize + (x0 + tx - region.x0) as usize;
+                        tile.sum[i] = a.sum[o];
+                        tile.depth[i] = a.depth[o];
+                        counts.push(a.count[o]);
+                    }
+                }
+                tile.spp_done = counts[0];
+                if counts.iter().any(|&c| c != tile.spp_done) {
+                    return Err(Error::InvalidArgument(format!(
+                        "the saved render's pixels in the tile at ({x0}, {y0}) have different sample counts; \
+                         it was not made with {ts}-pixel tiles"
+                    )));
+                }
+            }
+            tiles.push(tile);
         }
     }
+    Ok(tiles)
+}
+
+/// The state held by `tiles`, as one [`Accumulation`] over `region`.
+fn accumulation(tiles: &[Tile], region: PixelRect) -> Accumulation {
+    let n = region.width as usize * region.height as usize;
+    let mut a = Accumulation {
+        region,
+        sum: vec![DVec3::ZERO; n],
+        count: vec![0; n],
+        depth: vec![f32::INFINITY; n],
+    };
+    for tile in tiles {
+        for ty in 0..tile.height {
+            for tx in 0..tile.width {
+                let i = (ty * tile.width + tx) as usize;
+                let o =
+                    (tile.y0 + ty - region.y0) as usize * region.width as usize + (tile.x0 + tx - region.x0) as usize;
+                a.sum[o] = tile.sum[i];
+                a.count[o] = tile.spp_done;
+                a.depth[o] = tile.depth[i];
+            }
+        }
+    }
+    a
+}
+
+/// Renders the samples `tile.spp_done..pass_end` of every pixel of `tile`
+/// (and its depth, when it has no samples yet); returns (rays, invalid samples).
+fn render_tile(
+    scene: &CompiledScene,
+    camera: &dyn Camera,
+    settings: &RenderSettings,
+    tile: &mut Tile,
+    pass_end: u32,
+) -> (u64, u64) {
     let (axis_origin, axis_dir) = camera.view_axis();
+    let first = tile.spp_done;
+    let mut tile_rays = 0u64;
+    let mut tile_invalid = 0u64;
+    for ty in 0..tile.height {
+        // Depth, in the first pass: along the first lens position the optics let through.
+        for tx in (0..tile.width).filter(|_| first == 0 && settings.depth) {
+            let (px, py) = (tile.x0 + tx, tile.y0 + ty);
+            let film = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
+            let ray = depth_lens_samples().find_map(|lens| camera.generate_ray(CameraSample { film, lens }));
+            tile_rays += u64::from(ray.is_some());
+            if let Some(hit) = ray.and_then(|cr| scene.intersect(&cr.ray)) {
+                tile.depth[(ty * tile.width + tx) as usize] = (hit.p - axis_origin).dot(axis_dir);
+            }
+        }
+        // Pixels in pairs, so a camera can trace two rays at once
+        // (the realistic camera does); every pixel keeps its own
+        // samplers and its sum's order, so the image does not change.
+        for tx in (0..tile.width).step_by(2) {
+            let pixels = if tx + 1 < tile.width { 2 } else { 1 };
+            let pair = [tx, (tx + 1).min(tile.width - 1)].map(|x| (tile.x0 + x, tile.y0 + ty));
+            let slots = [tx, tx + 1].map(|x| (ty * tile.width + x) as usize);
+            for index in first..pass_end {
+                let mut samplers = pair.map(|(px, py)| Sampler::new(px, py, index, settings.seed));
+                let samples: [CameraSample; 2] = std::array::from_fn(|k| {
+                    let (px, py) = pair[k];
+                    let centre = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
+                    let film = centre + settings.filter.sample_offset(samplers[k].get_2d());
+                    CameraSample {
+                        film,
+                        lens: samplers[k].get_2d(),
+                    }
+                });
+                let rays = if pixels == 2 {
+                    camera.generate_ray_pair(samples)
+                } else {
+                    [camera.generate_ray(samples[0]), None]
+                };
+                for ((ray, sampler), &slot) in rays.into_iter().zip(&mut samplers).zip(&slots).take(pixels) {
+                    let l = ray.map_or(Rgb::ZERO, |cr| {
+                        cr.weight * radiance(scene, cr.ray, sampler, &settings.path, &mut tile_rays)
+                    });
+                    if l.is_finite() {
+                        tile.sum[slot] += l.as_dvec3();
+                    } else {
+                        tile_invalid += 1;
+                    }
+                }
+            }
+        }
+    }
+    tile.spp_done = pass_end;
+    (tile_rays, tile_invalid)
+}
+
+/// Samples per pixel of the pass after one of `last` samples: passes double
+/// up to 64, so a stopped render is still even; with checkpoints, a pass
+/// takes at most about half their interval (at `seconds_per_spp`).
+fn next_pass_size(last: u32, checkpoints: Option<&Checkpoints<'_>>, seconds_per_spp: f64) -> u32 {
+    let doubled = (last * 2).min(64);
+    match checkpoints {
+        Some(c) if seconds_per_spp > 0.0 => {
+            let fits = (0.5 * c.every.as_secs_f64() / seconds_per_spp).floor();
+            doubled.min(fits.clamp(1.0, 64.0) as u32)
+        }
+        _ => doubled,
+    }
+}
+
+fn render_in_pool(
+    scene: &CompiledScene,
+    camera: &dyn Camera,
+    settings: &RenderSettings,
+    mut tiles: Vec<Tile>,
+    mut checkpoints: Option<Checkpoints<'_>>,
+    progress: &(dyn Fn(u64, u64) + Sync),
+    cancel: &AtomicBool,
+) -> Result<RenderOutput> {
+    let started = Instant::now();
+    let region = region(settings);
     let total = u64::from(region.width) * u64::from(region.height) * u64::from(settings.spp);
-    let done = AtomicU64::new(0);
+    let tile_samples = |t: &Tile| u64::from(t.width * t.height) * u64::from(t.spp_done);
+    let resumed: u64 = tiles.iter().map(tile_samples).sum();
+    let done = AtomicU64::new(resumed);
     let rays = AtomicU64::new(0);
     let invalid = AtomicU64::new(0);
 
     // Progressive passes of growing size, so a stopped render is still even.
-    let mut pass_start = 0u32;
+    let mut pass_start = tiles.iter().map(|t| t.spp_done).min().unwrap_or(settings.spp);
     let mut pass_size = 1u32;
+    let mut last_save = Instant::now();
+    let mut unsaved = false;
     while pass_start < settings.spp && !cancel.load(Ordering::Relaxed) {
         let pass_end = (pass_start + pass_size).min(settings.spp);
         tiles.par_iter_mut().for_each(|tile| {
-            if cancel.load(Ordering::Relaxed) {
+            if cancel.load(Ordering::Relaxed) || tile.spp_done >= pass_end {
                 return;
             }
-            let mut tile_rays = 0u64;
-            let mut tile_invalid = 0u64;
-            for ty in 0..tile.height {
-                // Depth, in the first pass: along the first lens position the optics let through.
-                for tx in (0..tile.width).filter(|_| pass_start == 0 && settings.depth) {
-                    let (px, py) = (tile.x0 + tx, tile.y0 + ty);
-                    let film = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
-                    let ray = depth_lens_samples().find_map(|lens| camera.generate_ray(CameraSample { film, lens }));
-                    tile_rays += u64::from(ray.is_some());
-                    if let Some(hit) = ray.and_then(|cr| scene.intersect(&cr.ray)) {
-                        tile.depth[(ty * tile.width + tx) as usize] = (hit.p - axis_origin).dot(axis_dir);
-                    }
-                }
-                // Pixels in pairs, so a camera can trace two rays at once
-                // (the realistic camera does); every pixel keeps its own
-                // samplers and its sum's order, so the image does not change.
-                for tx in (0..tile.width).step_by(2) {
-                    let pixels = if tx + 1 < tile.width { 2 } else { 1 };
-                    let pair = [tx, (tx + 1).min(tile.width - 1)].map(|x| (tile.x0 + x, tile.y0 + ty));
-                    let slots = [tx, tx + 1].map(|x| (ty * tile.width + x) as usize);
-                    for index in pass_start..pass_end {
-                        let mut samplers = pair.map(|(px, py)| Sampler::new(px, py, index, settings.seed));
-                        let samples: [CameraSample; 2] = std::array::from_fn(|k| {
-                            let (px, py) = pair[k];
-                            let centre = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
-                            let film = centre + settings.filter.sample_offset(samplers[k].get_2d());
-                            CameraSample {
-                                film,
-                                lens: samplers[k].get_2d(),
-                            }
-                        });
-                        let rays = if pixels == 2 {
-                            camera.generate_ray_pair(samples)
-                        } else {
-                            [camera.generate_ray(samples[0]), None]
-                        };
-                        for ((ray, sampler), &slot) in rays.into_iter().zip(&mut samplers).zip(&slots).take(pixels) {
-                            let l = ray.map_or(Rgb::ZERO, |cr| {
-                                cr.weight * radiance(scene, cr.ray, sampler, &settings.path, &mut tile_rays)
-                            });
-                            if l.is_finite() {
-                                tile.sum[slot] += l.as_dvec3();
-                            } else {
-                                tile_invalid += 1;
-                            }
-                        }
-                    }
-                    for &slot in slots.iter().take(pixels) {
-                        tile.count[slot] = pass_end;
-                    }
-                }
-            }
+            let before = tile_samples(tile);
+            let (tile_rays, tile_invalid) = render_tile(scene, camera, settings, tile, pass_end);
             rays.fetch_add(tile_rays, Ordering::Relaxed);
             invalid.fetch_add(tile_invalid, Ordering::Relaxed);
-            let n = u64::from(tile.width * tile.height) * u64::from(pass_end - pass_start);
+            let n = tile_samples(tile) - before;
             progress(done.fetch_add(n, Ordering::Relaxed) + n, total);
         });
+        unsaved = true;
+        if let Some(c) = checkpoints.as_mut().filter(|c| last_save.elapsed() >= c.every) {
+            (c.save)(&accumulation(&tiles, region))?;
+            (last_save, unsaved) = (Instant::now(), false);
+        }
+        let taken = done.load(Ordering::Relaxed) - resumed;
+        let pixels = f64::from(region.width) * f64::from(region.height);
+        let seconds_per_spp = started.elapsed().as_secs_f64() * pixels / taken.max(1) as f64;
         pass_start = pass_end;
-        pass_size = (pass_size * 2).min(64);
+        pass_size = next_pass_size(pass_size, checkpoints.as_ref(), seconds_per_spp);
+    }
+    let state = accumulation(&tiles, region);
+    if let Some(c) = checkpoints.as_mut().filter(|_| unsaved) {
+        (c.save)(&state)?;
     }
 
     // Resolve: each pixel is the mean of its samples.
-    let (w, h) = (region.width as usize, region.height as usize);
-    let mut rgb = vec![0f32; 3 * w * h];
-    let mut depth = vec![f32::INFINITY; w * h];
-    let mut spp_min = u32::MAX;
-    let mut samples = 0u64;
-    for tile in &tiles {
-        for ty in 0..tile.height {
-            for tx in 0..tile.width {
-                let i = (ty * tile.width + tx) as usize;
-                let o = (tile.y0 + ty - region.y0) as usize * w + (tile.x0 + tx - region.x0) as usize;
-                let n = tile.count[i];
-                spp_min = spp_min.min(n);
-                samples += u64::from(n);
-                let mean = if n > 0 { tile.sum[i] / f64::from(n) } else { DVec3::ZERO };
-                rgb[3 * o..3 * o + 3].copy_from_slice(&mean.as_vec3().to_array());
-                depth[o] = tile.depth[i];
-            }
-        }
+    let mut rgb = vec![0f32; 3 * state.sum.len()];
+    for ((out, sum), &n) in rgb.chunks_exact_mut(3).zip(&state.sum).zip(&state.count) {
+        let mean = if n > 0 { *sum / f64::from(n) } else { DVec3::ZERO };
+        out.copy_from_slice(&mean.as_vec3().to_array());
     }
-    let cancelled = samples < total;
-    RenderOutput {
+    let spp_min = state.spp_min();
+    let samples: u64 = state.count.iter().map(|&c| u64::from(c)).sum();
+    Ok(RenderOutput {
         image: Image {
             width: region.width,
             height: region.height,
             rgb,
-            depth,
-            spp_min: if spp_min == u32::MAX { 0 } else { spp_min },
+            depth: state.depth,
+            spp_min,
             spp_requested: settings.spp,
         },
         stats: RenderStats {
             seconds: started.elapsed().as_secs_f64(),
-            samples,
+            samples: samples - resumed,
             rays: rays.into_inner(),
             invalid_samples: invalid.into_inner(),
-            cancelled,
+            cancelled: samples < total,
         },
-    }
+    })
 }

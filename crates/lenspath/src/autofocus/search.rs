@@ -66,6 +66,11 @@ pub const BEST_FOCUS_CYCLES_PER_PIXEL: f64 = 0.15;
 /// much (low resolutions, where the sweep has few steps).
 pub const FAST_BUDGET_OF_SWEEP: f64 = 0.1;
 
+/// The most samples the ground truth takes, as a multiple of the strategies'
+/// ([`Focuser::ground_truth`]): at 8× the two seeds of some dim or glassy
+/// patches still disagreed by a DoF, so the truth was itself noisy.
+pub const TRUTH_MAX_SPP_FACTOR: u32 = 32;
+
 /// Real-ray height for converting between sensor positions and distances (as the camera focuses).
 const FOCUS_RAY_HEIGHT_MM: f64 = 0.1;
 
@@ -641,8 +646,9 @@ impl<'a> Focuser<'a> {
     /// scale, widened while its maximum is near an end), located by a
     /// least-squares parabola through the log-scores within 1.5 DoF of its
     /// maximum, with two seeds; the
-    /// samples are doubled (from 4× the settings', up to 8×) until the seeds
-    /// agree within a quarter DoF. Its evaluations are not counted anywhere.
+    /// samples are doubled (from 4× the settings', up to
+    /// [`TRUTH_MAX_SPP_FACTOR`]×) until the seeds agree within a quarter DoF.
+    /// Its evaluations are not counted anywhere.
     pub fn ground_truth(&mut self) -> Result<GroundTruth> {
         let saved = (std::mem::take(&mut self.evaluations), self.camera_rays);
         let seed = self.settings.seed;
@@ -699,7 +705,7 @@ impl<'a> Focuser<'a> {
             }
             let z = 0.5 * (peaks[0] + peaks[1]);
             let spread = (peaks[0] - peaks[1]).abs() / self.depth_of_focus_mm(z);
-            if spread <= 0.25 || spp >= 8 * self.settings.spp {
+            if spread <= 0.25 || spp >= TRUTH_MAX_SPP_FACTOR * self.settings.spp {
                 break (z, spread, spp);
             }
             spp *= 2;

@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 use crate::error::{Error, Result};
 use crate::shapes::TriangleMesh;
 
+pub mod checkpoint;
 pub mod collada;
 pub mod gltf;
 pub mod image;
