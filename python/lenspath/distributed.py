@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import pickle
 import threading
 import uuid
 from collections import OrderedDict
@@ -117,6 +118,25 @@ def _worker_scene(ref: _SceneRef) -> Scene:
         return scene
 
 
+# Per worker process: cameras by their pickled form. Tiles arrive with fresh
+# copies; one object per camera keeps the realistic camera's exit-pupil tables
+# (built on its first render, a tenth of a second) for the following tiles.
+_cameras: OrderedDict[bytes, Camera] = OrderedDict()
+
+
+def _worker_camera(camera: Camera | None) -> Camera:
+    """The worker's one copy of ``camera`` (None: the scene's realistic camera, ``Camera.realistic()``)."""
+    key = pickle.dumps(camera)
+    with _scenes_lock:
+        cached = _cameras.get(key)
+        if cached is None:
+            cached = _cameras[key] = camera if camera is not None else Camera.realistic()
+            while len(_cameras) > 4 * _CACHED_SCENES:
+                _cameras.popitem(last=False)
+        _cameras.move_to_end(key)
+        return cached
+
+
 def scene_loads() -> int:
     """How many scenes this process has made for tiles (run on workers by the tests)."""
     return _scene_loads
@@ -144,7 +164,7 @@ def _render_tile(
     """One tile of one job, on a worker."""
     scene = _worker_scene(ref)
     threads = options.get("threads") or _threads_per_tile()
-    result: Image = _core.render(scene, camera, **{**options, "threads": threads, "crop": crop})
+    result: Image = _core.render(scene, _worker_camera(camera), **{**options, "threads": threads, "crop": crop})
     return result
 
 

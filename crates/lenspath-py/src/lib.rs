@@ -9,7 +9,7 @@
 
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::{Arc, OnceLock};
+use std::sync::{Arc, Mutex, OnceLock};
 use std::time::Duration;
 
 use glam::{DVec3, Vec3};
@@ -839,6 +839,36 @@ impl CameraSpec {
 #[derive(Clone)]
 struct Camera {
     spec: CameraSpec,
+    /// The camera last built from it, and for what (scene view and options,
+    /// image size): a realistic camera's exit-pupil tables take a tenth of a
+    /// second, which repeated renders (tiles, patches) need not pay again.
+    built: Arc<Mutex<Option<BuiltCamera>>>,
+}
+
+/// A camera as built for a render, and the key of what it was built for.
+type BuiltCamera = (String, Arc<dyn CameraTrait>);
+
+impl Camera {
+    fn new(spec: CameraSpec) -> Camera {
+        Camera {
+            spec,
+            built: Arc::default(),
+        }
+    }
+
+    /// The camera for `scene` at `width` × `height`, built once per scene view and size.
+    fn built_for(&self, scene: &Scene, width: u32, height: u32) -> PyResult<Arc<dyn CameraTrait>> {
+        let key = format!("{:?} {:?} {width}x{height}", scene.scene.view, scene.options);
+        let mut built = self.built.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some((k, camera)) = built.as_ref() {
+            if *k == key {
+                return Ok(camera.clone());
+            }
+        }
+        let camera: Arc<dyn CameraTrait> = Arc::from(build_camera(scene, Some(&self.spec), width, height)?);
+        *built = Some((key, camera.clone()));
+        Ok(camera)
+    }
 }
 
 /// An amount of light (radiance, intensity, irradiance): finite, not negative.
@@ -1014,9 +1044,7 @@ impl Camera {
     #[staticmethod]
     #[pyo3(signature = (fov_deg = None))]
     fn pinhole(fov_deg: Option<f32>) -> Camera {
-        Camera {
-            spec: CameraSpec::Pinhole { fov_deg },
-        }
+        Camera::new(CameraSpec::Pinhole { fov_deg })
     }
 
     /// An ideal thin lens of `aperture_radius` (scene units) focused at
@@ -1035,14 +1063,12 @@ impl Camera {
                 "aperture_radius must be zero or positive, got {aperture_radius}"
             )));
         }
-        Ok(Camera {
-            spec: CameraSpec::ThinLens {
+        Ok(Camera::new(CameraSpec::ThinLens {
                 fov_deg,
                 aperture_radius,
                 focus_distance,
                 aperture: parse_aperture(aperture)?.unwrap_or(ApertureShape::Circle),
-            },
-        })
+            }))
     }
 
     /// A real lens (a `Lens` or a built-in name; default: the scene file's,
@@ -1066,8 +1092,7 @@ impl Camera {
         if focus_distance.is_some() && sensor_mm.is_some() {
             return Err(value_error("give focus_distance or sensor_mm, not both"));
         }
-        Ok(Camera {
-            spec: CameraSpec::Realistic {
+        Ok(Camera::new(CameraSpec::Realistic {
                 lens: lens.map(Box::new),
                 focus_distance,
                 sensor_mm,
@@ -1075,8 +1100,7 @@ impl Camera {
                 f_number,
                 aperture: parse_aperture(aperture)?,
                 scene_unit_m,
-            },
-        })
+            }))
     }
 }
 
@@ -1213,15 +1237,21 @@ fn render<'py>(
         depth: true,
     };
     settings.validate().map_err(|e| to_py(e, FileKind::Scene))?;
-    let camera = build_camera(scene, camera.map(|c| &c.spec), width, height)?;
+    let camera = match camera {
+        Some(c) => c.built_for(scene, width, height)?,
+        None => Arc::from(build_camera(scene, None, width, height)?),
+    };
     let compiled = scene.compiled(py)?;
 
     // Render on a worker thread without the GIL; this thread wakes every
-    // 50 ms to report progress and to turn Ctrl-C into a cancelled render.
+    // 50 ms to report progress and to turn Ctrl-C into a cancelled render,
+    // and at once when the render ends (small renders, such as tiles, take
+    // less than that).
     let cancel = AtomicBool::new(false);
     let (done, total) = (AtomicU64::new(0), AtomicU64::new(0));
     let finished = AtomicBool::new(false);
     let mut interrupt: Option<PyErr> = None;
+    let waiting = std::thread::current();
     let output = std::thread::scope(|s| {
         let worker = s.spawn(|| {
             let out = render_scene(
@@ -1235,10 +1265,11 @@ fn render<'py>(
                 &cancel,
             );
             finished.store(true, Ordering::Release);
+            waiting.unpark();
             out
         });
         while !finished.load(Ordering::Acquire) {
-            py.detach(|| std::thread::sleep(Duration::from_millis(50)));
+            py.detach(|| std::thread::park_timeout(Duration::from_millis(50)));
             if interrupt.is_none() {
                 if let Err(e) = py.check_signals() {
                     cancel.store(true, Ordering::SeqCst);
@@ -1400,17 +1431,15 @@ fn autofocus(
         camera_rays: result.camera_rays,
         seconds: result.seconds,
         depth_of_focus_mm,
-        camera: Camera {
-            spec: CameraSpec::Realistic {
-                lens,
-                focus_distance: None,
-                sensor_mm: Some(result.sensor_z_mm),
-                sensor_width_mm,
-                f_number,
-                aperture,
-                scene_unit_m,
-            },
-        },
+        camera: Camera::new(CameraSpec::Realistic {
+            lens,
+            focus_distance: None,
+            sensor_mm: Some(result.sensor_z_mm),
+            sensor_width_mm,
+            f_number,
+            aperture,
+            scene_unit_m,
+        }),
     })
 }
 

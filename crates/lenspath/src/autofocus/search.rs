@@ -66,6 +66,10 @@ pub const BEST_FOCUS_CYCLES_PER_PIXEL: f64 = 0.15;
 /// much (low resolutions, where the sweep has few steps).
 pub const FAST_BUDGET_OF_SWEEP: f64 = 0.1;
 
+/// Most renders of the `fast` search's fine stage (five, then more beyond
+/// its best until the best has two on each side).
+const FINE_RENDERS: usize = 9;
+
 /// The most samples the ground truth takes, as a multiple of the strategies'
 /// ([`Focuser::ground_truth`]): at 8× the two seeds of some dim or glassy
 /// patches still disagreed by a DoF, so the truth was itself noisy.
@@ -455,34 +459,39 @@ impl<'a> Focuser<'a> {
         let i = winner.1;
         let around = &coarse[i.saturating_sub(1)..=(i + 1).min(n - 1)];
         let z0 = log_parabola_peak(around, coarse[i].0, 1.01 * (far - near) / (n - 1) as f64);
-        // The fine stage: common random numbers keep neighbouring scores'
-        // noise alike, so the shape of the peak shows through it. Its samples
-        // are 1.5× the scan's, less if its seven renders at most would take
-        // the search past its budget.
+        // The fine stage: renders 1 DoF apart, starting with five around z0
+        // (moved inside the range rather than clamped, so none repeats),
+        // then one more at a time beyond the best while it has fewer than two
+        // neighbours on a side, so the fit sees the peak from both sides;
+        // common random numbers keep neighbouring scores' noise alike. Its
+        // samples are 1.5× the scan's, fewer if its renders (at most
+        // FINE_RENDERS) would take the search past its budget.
         let spent: u32 = self.evaluations.iter().map(|e| e.spp).sum();
         let budget = FAST_BUDGET_OF_SWEEP * (self.steps(self.pitch_mm) as u32 * spp) as f64;
-        let affordable = ((budget - f64::from(spent)) / 7.0).floor().max(1.0) as u32;
+        let affordable = ((budget - f64::from(spent)) / FINE_RENDERS as f64).floor().max(1.0) as u32;
         let (fine_spp, dof) = ((spp + spp / 2).min(affordable), self.depth_of_focus_mm(z0));
+        let first = (z0 - 2.0 * dof).clamp(near, (far - 4.0 * dof).max(near));
         let mut points: Vec<(f64, f64)> = Vec::new();
-        for k in -2..=2 {
-            let z = (z0 + f64::from(k) * dof).clamp(near, far);
+        for k in 0..5 {
+            let z = (first + f64::from(k) * dof).min(far);
             points.push((z, self.measure_at(z, fine_spp, seed, Detail::Fine)?));
         }
-        let last = points.len() - 1;
-        let beyond: Option<f64> = match peak_index(&points) {
-            0 => Some(-dof),
-            b if b == last => Some(dof),
-            _ => None,
-        };
-        if let Some(direction) = beyond {
-            let end = if direction < 0.0 { points[0].0 } else { points[last].0 };
-            for k in 1..=2 {
-                let z = (end + f64::from(k) * direction).clamp(near, far);
-                points.push((z, self.measure_at(z, fine_spp, seed, Detail::Fine)?));
-            }
+        while points.len() < FINE_RENDERS {
+            let best = peak_index(&points);
+            let z = if best < 2 && points[0].0 - dof >= near {
+                points[0].0 - dof
+            } else if best + 2 >= points.len() && points[points.len() - 1].0 + dof <= far {
+                points[points.len() - 1].0 + dof
+            } else {
+                break;
+            };
+            let score = self.measure_at(z, fine_spp, seed, Detail::Fine)?;
+            let at = points.partition_point(|p| p.0 < z);
+            points.insert(at, (z, score));
         }
+        // The least-squares log-parabola through the best and two on each side.
         let peak = points[peak_index(&points)].0;
-        Ok(log_parabola_peak(&points, peak, 2.5 * dof))
+        Ok(log_parabola_peak(&points, peak, 2.01 * dof))
     }
 
     /// Camera rays through `k` × `k` points of the patch: what each hits, in

@@ -175,8 +175,8 @@ fn write_png(tmp: &Path, image: &Image, exposure: f32) -> Result<()> {
 
 fn write_exr(tmp: &Path, image: &Image) -> Result<()> {
     use exr::prelude::{
-        AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Layer, LayerAttributes, SmallVec, Text,
-        WritableImage,
+        AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Layer, LayerAttributes, LineOrder, SmallVec,
+        Text, WritableImage,
     };
     let n = image.width as usize * image.height as usize;
     let channel = |c: usize| (0..n).map(|i| image.rgb[3 * i + c]).collect::<Vec<f32>>();
@@ -195,7 +195,12 @@ fn write_exr(tmp: &Path, image: &Image) -> Result<()> {
     let layer = Layer::new(
         (image.width as usize, image.height as usize),
         attributes,
-        Encoding::FAST_LOSSLESS,
+        // Blocks in increasing order: exr compresses them in parallel, and in
+        // the order they finish the file's bytes would differ from run to run.
+        Encoding {
+            line_order: LineOrder::Increasing,
+            ..Encoding::FAST_LOSSLESS
+        },
         AnyChannels::sort(list),
     );
     exr::image::Image::from_layer(layer)
