@@ -1064,11 +1064,11 @@ impl Camera {
             )));
         }
         Ok(Camera::new(CameraSpec::ThinLens {
-                fov_deg,
-                aperture_radius,
-                focus_distance,
-                aperture: parse_aperture(aperture)?.unwrap_or(ApertureShape::Circle),
-            }))
+            fov_deg,
+            aperture_radius,
+            focus_distance,
+            aperture: parse_aperture(aperture)?.unwrap_or(ApertureShape::Circle),
+        }))
     }
 
     /// A real lens (a `Lens` or a built-in name; default: the scene file's,
@@ -1093,14 +1093,14 @@ impl Camera {
             return Err(value_error("give focus_distance or sensor_mm, not both"));
         }
         Ok(Camera::new(CameraSpec::Realistic {
-                lens: lens.map(Box::new),
-                focus_distance,
-                sensor_mm,
-                sensor_width_mm,
-                f_number,
-                aperture: parse_aperture(aperture)?,
-                scene_unit_m,
-            }))
+            lens: lens.map(Box::new),
+            focus_distance,
+            sensor_mm,
+            sensor_width_mm,
+            f_number,
+            aperture: parse_aperture(aperture)?,
+            scene_unit_m,
+        }))
     }
 }
 

@@ -235,7 +235,10 @@ fn large_exrs_are_byte_identical_across_writes() {
             std::fs::read(&path).unwrap()
         })
         .collect();
-    assert!(bytes.iter().all(|b| *b == bytes[0]), "the EXR's bytes changed between writes");
+    assert!(
+        bytes.iter().all(|b| *b == bytes[0]),
+        "the EXR's bytes changed between writes"
+    );
     assert_eq!(read_exr(&dir.path().join("0.exr")).unwrap().rgb, image.rgb);
 }
 
