@@ -52,7 +52,7 @@ class _SceneRef:
 
     key: str
     builtin: str | None = None
-    mesh_triangles: int = 0
+    mesh_triangles: int | None = None  # None: Scene.builtin's default
     path: str | None = None
 
 
@@ -75,7 +75,8 @@ def _scene_ref(scene: Scene | str | os.PathLike[str]) -> _SceneRef:
             name, triangles = args
             return _SceneRef(key=f"builtin:{name}:{triangles}", builtin=name, mesh_triangles=triangles)
     if isinstance(scene, str) and scene in builtin_scenes():
-        return _scene_ref(Scene.builtin(scene))
+        # By name: the worker makes it (cornell-mesh has a million triangles to build).
+        return _SceneRef(key=f"builtin:{scene}", builtin=scene)
     if isinstance(scene, (str, os.PathLike)):
         path = os.path.abspath(os.fspath(scene))
         if not os.path.isfile(path):
@@ -100,7 +101,11 @@ def _worker_scene(ref: _SceneRef) -> Scene:
             _scenes.move_to_end(ref.key)
             return scene
         if ref.builtin is not None:
-            scene = Scene.builtin(ref.builtin, ref.mesh_triangles)
+            scene = (
+                Scene.builtin(ref.builtin)
+                if ref.mesh_triangles is None
+                else Scene.builtin(ref.builtin, ref.mesh_triangles)
+            )
         else:
             assert ref.path is not None
             here = f"sha256:{_file_sha256(ref.path)}"
@@ -168,10 +173,8 @@ def _render_tile(
     return result
 
 
-def _image_size(ref: _SceneRef, resolution: tuple[int, int] | None) -> tuple[int, int]:
-    """The image size of a job: ``resolution``, else the scene file's, else 640 × 480."""
-    if resolution is not None:
-        return resolution
+def _image_size(ref: _SceneRef) -> tuple[int, int]:
+    """The image size of a job that gives none: the scene file's, else 640 × 480."""
     return _worker_scene(ref).resolution or (640, 480)
 
 
@@ -235,12 +238,16 @@ def map_renders(
         prepared.append((_scene_ref(job["scene"]), job.get("camera"), options))
 
     # Image sizes: the jobs', else the scene files' (asked of a worker, which keeps the scene).
-    sizes = [client.submit(_image_size, ref, options.get("resolution"), pure=False) for ref, _, options in prepared]
+    asked = {
+        number: client.submit(_image_size, ref, pure=False)
+        for number, (ref, _, options) in enumerate(prepared)
+        if options.get("resolution") is None
+    }
     run = uuid.uuid4().hex[:8]
     futures = {}
     outputs: list[Image] = []
-    for number, ((ref, camera, options), size) in enumerate(zip(prepared, sizes, strict=True)):
-        width, height = size.result()
+    for number, (ref, camera, options) in enumerate(prepared):
+        width, height = asked[number].result() if number in asked else options["resolution"]
         options["resolution"] = (width, height)
         rgb = np.zeros((height, width, 3), np.float32)
         want_depth = bool(options.get("aovs"))

@@ -574,21 +574,25 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
             (Box::new(camera), format!("{lens_settings:?}"))
         }
     };
-    let fingerprint = scene_hash
-        .map(|hash| fingerprint(hash, &scene_name, &settings, &camera_description, &aperture))
-        .unwrap_or_default();
-    let start = args
-        .resume
-        .as_deref()
-        .map(|p| resume_state(p, &fingerprint))
-        .transpose()?;
-    if let Some(state) = &start {
-        eprintln!(
-            "resuming {} from {} samples per pixel",
-            args.resume.as_deref().unwrap_or(Path::new("")).display(),
-            state.spp_min()
-        );
-    }
+    // The checkpoint file and this render's fingerprint, when checkpointing.
+    let checkpointing: Option<(PathBuf, String)> = checkpoint_path.zip(scene_hash).map(|(path, hash)| {
+        (
+            path,
+            fingerprint(hash, &scene_name, &settings, &camera_description, &aperture),
+        )
+    });
+    let start = match (&args.resume, &checkpointing) {
+        (Some(resume), Some((_, fingerprint))) => {
+            let state = resume_state(resume, fingerprint)?;
+            eprintln!(
+                "resuming {} from {} samples per pixel",
+                resume.display(),
+                state.spp_min()
+            );
+            Some(state)
+        }
+        _ => None,
+    };
 
     let cancel = Arc::new(AtomicBool::new(false));
     {
@@ -602,14 +606,17 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
     }
     let total = u64::from(settings.width) * u64::from(settings.height) * u64::from(settings.spp);
     let progress = Progress::new(&format!("render {scene_name}"), total);
-    let mut save = |state: &Accumulation| match &checkpoint_path {
-        Some(path) => write_checkpoint(path, &fingerprint, state),
-        None => Ok(()),
+    let mut save;
+    let checkpoints = match &checkpointing {
+        Some((path, fingerprint)) => {
+            save = |state: &Accumulation| write_checkpoint(path, fingerprint, state);
+            Some(Checkpoints {
+                every: args.checkpoint_every.unwrap_or(Duration::from_secs(60)),
+                save: &mut save,
+            })
+        }
+        None => None,
     };
-    let checkpoints = checkpoint_path.as_ref().map(|_| Checkpoints {
-        every: args.checkpoint_every.unwrap_or(Duration::from_secs(60)),
-        save: &mut save,
-    });
     let output = render_from(
         &compiled,
         camera.as_ref(),
@@ -630,9 +637,10 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
             args.out.display(),
             output.image.spp_min,
             settings.spp,
-            checkpoint_path
-                .as_ref()
-                .map_or(String::new(), |p| format!("; continue with --resume {}", p.display()))
+            checkpointing.as_ref().map_or(String::new(), |(p, _)| format!(
+                "; continue with --resume {}",
+                p.display()
+            ))
         );
     }
     if s.invalid_samples > 0 {

@@ -255,6 +255,19 @@ struct Tile {
     depth: Vec<f32>,
 }
 
+impl Tile {
+    /// Each of its pixels as (index in the tile, index in `region`), row by row.
+    fn pixels_in(&self, region: PixelRect) -> impl Iterator<Item = (usize, usize)> + '_ {
+        (0..self.height).flat_map(move |ty| {
+            (0..self.width).map(move |tx| {
+                let o =
+                    (self.y0 + ty - region.y0) as usize * region.width as usize + (self.x0 + tx - region.x0) as usize;
+                ((ty * self.width + tx) as usize, o)
+            })
+        })
+    }
+}
+
 /// Renders `scene` through `camera`. `progress(done, total)` is called with
 /// sample counts as tiles finish; setting `cancel` stops the render within
 /// one tile per thread and returns what was accumulated, every pixel the
@@ -344,18 +357,13 @@ fn tiles(settings: &RenderSettings, start: Option<Accumulation>) -> Result<Vec<T
                 depth: vec![f32::INFINITY; n],
             };
             if let Some(a) = &start {
-                let mut counts = Vec::with_capacity(n);
-                for ty in 0..height {
-                    for tx in 0..width {
-                        let i = (ty * width + tx) as usize;
-                        let o = (y0 + ty - region.y0) as usize * region.width as usize + (x0 + tx - region.x0) as usize;
-                        tile.sum[i] = a.sum[o];
-                        tile.depth[i] = a.depth[o];
-                        counts.push(a.count[o]);
-                    }
+                let pixels: Vec<(usize, usize)> = tile.pixels_in(region).collect();
+                tile.spp_done = a.count[pixels[0].1];
+                for &(i, o) in &pixels {
+                    tile.sum[i] = a.sum[o];
+                    tile.depth[i] = a.depth[o];
                 }
-                tile.spp_done = counts[0];
-                if counts.iter().any(|&c| c != tile.spp_done) {
+                if pixels.iter().any(|&(_, o)| a.count[o] != tile.spp_done) {
                     return Err(Error::InvalidArgument(format!(
                         "the saved render's pixels in the tile at ({x0}, {y0}) have different sample counts; \
                          it was not made with {ts}-pixel tiles"
@@ -378,15 +386,10 @@ fn accumulation(tiles: &[Tile], region: PixelRect) -> Accumulation {
         depth: vec![f32::INFINITY; n],
     };
     for tile in tiles {
-        for ty in 0..tile.height {
-            for tx in 0..tile.width {
-                let i = (ty * tile.width + tx) as usize;
-                let o =
-                    (tile.y0 + ty - region.y0) as usize * region.width as usize + (tile.x0 + tx - region.x0) as usize;
-                a.sum[o] = tile.sum[i];
-                a.count[o] = tile.spp_done;
-                a.depth[o] = tile.depth[i];
-            }
+        for (i, o) in tile.pixels_in(region) {
+            a.sum[o] = tile.sum[i];
+            a.count[o] = tile.spp_done;
+            a.depth[o] = tile.depth[i];
         }
     }
     a
@@ -529,7 +532,7 @@ fn render_in_pool(
         out.copy_from_slice(&mean.as_vec3().to_array());
     }
     let spp_min = state.spp_min();
-    let samples: u64 = state.count.iter().map(|&c| u64::from(c)).sum();
+    let samples = done.into_inner();
     Ok(RenderOutput {
         image: Image {
             width: region.width,

@@ -16,7 +16,7 @@
 //! depends on except the sample count, so a checkpoint is never continued
 //! with another scene, camera or seed.
 
-use std::io::{BufWriter, Read, Write};
+use std::io::{Read, Write};
 use std::path::Path;
 
 use glam::DVec3;
@@ -31,9 +31,8 @@ const VERSION: u32 = 1;
 /// Writes `state` and its `fingerprint` to `path` atomically (temporary file + rename).
 pub fn write_checkpoint(path: &Path, fingerprint: &str, state: &Accumulation) -> Result<()> {
     write_atomically(path, |tmp| {
-        let file = std::fs::File::create(tmp).map_err(|e| io_error(path, e))?;
-        let mut out = BufWriter::new(file);
-        let mut bytes = Vec::with_capacity(64 + fingerprint.len());
+        let n = state.sum.len();
+        let mut bytes = Vec::with_capacity(48 + fingerprint.len() + 32 * n);
         bytes.extend_from_slice(MAGIC);
         bytes.extend_from_slice(&VERSION.to_le_bytes());
         bytes.extend_from_slice(&(fingerprint.len() as u32).to_le_bytes());
@@ -53,8 +52,8 @@ pub fn write_checkpoint(path: &Path, fingerprint: &str, state: &Accumulation) ->
         for d in &state.depth {
             bytes.extend_from_slice(&d.to_le_bytes());
         }
-        out.write_all(&bytes).map_err(|e| io_error(path, e))?;
-        let file = out.into_inner().map_err(|e| io_error(path, e.into_error()))?;
+        let mut file = std::fs::File::create(tmp).map_err(|e| io_error(path, e))?;
+        file.write_all(&bytes).map_err(|e| io_error(path, e))?;
         // On disk before the rename, so a crash cannot leave an empty checkpoint.
         file.sync_all().map_err(|e| io_error(path, e))
     })
