@@ -12,7 +12,10 @@ here once for each renderer from the same numbers (crates/lenspath/src/builtin.r
 seen through the same pinhole camera; or, with `--scene cornell-dragon`, the same
 box with the Stanford dragon (../shared/meshes/dragon_100k.ply, 100 k triangles,
 1.2 units long) on its floor instead of the spheres. Mitsuba renders it with its `path`
-integrator in `scalar_rgb` and, when it runs here, `llvm_ad_rgb`; lenspath on all
+integrator in `scalar_rgb` and, when it runs here, `llvm_ad_rgb` (Dr.Jit's LLVM JIT
+needs libLLVM 16 or newer: on Debian 12, `apt-get install libllvm19`; the newest
+libLLVM found is handed to it through DRJIT_LIBLLVM_PATH unless that is set, and
+with 14 or 15 it aborts, "cannot select fminimum"); lenspath on all
 threads with one light sample. Mitsuba's `max_depth` counts the camera segment,
 so it is lenspath's plus one.
 
@@ -30,6 +33,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import re
 import subprocess
 import sys
 import tempfile
@@ -197,6 +202,16 @@ def render_mitsuba(variant: str, job: Job):
     return image[:, :, :3], time.perf_counter() - started
 
 
+def newest_libllvm() -> str | None:
+    """The newest libLLVM shared library in the usual Debian places, if any."""
+    found = []
+    for folder in [Path("/usr/lib/x86_64-linux-gnu"), *Path("/usr/lib").glob("llvm-*/lib")]:
+        for lib in folder.glob("libLLVM-*.so"):
+            if match := re.fullmatch(r"libLLVM-(\d+)\.so", lib.name):
+                found.append((int(match.group(1)), str(lib)))
+    return max(found)[1] if found else None
+
+
 def variant_runs(variant: str) -> bool:
     """Whether a Mitsuba variant renders here: tried in a child process, since a JIT
     backend that cannot compile (an old libLLVM) aborts the process."""
@@ -228,10 +243,12 @@ def main() -> int:
     args = parser.parse_args()
     in_venv(["numpy", "mitsuba"], install_lenspath=True)
     variants = ["scalar_rgb"]
+    if "DRJIT_LIBLLVM_PATH" not in os.environ and (libllvm := newest_libllvm()):
+        os.environ["DRJIT_LIBLLVM_PATH"] = libllvm
     if variant_runs("llvm_ad_rgb"):
         variants.append("llvm_ad_rgb")
     else:
-        print("llvm_ad_rgb does not run here (it needs a newer libLLVM); scalar_rgb only", file=sys.stderr)
+        print("llvm_ad_rgb does not run here (it needs libLLVM 16 or newer); scalar_rgb only", file=sys.stderr)
     extra = [(*dragon(), SPHERE_WHITE)] if args.scene == "cornell-dragon" else []
     job = Job(args.scene, extra, *args.res, args.spp, args.max_depth)
     print(
