@@ -48,20 +48,28 @@ def lenspath_bench(binary: Path, mesh_args: list[str], rays: int, threads: int |
     return json.loads(subprocess.run(command, check=True, capture_output=True, text=True).stdout)
 
 
-def embree_measure(vertices, faces, ray_sets: dict, rounds: int) -> dict:
+def embree_scene(device, vertices, faces):
+    """An Embree scene of the triangles on `device`, built."""
     import numpy as np
-    from embreex import rtcore, rtcore_scene
+    from embreex import rtcore_scene
     from embreex.mesh_construction import TriangleMesh
 
-    one = (np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32))
+    scene = rtcore_scene.EmbreeScene(device)
+    TriangleMesh(scene, vertices, faces)
+    # embreex commits (builds) the scene on its first query.
+    scene.run(np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32))
+    return scene
+
+
+def embree_measure(vertices, faces, ray_sets: dict, rounds: int) -> dict:
+    from embreex import rtcore
+
     # One device for every build, made outside the timing (it starts Embree's thread pool).
     device = rtcore.EmbreeDevice()
     builds = []
     for _ in range(rounds):
         started = time.perf_counter()
-        scene = rtcore_scene.EmbreeScene(device)
-        TriangleMesh(scene, vertices, faces)
-        scene.run(*one)  # embreex commits (builds) the scene on its first query
+        scene = embree_scene(device, vertices, faces)
         builds.append(time.perf_counter() - started)
     result = {"build_ms": 1e3 * min(builds)}
     for name, (origins, directions, _) in ray_sets.items():
@@ -78,13 +86,9 @@ def embree_measure(vertices, faces, ray_sets: dict, rounds: int) -> dict:
 
 def _embree_share(vertices, faces, origins, directions, barrier, results) -> None:
     """One process's share of an all-cores measurement: build, wait for the others, trace."""
-    import numpy as np
-    from embreex import rtcore, rtcore_scene
-    from embreex.mesh_construction import TriangleMesh
+    from embreex import rtcore
 
-    scene = rtcore_scene.EmbreeScene(rtcore.EmbreeDevice())
-    TriangleMesh(scene, vertices, faces)
-    scene.run(np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32))
+    scene = embree_scene(rtcore.EmbreeDevice(), vertices, faces)
     barrier.wait()
     started = time.perf_counter()
     scene.run(origins, directions, query="INTERSECT")
