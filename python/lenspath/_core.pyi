@@ -338,8 +338,11 @@ class AutofocusResult:
     def evaluations(self) -> npt.NDArray[np.float64]:
         """Every patch render as a (sensor_mm, score) row, in the order rendered."""
     @property
+    def phase_readings(self) -> int:
+        """Phase-detect readings (four half-aperture patch renders each)."""
+    @property
     def camera_rays(self) -> int:
-        """Camera rays traced (patch samples and range-finder probes)."""
+        """Camera rays traced (patch samples, half-aperture samples and range-finder probes)."""
     @property
     def seconds(self) -> float:
         """Wall time."""
@@ -365,7 +368,7 @@ def autofocus(
     threads: int | None = None,
 ) -> AutofocusResult:
     """Focuses a realistic camera on ``patch`` (x, y, width, height in fractions of the image)
-    by rendering it (``strategy``: sweep, early-exit, fast, depth, depth-refine). Raises
+    by rendering it (``strategy``: sweep, early-exit, fast, rangefinder, depth). Raises
     ValueError for a bad patch, metric, strategy or a camera that is not realistic."""
 
 def lens_blur(

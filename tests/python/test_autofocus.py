@@ -15,7 +15,7 @@ import lenspath
 NEAR_SPHERE = (0.52, 0.70, 0.10, 0.12)
 
 
-@pytest.mark.parametrize("strategy", ["fast", "early-exit", "depth", "depth-refine"])
+@pytest.mark.parametrize("strategy", ["fast", "early-exit", "rangefinder", "depth"])
 def test_same_settings_give_the_clis_answer(cli, strategy: str) -> None:
     args = ["--scene", "cornell-spheres", "--patch", "0.52,0.70,0.10,0.12", "--res", "160x120", "--spp", "4"]
     out = subprocess.run(
@@ -32,12 +32,13 @@ def test_same_settings_give_the_clis_answer(cli, strategy: str) -> None:
     assert ours.focus_distance == theirs["focus_distance"]
     assert ours.camera_rays == theirs["camera_rays"]
     assert ours.evaluations.shape == (theirs["evaluations"], 2)
+    assert ours.phase_readings == theirs["phase_readings"]
     assert ours.depth_of_focus_mm == theirs["depth_of_focus_mm"]
 
 
 def test_the_focused_camera_renders_the_patch_sharper_than_either_side_of_it() -> None:
     camera = lenspath.Camera.realistic("dgauss50")
-    result = lenspath.autofocus("cornell-spheres", NEAR_SPHERE, camera, strategy="depth-refine", resolution=(320, 240))
+    result = lenspath.autofocus("cornell-spheres", NEAR_SPHERE, camera, strategy="depth", resolution=(320, 240))
     assert result.focus_distance is not None
     assert "sensor_mm" in repr(result)
     rows, cols = slice(168, 197), slice(166, 198)  # the patch in pixels at 320 x 240

@@ -40,7 +40,7 @@ pub struct AutofocusArgs {
     /// Focus measure: variance, normalized-variance, sml, tenengrad, brenner, laplacian-energy, vollath.
     #[arg(long, default_value = "tenengrad")]
     metric: String,
-    /// Search: sweep, early-exit, fast, depth (range finder) or depth-refine (range finder, then contrast).
+    /// Search: sweep, early-exit, fast, rangefinder (probe rays and the lens model) or depth (range finder, then phase detection).
     #[arg(long, default_value = "fast")]
     strategy: String,
     /// early-exit: stop after this many steps without a new best.
@@ -126,10 +126,11 @@ fn summary_line(r: &AutofocusResult, metric: &str, scene_unit_m: f64) -> String 
         None => "focused beyond infinity".to_string(),
     };
     format!(
-        "autofocus ({}, {metric}): sensor {:.4} mm behind the stop, {distance}; {} patch renders, {:.2} M camera rays, {:.2} s",
+        "autofocus ({}, {metric}): sensor {:.4} mm behind the stop, {distance}; {} patch renders, {} phase-detect readings, {:.2} M camera rays, {:.2} s",
         r.strategy,
         r.sensor_z_mm,
         r.evaluations.len(),
+        r.phase_readings,
         r.camera_rays as f64 / 1e6,
         r.seconds
     )
@@ -184,6 +185,7 @@ pub fn run(args: AutofocusArgs) -> Result<Outcome> {
             "metric": args.metric,
             "strategy": result.strategy,
             "evaluations": result.evaluations.len(),
+            "phase_readings": result.phase_readings,
             "camera_rays": result.camera_rays,
             "seconds": result.seconds,
             "depth_of_focus_mm": focuser.depth_of_focus_mm(result.sensor_z_mm),
@@ -436,6 +438,7 @@ fn evaluate(args: &AutofocusArgs, measure: FocusMeasure) -> Result<Outcome> {
                     "sensor_position_mm": r.sensor_z_mm,
                     "error_dof": (r.sensor_z_mm - truth.sensor_z_mm) / dof,
                     "evaluations": r.evaluations.len(),
+                    "phase_readings": r.phase_readings,
                     "camera_rays": r.camera_rays,
                     "seconds": r.seconds,
                 })).collect::<Vec<_>>(),
@@ -479,6 +482,9 @@ fn row_text(id: &str, truth: &GroundTruth, dof: f64, results: &[AutofocusResult]
             (r.sensor_z_mm - truth.sensor_z_mm) / dof,
             r.evaluations.len()
         );
+        if r.phase_readings > 0 {
+            line += &format!(" + {} phase", r.phase_readings);
+        }
     }
     line
 }

@@ -1323,7 +1323,9 @@ struct AutofocusResult {
     strategy: String,
     /// Every patch render: (sensor_mm, score) rows, in the order rendered.
     evaluations: Py<PyArray2<f64>>,
-    /// Camera rays traced (patch samples and probe rays).
+    /// Phase-detect readings (four half-aperture patch renders each).
+    phase_readings: usize,
+    /// Camera rays traced (patch samples, half-aperture samples and probe rays).
     camera_rays: u64,
     /// Wall time, seconds.
     seconds: f64,
@@ -1428,6 +1430,7 @@ fn autofocus(
         metric: metric.to_string(),
         strategy: result.strategy.to_string(),
         evaluations,
+        phase_readings: result.phase_readings,
         camera_rays: result.camera_rays,
         seconds: result.seconds,
         depth_of_focus_mm,

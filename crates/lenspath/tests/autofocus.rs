@@ -21,6 +21,15 @@ const CENTRE: PixelRect = PixelRect {
     height: 24,
 };
 
+/// The centre 48 × 48 pixels: room for the coarse band-pass (σ up to 8
+/// pixels) that phase detection correlates at.
+const CENTRE_WIDE: PixelRect = PixelRect {
+    x0: 136,
+    y0: 96,
+    width: 48,
+    height: 48,
+};
+
 fn focuser(scene: &CompiledScene, f_number: Option<f64>, patch: PixelRect) -> Focuser<'_> {
     let pose = CameraPose::look_at(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y);
     let (width, height) = (320, 240);
@@ -65,8 +74,8 @@ fn every_strategy_focuses_a_plane_at_its_conjugate() {
         Strategy::Sweep,
         Strategy::EarlyExit { patience: 12 },
         Strategy::Fast,
-        Strategy::Depth { refine: true },
-        Strategy::Depth { refine: false },
+        Strategy::Rangefinder,
+        Strategy::Depth,
     ] {
         let r = f.run(strategy).unwrap();
         let error = (r.sensor_z_mm - conjugate) / dof;
@@ -79,15 +88,20 @@ fn every_strategy_focuses_a_plane_at_its_conjugate() {
                 r.camera_rays,
                 sweep.camera_rays
             ),
-            // 64 probe rays, and at most 4 patch renders of 24 × 24 pixels × 4 samples to refine.
-            Strategy::Depth { refine } => {
-                let renders = r.evaluations.len() as u64;
-                assert!(renders <= if refine { 4 } else { 0 }, "depth: {renders} renders");
+            // 64 probe rays; for depth, two phase-detect readings of four
+            // half-aperture renders of 24 × 24 pixels at half the 4 samples.
+            Strategy::Rangefinder | Strategy::Depth => {
+                let phase_rays = if strategy == Strategy::Depth {
+                    2 * 4 * 24 * 24 * 2
+                } else {
+                    0
+                };
                 assert!(
-                    r.camera_rays <= 64 + renders * 24 * 24 * 4,
-                    "depth: {} rays",
-                    r.camera_rays
+                    r.evaluations.is_empty(),
+                    "{strategy:?}: {} renders",
+                    r.evaluations.len()
                 );
+                assert!(r.camera_rays <= 64 + phase_rays, "{strategy:?}: {} rays", r.camera_rays);
             }
             _ => {}
         }
@@ -149,5 +163,35 @@ fn range_focus_predicts_the_contrast_peak_off_axis() {
     assert!(
         predicted.abs() < conjugate.abs(),
         "{predicted:+.2} vs conjugate {conjugate:+.2}"
+    );
+}
+
+/// Phase detection focuses on what carries the contrast, not on what most of
+/// the patch sees: a plain dark board 1 m away covers a quarter of the patch,
+/// its edge against a plain bright wall 2 m away. The range finder ranges on
+/// the wall; the only detail is the board's edge, sharp when the board is in
+/// focus (the glass and gold spheres' silhouettes in glass-and-gold are this case).
+#[test]
+fn depth_focuses_on_the_edge_the_contrast_comes_from() {
+    let mut scene = checker_scene();
+    add_checkerboard(&mut scene, (-3.0, 3.0), (-2.0, 2.0), 2.0, 10.0);
+    add_checkerboard(&mut scene, (-0.3, -0.027), (-0.3, 0.3), 1.0, 10.0);
+    scene.meshes.last_mut().unwrap().material = 1;
+    let scene = scene.compile(&BvhSettings::default()).unwrap();
+    let mut f = focuser(&scene, None, CENTRE_WIDE);
+    let near = f.sensor_z_for_distance(1.0).unwrap();
+    let far = f.sensor_z_for_distance(2.0).unwrap();
+    let dof = f.depth_of_focus_mm(near);
+    let ranged = f.range_focus().unwrap().unwrap().conjugate_z_mm;
+    assert!(
+        (ranged - far).abs() < 0.5 * dof,
+        "ranged at {ranged} mm, the wall at {far} mm"
+    );
+    let r = f.run(Strategy::Depth).unwrap();
+    let error = (r.sensor_z_mm - near) / dof;
+    assert!(
+        error.abs() <= 1.0,
+        "depth at {:.4} mm, {error:+.2} DoF from the board's conjugate {near:.4} (the wall's {far:.4})",
+        r.sensor_z_mm
     );
 }

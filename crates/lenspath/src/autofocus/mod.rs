@@ -5,6 +5,7 @@
 //! checked against ground truth.
 
 pub mod measures;
+pub mod phase;
 pub mod plot;
 pub mod search;
 

@@ -14,7 +14,10 @@ use std::time::Instant;
 use glam::{DVec3, Vec2, Vec3};
 
 use super::measures::{FocusMeasure, Patch};
-use crate::camera::{Camera, CameraPose, CameraSample, LensFocus, RealisticCamera, RealisticCameraSettings};
+use super::phase::{disparity, PhaseCalibration, Split};
+use crate::camera::{
+    ApertureShape, Camera, CameraPose, CameraSample, LensFocus, RealisticCamera, RealisticCameraSettings,
+};
 use crate::error::{Error, Result};
 use crate::film::Filter;
 use crate::integrator::PathSettings;
@@ -75,6 +78,22 @@ const FINE_RENDERS: usize = 9;
 /// patches still disagreed by a DoF, so the truth was itself noisy.
 pub const TRUTH_MAX_SPP_FACTOR: u32 = 32;
 
+/// Phase-detect readings of the `depth` search (and of `fast`'s start).
+const PHASE_READINGS: usize = 2;
+
+/// How far, pixels either way, a phase-detect reading looks for the shift
+/// between the halves' images: about 7 DoF at f/2 (a DoF moves them 0.4
+/// pixels apart). The range finder starts it within a few DoF, and a wider
+/// search lets a noise-made peak far out win on dim patches.
+const PHASE_MAX_SHIFT_PX: usize = 3;
+
+/// One phase-detect reading: where it puts the best focus, and its weight
+/// (inverse variance, up to a factor).
+struct PhaseReading {
+    sensor_z_mm: f64,
+    weight: f64,
+}
+
 /// Real-ray height for converting between sensor positions and distances (as the camera focuses).
 const FOCUS_RAY_HEIGHT_MM: f64 = 0.1;
 
@@ -88,17 +107,18 @@ pub enum Strategy {
         /// Steps without improvement before stopping.
         patience: usize,
     },
-    /// Coarse-to-fine contrast search: a coarse low-sample scan of the whole
-    /// range, the best peaks re-scored, a least-squares fit of the log-score
-    /// over five finer renders around the winner.
+    /// Hybrid search: a start from the range finder and phase detection (or,
+    /// with nothing to range on, a coarse contrast scan of the whole range),
+    /// then a least-squares fit of the contrast peak over fine renders around it.
     Fast,
-    /// Rangefinder: probe rays find the patch's dominant surface, the lens's
-    /// through-focus modulation gives its best-contrast sensor position;
-    /// `refine` adds a 3-point contrast fit.
-    Depth {
-        /// Refine with three patch renders around the depth estimate.
-        refine: bool,
-    },
+    /// Range finder: probe rays find the patch's dominant surface, the lens's
+    /// through-focus modulation gives its best-contrast sensor position. No
+    /// patch renders.
+    Rangefinder,
+    /// Range finder, then phase detection: the patch rendered through each
+    /// half of the stop, the shift between the halves' images turned into a
+    /// sensor position by the lens's calibration, twice.
+    Depth,
 }
 
 /// Every strategy with its command-line name.
@@ -106,8 +126,8 @@ pub const STRATEGIES: [(&str, Strategy); 5] = [
     ("sweep", Strategy::Sweep),
     ("early-exit", Strategy::EarlyExit { patience: 12 }),
     ("fast", Strategy::Fast),
-    ("depth", Strategy::Depth { refine: false }),
-    ("depth-refine", Strategy::Depth { refine: true }),
+    ("rangefinder", Strategy::Rangefinder),
+    ("depth", Strategy::Depth),
 ];
 
 impl Strategy {
@@ -129,8 +149,8 @@ impl Strategy {
             Strategy::Sweep => "sweep",
             Strategy::EarlyExit { .. } => "early-exit",
             Strategy::Fast => "fast",
-            Strategy::Depth { refine: false } => "depth",
-            Strategy::Depth { refine: true } => "depth-refine",
+            Strategy::Rangefinder => "rangefinder",
+            Strategy::Depth => "depth",
         }
     }
 }
@@ -184,7 +204,9 @@ pub struct AutofocusResult {
     pub focus_distance: Option<f64>,
     /// Every patch render, in order.
     pub evaluations: Vec<Evaluation>,
-    /// Camera rays generated: patch samples plus depth probes.
+    /// Phase-detect readings (four half-aperture patch renders at half the samples each).
+    pub phase_readings: usize,
+    /// Camera rays generated: patch samples, half-aperture samples and range-finder probes.
     pub camera_rays: u64,
     /// Wall time.
     pub seconds: f64,
@@ -228,6 +250,7 @@ pub struct Focuser<'a> {
     exit_pupil: (f64, f64),
     mm_per_scene: f64,
     evaluations: Vec<Evaluation>,
+    phase_readings: usize,
     camera_rays: u64,
 }
 
@@ -271,6 +294,7 @@ impl<'a> Focuser<'a> {
             system,
             settings,
             evaluations: Vec::new(),
+            phase_readings: 0,
             camera_rays: 0,
         })
     }
@@ -318,34 +342,14 @@ impl<'a> Focuser<'a> {
     /// for sharpness; with 1 sample, one render. Each render is band-passed
     /// first, at the scale of `detail`.
     pub fn measure_at(&mut self, z: f64, spp: u32, seed: u32, detail: Detail) -> Result<f64> {
-        let s = &self.settings;
-        let camera = RealisticCamera::for_region(self.pose, s.width, s.height, &self.camera_settings(z), s.patch)?;
+        let camera = self.patch_camera(z, self.settings.camera.aperture.clone())?;
         let halves = if spp >= 2 { [spp / 2, spp - spp / 2] } else { [spp, 0] };
         let mut images = Vec::new();
         for (k, &half) in halves.iter().enumerate().filter(|(_, &h)| h > 0) {
-            let render_settings = RenderSettings {
-                width: s.width,
-                height: s.height,
-                spp: half,
-                path: s.path,
-                // Seeds far apart, so the halves' sample sequences are independent.
-                seed: seed.wrapping_add(k as u32 * 0x9E37_79B9),
-                filter: Filter::Box,
-                threads: s.threads,
-                tile_size: 16,
-                crop: Some(s.patch),
-                depth: false,
-            };
-            let output = render(
-                self.scene,
-                &camera,
-                &render_settings,
-                &|_, _| {},
-                &AtomicBool::new(false),
-            )?;
-            self.camera_rays += output.stats.samples;
-            images.push(detail.band_pass(&output.image.rgb, output.image.width as usize));
+            // Seeds far apart, so the halves' sample sequences are independent.
+            images.push(self.render_patch(&camera, half, seed.wrapping_add(k as u32 * 0x9E37_79B9), detail)?);
         }
+        let s = &self.settings;
         let (w, h) = (s.patch.width as usize, s.patch.height as usize);
         let patch = |i: usize| Patch::new(w, h, &images[i]);
         let score = if images.len() == 2 {
@@ -362,22 +366,63 @@ impl<'a> Focuser<'a> {
         Ok(score)
     }
 
+    /// The camera for patch renders with the sensor at `z`, its stop opening shaped as `aperture`.
+    fn patch_camera(&self, z: f64, aperture: ApertureShape) -> Result<RealisticCamera> {
+        let s = &self.settings;
+        let settings = RealisticCameraSettings {
+            aperture,
+            ..self.camera_settings(z)
+        };
+        RealisticCamera::for_region(self.pose, s.width, s.height, &settings, s.patch)
+    }
+
+    /// The patch rendered through `camera` at `spp` samples with `seed`,
+    /// band-passed at the scale of `detail`; its samples are counted as
+    /// camera rays of the running strategy.
+    fn render_patch(&mut self, camera: &RealisticCamera, spp: u32, seed: u32, detail: Detail) -> Result<Vec<f32>> {
+        let s = &self.settings;
+        let render_settings = RenderSettings {
+            width: s.width,
+            height: s.height,
+            spp,
+            path: s.path,
+            seed,
+            filter: Filter::Box,
+            threads: s.threads,
+            tile_size: 16,
+            crop: Some(s.patch),
+            depth: false,
+        };
+        let output = render(
+            self.scene,
+            camera,
+            &render_settings,
+            &|_, _| {},
+            &AtomicBool::new(false),
+        )?;
+        self.camera_rays += output.stats.samples;
+        Ok(detail.band_pass(&output.image.rgb, output.image.width as usize))
+    }
+
     /// Runs `strategy` and reports what it found and what it cost.
     pub fn run(&mut self, strategy: Strategy) -> Result<AutofocusResult> {
         let started = Instant::now();
         self.evaluations.clear();
+        self.phase_readings = 0;
         self.camera_rays = 0;
         let z = match strategy {
             Strategy::Sweep => self.sweep(None)?,
             Strategy::EarlyExit { patience } => self.sweep(Some(patience.max(1)))?,
             Strategy::Fast => self.fast()?,
-            Strategy::Depth { refine } => self.depth(refine)?,
+            Strategy::Rangefinder => self.rangefinder()?,
+            Strategy::Depth => self.depth()?,
         };
         Ok(AutofocusResult {
             strategy: strategy.name(),
             sensor_z_mm: z,
             focus_distance: self.focus_distance_at(z),
             evaluations: std::mem::take(&mut self.evaluations),
+            phase_readings: self.phase_readings,
             camera_rays: self.camera_rays,
             seconds: started.elapsed().as_secs_f64(),
         })
@@ -415,18 +460,28 @@ impl<'a> Focuser<'a> {
         Ok(best.1)
     }
 
-    /// Coarse-to-fine contrast search (docs/autofocus.md):
+    /// Hybrid search, as a camera with phase-detect pixels focuses
+    /// (docs/autofocus.md): a start from the range finder and phase detection
+    /// ([`Focuser::phase_focus`]), or, with nothing in the patch to range on,
+    /// from a coarse contrast scan ([`Focuser::coarse_peak`]); then the
+    /// contrast peak near it ([`Focuser::fine_peak`]), which is what the
+    /// search answers to.
+    fn fast(&mut self) -> Result<f64> {
+        let z0 = match self.phase_focus()? {
+            Some(z) => z,
+            None => self.coarse_peak()?,
+        };
+        self.fine_peak(z0)
+    }
+
+    /// The coarse stage of a contrast search from nothing:
     /// 1. a scan of the whole range in steps of about 6 DoF at half the
     ///    samples, scored at [`Detail::Coarse`], where a peak is several steps
     ///    wide and the noise weak;
     /// 2. its local maxima that reach half of the best (at most three)
     ///    re-scored at full samples, since a half-sample score can be lucky;
-    /// 3. the winner's peak from the log-parabola through it and its neighbours;
-    /// 4. five renders 1 DoF apart around it at 1.5× the samples, scored at
-    ///    [`Detail::Fine`] (two more beyond an end when the best is there), and
-    ///    the vertex of the least-squares log-parabola through them; fewer
-    ///    samples when that would pass [`FAST_BUDGET_OF_SWEEP`].
-    fn fast(&mut self) -> Result<f64> {
+    /// 3. the winner's peak from the log-parabola through it and its neighbours.
+    fn coarse_peak(&mut self) -> Result<f64> {
         let (spp, seed) = (self.settings.spp, self.settings.seed);
         let (near, far) = self.range_mm;
         let step = 6.0 * self.depth_of_focus_mm(near);
@@ -458,17 +513,34 @@ impl<'a> Focuser<'a> {
         }
         let i = winner.1;
         let around = &coarse[i.saturating_sub(1)..=(i + 1).min(n - 1)];
-        let z0 = log_parabola_peak(around, coarse[i].0, 1.01 * (far - near) / (n - 1) as f64);
+        Ok(log_parabola_peak(
+            around,
+            coarse[i].0,
+            1.01 * (far - near) / (n - 1) as f64,
+        ))
+    }
+
+    /// The fine stage of the contrast search: renders 1 DoF apart around
+    /// `z0` at 1.5× the samples, scored at [`Detail::Fine`], five and then
+    /// more beyond the best (at most [`FINE_RENDERS`]), and the vertex of the
+    /// least-squares log-parabola through them; fewer samples when that would
+    /// take the search past [`FAST_BUDGET_OF_SWEEP`].
+    fn fine_peak(&mut self, z0: f64) -> Result<f64> {
+        let (spp, seed) = (self.settings.spp, self.settings.seed);
+        let (near, far) = self.range_mm;
         // The fine stage: renders 1 DoF apart, starting with five around z0
         // (moved inside the range rather than clamped, so none repeats),
         // then one more at a time beyond the best while it has fewer than two
         // neighbours on a side, so the fit sees the peak from both sides;
         // common random numbers keep neighbouring scores' noise alike. Its
         // samples are 1.5× the scan's, fewer if its renders (at most
-        // FINE_RENDERS) would take the search past its budget.
-        let spent: u32 = self.evaluations.iter().map(|e| e.spp).sum();
+        // FINE_RENDERS) would take the search past its budget. What was spent
+        // is counted in camera rays (samples per patch pixel): the phase
+        // detection's half-aperture renders are not evaluations.
+        let patch_pixels = f64::from(self.settings.patch.width * self.settings.patch.height);
+        let spent = self.camera_rays as f64 / patch_pixels;
         let budget = FAST_BUDGET_OF_SWEEP * (self.steps(self.pitch_mm) as u32 * spp) as f64;
-        let affordable = ((budget - f64::from(spent)) / FINE_RENDERS as f64).floor().max(1.0) as u32;
+        let affordable = ((budget - spent) / FINE_RENDERS as f64).floor().max(1.0) as u32;
         let (fine_spp, dof) = ((spp + spp / 2).min(affordable), self.depth_of_focus_mm(z0));
         let first = (z0 - 2.0 * dof).clamp(near, (far - 4.0 * dof).max(near));
         let mut points: Vec<(f64, f64)> = Vec::new();
@@ -538,6 +610,12 @@ impl<'a> Focuser<'a> {
     /// modulation at their actual positions ([`Focuser::point_best_focus_z`]),
     /// and their median. `None` when no probe hits anything.
     pub fn range_focus(&mut self) -> Result<Option<RangeFocus>> {
+        Ok(self.range_probe()?.map(|(range, _)| range))
+    }
+
+    /// [`Focuser::range_focus`] and the camera-space point of the dominant
+    /// window's median probe.
+    fn range_probe(&mut self) -> Result<Option<(RangeFocus, Vec3)>> {
         let mut probes: Vec<(f64, Vec3)> = self
             .probe_points(8)?
             .into_iter()
@@ -566,11 +644,20 @@ impl<'a> Focuser<'a> {
             })
             .collect();
         best_focus.sort_by(f64::total_cmp);
-        Ok(Some(RangeFocus {
-            conjugate_z_mm: dominant[dominant.len() / 2].0,
+        let (conjugate_z_mm, point) = dominant[dominant.len() / 2];
+        let range = RangeFocus {
+            conjugate_z_mm,
             best_focus_z_mm: best_focus[best_focus.len() / 2],
             dominant_fraction: best_count as f64 / probes.len() as f64,
-        }))
+        };
+        Ok(Some((range, point)))
+    }
+
+    /// The camera-space point `p` (scene units from the sensor centre) in lens
+    /// coordinates (mm, from the stop) with the sensor `z` mm behind the stop.
+    fn lens_point(&self, p: Vec3, z: f64) -> DVec3 {
+        let mm = self.mm_per_scene;
+        DVec3::new(f64::from(p.x) * mm, f64::from(p.y) * mm, z - f64::from(p.z) * mm)
     }
 
     /// The sensor position where the image of the camera-space point `p` has
@@ -581,12 +668,10 @@ impl<'a> Focuser<'a> {
     /// focus), so the search is repeated once from its own answer.
     fn point_best_focus_z(&self, p: Vec3, conjugate_z: f64) -> f64 {
         let frequency_per_mm = BEST_FOCUS_CYCLES_PER_PIXEL / self.pitch_mm;
-        let mm = self.mm_per_scene;
         let mut z = conjugate_z;
         for _ in 0..2 {
-            let object = DVec3::new(f64::from(p.x) * mm, f64::from(p.y) * mm, z - f64::from(p.z) * mm);
             let half_range = 5.0 * self.depth_of_focus_mm(z);
-            let bundle = self.system.spot_bundle(object, 32);
+            let bundle = self.system.spot_bundle(self.lens_point(p, z), 32);
             match bundle.best_focus_z(z - half_range, z + half_range, 100, frequency_per_mm) {
                 Some(best) => z = best,
                 None => return conjugate_z,
@@ -595,52 +680,113 @@ impl<'a> Focuser<'a> {
         z
     }
 
-    /// Rangefinder focusing ([`Focuser::range_focus`]), optionally refined by
-    /// a contrast fit through three renders 1.5 DoF apart.
-    fn depth(&mut self, refine: bool) -> Result<f64> {
-        let Some(RangeFocus {
-            best_focus_z_mm: z0, ..
-        }) = self.range_focus()?
-        else {
-            // Nothing to range on (the patch sees only the sky): contrast search instead.
-            return self.fast();
+    /// Range-finder focusing ([`Focuser::range_focus`]); with nothing in the
+    /// patch to range on (only sky), the contrast search instead.
+    fn rangefinder(&mut self) -> Result<f64> {
+        match self.range_focus()? {
+            Some(range) => Ok(range.best_focus_z_mm),
+            None => self.fast(),
+        }
+    }
+
+    /// Range finder and phase detection ([`Focuser::phase_focus`]); with
+    /// nothing in the patch to range on, the contrast search instead.
+    fn depth(&mut self) -> Result<f64> {
+        match self.phase_focus()? {
+            Some(z) => Ok(z),
+            None => self.fast(),
+        }
+    }
+
+    /// The range finder's best focus, corrected by two phase-detect readings
+    /// ([`Focuser::phase_detect`]): one there and one where it points. Both
+    /// are scored at the coarse scale, where a shift of a few pixels still
+    /// correlates and the noise is weak (the fine scale's 8-sample readings
+    /// were noise-led on dim patches), and the answer is their estimates'
+    /// inverse-variance mean (the last alone when the first was more than 2
+    /// DoF from its answer). The lens's calibration comes from the ranged
+    /// point. `None` when no probe hits anything.
+    fn phase_focus(&mut self) -> Result<Option<f64>> {
+        let Some((range, point)) = self.range_probe()? else {
+            return Ok(None);
         };
-        if !refine {
-            return Ok(z0);
+        let mut z = range.best_focus_z_mm;
+        let Some(calibration) = self.phase_calibration(point, z) else {
+            return Ok(Some(z));
+        };
+        let (mut weighted, mut total) = (0.0, 0.0);
+        for _ in 0..PHASE_READINGS {
+            if let Some(reading) = self.phase_detect(z, &calibration)? {
+                // A reading far from focus only points the way: the halves'
+                // images are blurred, and their shift may pass the search's end.
+                if (reading.sensor_z_mm - z).abs() > 2.0 * self.depth_of_focus_mm(z) {
+                    (weighted, total) = (0.0, 0.0);
+                }
+                z = reading.sensor_z_mm;
+                weighted += reading.sensor_z_mm * reading.weight;
+                total += reading.weight;
+            }
         }
-        let (spp, seed) = (self.settings.spp, self.settings.seed);
-        // Three renders 1.5 DoF apart around the estimate; if the best is at an
-        // end, one more beyond it (the lens's best focus can differ from the
-        // real-ray conjugate by a DoF or two, through spherical aberration).
-        let step = 1.5 * self.depth_of_focus_mm(z0);
-        let mut points: Vec<(f64, f64)> = Vec::new();
-        for z in [z0 - step, z0, z0 + step] {
-            points.push((z, self.measure_at(z, spp, seed, Detail::Fine)?));
+        Ok(Some(if total > 0.0 { weighted / total } else { z }))
+    }
+
+    /// The phase-detect calibration of both splits of the stop for the
+    /// camera-space point `p` with the sensor near `z`: how fast the halves'
+    /// images separate, and how far the lens's best contrast lies from where
+    /// they coincide. `None` when the lens passes no ray from `p` through a half.
+    fn phase_calibration(&self, p: Vec3, z: f64) -> Option<[PhaseCalibration; 2]> {
+        let best = self.point_best_focus_z(p, z);
+        let bundle = self.system.spot_bundle(self.lens_point(p, best), 32);
+        let calibrate = |split: Split| {
+            let (a, b) = bundle.half_pupil_separation(split.axis())?;
+            Some(PhaseCalibration {
+                separation_per_mm: b,
+                best_minus_zero_mm: best + a / b,
+            })
+        };
+        Some([calibrate(Split::LeftRight)?, calibrate(Split::TopBottom)?])
+    }
+
+    /// One phase-detect reading with the sensor at `z`: the patch rendered
+    /// through each half of the stop for both splits (four renders of half
+    /// the samples, independent seeds), band-passed at the coarse scale; each
+    /// split's shift ([`disparity`]) gives a best-contrast position through
+    /// `calibration`. They are averaged with weights the square of the
+    /// correlation peak's sharpness: the shift's noise is the noise of the
+    /// correlation's slope over that sharpness, and the noise is alike for
+    /// both splits. Searched up to [`PHASE_MAX_SHIFT_PX`] either way. `None`
+    /// when neither split sees shared detail.
+    fn phase_detect(&mut self, z: f64, calibration: &[PhaseCalibration; 2]) -> Result<Option<PhaseReading>> {
+        let (spp, seed) = ((self.settings.spp / 2).max(1), self.settings.seed);
+        let (w, h) = (self.settings.patch.width as usize, self.settings.patch.height as usize);
+        let (sw, sh) = self.settings.camera.sensor_mm;
+        // Lens x runs against the image's columns and lens y along its rows
+        // (the sensor sees the scene upside down; RealisticCamera::film_point).
+        let mm_per_px = [
+            -sw / f64::from(self.settings.width),
+            sh / f64::from(self.settings.height),
+        ];
+        self.phase_readings += 1;
+        let (mut weighted, mut total) = (0.0, 0.0);
+        for (k, split) in Split::BOTH.into_iter().enumerate() {
+            let mut images = Vec::with_capacity(2);
+            for (half, (mw, mh, values)) in split.half_masks().into_iter().enumerate() {
+                let camera = self.patch_camera(z, ApertureShape::mask(mw, mh, values)?)?;
+                let seed = seed.wrapping_add((2 * k + half) as u32 * 0x9E37_79B9);
+                images.push(self.render_patch(&camera, spp, seed, Detail::Coarse)?);
+            }
+            let axis = split.axis();
+            if let Some(d) = disparity(&images[0], &images[1], w, h, axis, PHASE_MAX_SHIFT_PX) {
+                let weight = d.strength * d.strength;
+                weighted += weight * calibration[k].best_focus_z(z, d.shift_px * mm_per_px[axis]);
+                total += weight;
+            }
         }
-        match peak_index(&points) {
-            0 => points.insert(
-                0,
-                (
-                    z0 - 2.0 * step,
-                    self.measure_at(z0 - 2.0 * step, spp, seed, Detail::Fine)?,
-                ),
-            ),
-            2 => points.push((
-                z0 + 2.0 * step,
-                self.measure_at(z0 + 2.0 * step, spp, seed, Detail::Fine)?,
-            )),
-            _ => {}
-        }
-        let i = peak_index(&points).clamp(1, points.len() - 2);
-        let three = &points[i - 1..=i + 1];
-        if three.iter().any(|p| p.1 <= 0.0) {
-            return Ok(points[peak_index(&points)].0);
-        }
-        Ok(parabola_vertex(
-            [three[0].0, three[1].0, three[2].0],
-            [three[0].1.ln(), three[1].1.ln(), three[2].1.ln()],
-        )
-        .unwrap_or(points[peak_index(&points)].0))
+        let (near, far) = self.range_mm;
+        Ok((total > 0.0).then(|| PhaseReading {
+            sensor_z_mm: (weighted / total).clamp(near, far),
+            weight: total,
+        }))
     }
 
     /// `(z, score)` at each sensor position of `zs`, scored at the fine scale.
@@ -830,32 +976,9 @@ fn least_squares_parabola(points: &[(f64, f64)]) -> Option<(f64, f64, f64)> {
     Some((column(0), column(1), column(2)))
 }
 
-/// The abscissa of the vertex of the parabola through three points, when it
-/// opens downward, kept within the points' span.
-fn parabola_vertex(x: [f64; 3], y: [f64; 3]) -> Option<f64> {
-    let (d01, d12) = (x[1] - x[0], x[2] - x[1]);
-    let (s01, s12) = ((y[1] - y[0]) / d01, (y[2] - y[1]) / d12);
-    let curvature = (s12 - s01) / (x[2] - x[0]);
-    if !curvature.is_finite() || curvature >= 0.0 {
-        return None;
-    }
-    // y = s01 + curvature·(x − x0 + x − x1) for the slope; zero at the vertex.
-    let vertex = 0.5 * (x[0] + x[1]) - s01 / (2.0 * curvature);
-    Some(vertex.clamp(x[0], x[2]))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn parabola_vertex_of_a_known_parabola() {
-        let f = |x: f64| -2.0 * (x - 1.3).powi(2) + 5.0;
-        let v = parabola_vertex([0.5, 1.0, 2.0], [f(0.5), f(1.0), f(2.0)]).unwrap();
-        assert!((v - 1.3).abs() < 1e-12, "{v}");
-        // Opening upward: no peak.
-        assert!(parabola_vertex([0.0, 1.0, 2.0], [1.0, 0.0, 1.0]).is_none());
-    }
 
     #[test]
     fn least_squares_parabola_recovers_an_exact_one() {
@@ -872,6 +995,9 @@ mod tests {
             assert_eq!(s.name(), name);
         }
         let err = Strategy::from_name("phase", 12).unwrap_err().to_string();
-        assert!(err.contains("use one of sweep, early-exit, fast, depth"), "{err}");
+        assert!(
+            err.contains("use one of sweep, early-exit, fast, rangefinder, depth"),
+            "{err}"
+        );
     }
 }
