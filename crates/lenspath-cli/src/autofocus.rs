@@ -85,6 +85,11 @@ pub struct AutofocusArgs {
     /// --evaluate: only these patches (comma-separated, such as CBdragon#2,glass-and-gold#3) or scenes (CBbunny).
     #[arg(long, value_name = "IDS", value_delimiter = ',', requires = "evaluate")]
     only: Vec<String>,
+    /// --evaluate: reuse the ground truths of an earlier --evaluate-json for
+    /// the patches it has with the same place, metric, samples and image size
+    /// (the truth is deterministic and costs most of the run); others are computed.
+    #[arg(long, value_name = "FILE", requires = "evaluate")]
+    truths: Option<PathBuf>,
 }
 
 /// Focuses `lens` on `patch` with the fast strategy before a render, saying what it found on stderr.
@@ -322,6 +327,49 @@ const EVALUATION_SET: [EvaluationScene; 5] = [
     },
 ];
 
+/// Ground truths of an earlier evaluation (its `--evaluate-json`), for the
+/// same metric, samples and image size.
+struct EarlierTruths {
+    patches: Vec<serde_json::Value>,
+}
+
+impl EarlierTruths {
+    /// Reads `path`; an error if it is not an evaluation of `metric` at `spp` and `size`.
+    fn load(path: &Path, metric: &str, spp: u32, size: (u32, u32)) -> Result<EarlierTruths> {
+        let bad = |message: String| Error::Parse {
+            path: path.to_path_buf(),
+            message,
+        };
+        let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
+            path: path.to_path_buf(),
+            source: e,
+        })?;
+        let file: serde_json::Value = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
+        let (their_metric, their_spp, their_size) = (&file["metric"], &file["spp"], &file["resolution"]);
+        if their_metric != metric || their_spp != spp || *their_size != json!([size.0, size.1]) {
+            return Err(bad(format!(
+                "its truths are for metric {their_metric}, {their_spp} spp, resolution {their_size}; \
+                 this run is {metric}, {spp} spp, {}x{}",
+                size.0, size.1
+            )));
+        }
+        let patches = file["patches"]
+            .as_array()
+            .ok_or_else(|| bad("no \"patches\" array".into()))?
+            .clone();
+        Ok(EarlierTruths { patches })
+    }
+
+    /// The truth recorded for patch `id` at `rect`, if any.
+    fn get(&self, id: &str, rect: &[f64; 4]) -> Option<GroundTruth> {
+        let patch = self
+            .patches
+            .iter()
+            .find(|p| p["patch"] == id && p["rect"] == json!(rect))?;
+        serde_json::from_value(patch["truth"].clone()).ok()
+    }
+}
+
 /// The repository root (the CLI crate's manifest is two levels down).
 fn repo_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -330,6 +378,11 @@ fn repo_root() -> PathBuf {
 /// Every strategy on every evaluation patch, against ground truth.
 fn evaluate(args: &AutofocusArgs, measure: FocusMeasure) -> Result<Outcome> {
     let (width, height) = args.res.map_or(DEFAULT_IMAGE_SIZE, |r| (r.width, r.height));
+    let earlier_truths = args
+        .truths
+        .as_deref()
+        .map(|path| EarlierTruths::load(path, &args.metric, args.spp, (width, height)))
+        .transpose()?;
     let mut rows = Vec::new();
     let mut patches_run = 0;
     let wanted = |id: &str, scene: &str| args.only.is_empty() || args.only.iter().any(|o| o == id || o == scene);
@@ -397,7 +450,10 @@ fn evaluate(args: &AutofocusArgs, measure: FocusMeasure) -> Result<Outcome> {
                 threads: args.threads,
             };
             let mut focuser = Focuser::new(&compiled, view.pose, settings)?;
-            let truth = focuser.ground_truth()?;
+            let truth = match earlier_truths.as_ref().and_then(|t| t.get(&id, p)) {
+                Some(truth) => truth,
+                None => focuser.ground_truth()?,
+            };
             let dof = focuser.depth_of_focus_mm(truth.sensor_z_mm);
             let mut results = Vec::new();
             for (_, strategy) in STRATEGIES {

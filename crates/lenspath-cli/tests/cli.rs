@@ -534,3 +534,25 @@ fn bokeh_spreads_light_into_the_mask_and_refuses_bad_input() {
     assert!(String::from_utf8_lossy(&o.stdout).contains("by depth (circles of confusion up to"));
     assert!(blurred.exists());
 }
+
+#[test]
+fn autofocus_evaluation_refuses_truths_for_other_settings() {
+    let dir = tempfile::tempdir().unwrap();
+    let truths = dir.path().join("truths.json");
+    std::fs::write(
+        &truths,
+        r#"{"metric": "tenengrad", "spp": 64, "resolution": [640, 480], "patches": []}"#,
+    )
+    .unwrap();
+    let o = lenspath(&[
+        "autofocus",
+        "--evaluate",
+        "--truths",
+        truths.to_str().unwrap(),
+        "--spp",
+        "16",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(stderr(&o).contains("truths.json"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("64 spp"), "{}", stderr(&o));
+}

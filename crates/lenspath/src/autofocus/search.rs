@@ -213,7 +213,7 @@ pub struct AutofocusResult {
 }
 
 /// The reference focus of a patch.
-#[derive(Clone, Copy, Debug, serde::Serialize)]
+#[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
 pub struct GroundTruth {
     /// Sensor position of the sharpest patch, mm behind the stop.
     pub sensor_z_mm: f64,
