@@ -772,7 +772,7 @@ impl<'a> Focuser<'a> {
             let mut images = Vec::with_capacity(2);
             for (half, (mw, mh, values)) in split.half_masks().into_iter().enumerate() {
                 let camera = self.patch_camera(z, ApertureShape::mask(mw, mh, values)?)?;
-                let seed = seed.wrapping_add((2 * k + half) as u32 * 0x9E37_79B9);
+                let seed = seed.wrapping_add(0x9E37_79B9u32.wrapping_mul((2 * k + half) as u32));
                 images.push(self.render_patch(&camera, spp, seed, Detail::Coarse)?);
             }
             let axis = split.axis();
