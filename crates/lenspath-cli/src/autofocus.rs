@@ -340,10 +340,7 @@ impl EarlierTruths {
             path: path.to_path_buf(),
             message,
         };
-        let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
-            path: path.to_path_buf(),
-            source: e,
-        })?;
+        let text = lenspath::io::read_text(path)?;
         let file: serde_json::Value = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
         let (their_metric, their_spp, their_size) = (&file["metric"], &file["spp"], &file["resolution"]);
         if their_metric != metric || their_spp != spp || *their_size != json!([size.0, size.1]) {

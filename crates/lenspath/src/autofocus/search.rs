@@ -346,8 +346,7 @@ impl<'a> Focuser<'a> {
         let halves = if spp >= 2 { [spp / 2, spp - spp / 2] } else { [spp, 0] };
         let mut images = Vec::new();
         for (k, &half) in halves.iter().enumerate().filter(|(_, &h)| h > 0) {
-            // Seeds far apart, so the halves' sample sequences are independent.
-            images.push(self.render_patch(&camera, half, seed.wrapping_add(k as u32 * 0x9E37_79B9), detail)?);
+            images.push(self.render_patch(&camera, half, stream_seed(seed, k), detail)?);
         }
         let s = &self.settings;
         let (w, h) = (s.patch.width as usize, s.patch.height as usize);
@@ -467,10 +466,16 @@ impl<'a> Focuser<'a> {
     /// contrast peak near it ([`Focuser::fine_peak`]), which is what the
     /// search answers to.
     fn fast(&mut self) -> Result<f64> {
-        let z0 = match self.phase_focus()? {
-            Some(z) => z,
-            None => self.coarse_peak()?,
-        };
+        match self.phase_focus()? {
+            Some(z0) => self.fine_peak(z0),
+            None => self.contrast_search(),
+        }
+    }
+
+    /// The contrast search from nothing: the coarse scan's peak, refined by
+    /// the fine stage. What `fast` does when there is nothing to range on.
+    fn contrast_search(&mut self) -> Result<f64> {
+        let z0 = self.coarse_peak()?;
         self.fine_peak(z0)
     }
 
@@ -681,11 +686,12 @@ impl<'a> Focuser<'a> {
     }
 
     /// Range-finder focusing ([`Focuser::range_focus`]); with nothing in the
-    /// patch to range on (only sky), the contrast search instead.
+    /// patch to range on (only sky), the contrast search instead (not `fast`,
+    /// which would probe again).
     fn rangefinder(&mut self) -> Result<f64> {
         match self.range_focus()? {
             Some(range) => Ok(range.best_focus_z_mm),
-            None => self.fast(),
+            None => self.contrast_search(),
         }
     }
 
@@ -694,7 +700,7 @@ impl<'a> Focuser<'a> {
     fn depth(&mut self) -> Result<f64> {
         match self.phase_focus()? {
             Some(z) => Ok(z),
-            None => self.fast(),
+            None => self.contrast_search(),
         }
     }
 
@@ -772,8 +778,7 @@ impl<'a> Focuser<'a> {
             let mut images = Vec::with_capacity(2);
             for (half, (mw, mh, values)) in split.half_masks().into_iter().enumerate() {
                 let camera = self.patch_camera(z, ApertureShape::mask(mw, mh, values)?)?;
-                let seed = seed.wrapping_add(0x9E37_79B9u32.wrapping_mul((2 * k + half) as u32));
-                images.push(self.render_patch(&camera, spp, seed, Detail::Coarse)?);
+                images.push(self.render_patch(&camera, spp, stream_seed(seed, 2 * k + half), Detail::Coarse)?);
             }
             let axis = split.axis();
             if let Some(d) = disparity(&images[0], &images[1], w, h, axis, PHASE_MAX_SHIFT_PX) {
@@ -875,6 +880,13 @@ impl<'a> Focuser<'a> {
             lens_best_focus_z_mm: range.map(|r| r.best_focus_z_mm),
         })
     }
+}
+
+/// The seed of the `stream`-th of several renders that must be independent:
+/// seeds far apart (the golden-ratio increment), so their sample sequences
+/// do not overlap.
+fn stream_seed(seed: u32, stream: usize) -> u32 {
+    seed.wrapping_add(0x9E37_79B9u32.wrapping_mul(stream as u32))
 }
 
 /// `rgb` (`width` pixels wide, three floats each) blurred by a separable

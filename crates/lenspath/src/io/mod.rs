@@ -57,7 +57,7 @@ pub fn load_mesh(path: &Path) -> Result<TriangleMesh> {
 }
 
 /// The whole of a text file, with a clear error for a missing or non-UTF-8 file.
-fn read_text(path: &Path) -> Result<String> {
+pub fn read_text(path: &Path) -> Result<String> {
     let bytes = std::fs::read(path).map_err(|e| io_error(path, e))?;
     String::from_utf8(bytes).map_err(|e| Error::Parse {
         path: path.to_path_buf(),
