@@ -76,6 +76,12 @@ pub struct AutofocusArgs {
     /// Run every strategy against ground truth on the evaluation patches (docs/autofocus.md).
     #[arg(long, conflicts_with_all = ["patch", "file", "plot", "render"])]
     evaluate: bool,
+    /// --evaluate: run each strategy with this many seeds (--seed and the ones
+    /// after it) on each patch, so one lucky or unlucky noise draw does not
+    /// decide a patch; the sweep and early-exit, whose cost dominates the
+    /// run, with the first only.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..), requires = "evaluate")]
+    seeds: u32,
     /// --evaluate: write every result as JSON here.
     #[arg(long, value_name = "FILE", requires = "evaluate")]
     evaluate_json: Option<PathBuf>,
@@ -87,7 +93,9 @@ pub struct AutofocusArgs {
     only: Vec<String>,
     /// --evaluate: reuse the ground truths of an earlier --evaluate-json for
     /// the patches it has with the same place, metric, samples and image size
-    /// (the truth is deterministic and costs most of the run); others are computed.
+    /// (the truth is deterministic and costs most of the run); others are
+    /// computed, as are those whose two seeds disagreed when more samples are
+    /// now allowed.
     #[arg(long, value_name = "FILE", requires = "evaluate")]
     truths: Option<PathBuf>,
 }
@@ -357,13 +365,17 @@ impl EarlierTruths {
         Ok(EarlierTruths { patches })
     }
 
-    /// The truth recorded for patch `id` at `rect`, if any.
-    fn get(&self, id: &str, rect: &[f64; 4]) -> Option<GroundTruth> {
+    /// The truth recorded for patch `id` at `rect`, if any and settled
+    /// ([`GroundTruth::is_settled`] for strategies at `spp`): one whose seeds
+    /// disagreed is computed again when more samples are now allowed.
+    fn get(&self, id: &str, rect: &[f64; 4], spp: u32) -> Option<GroundTruth> {
         let patch = self
             .patches
             .iter()
             .find(|p| p["patch"] == id && p["rect"] == json!(rect))?;
-        serde_json::from_value(patch["truth"].clone()).ok()
+        serde_json::from_value::<GroundTruth>(patch["truth"].clone())
+            .ok()
+            .filter(|truth| truth.is_settled(spp))
     }
 }
 
@@ -446,21 +458,36 @@ fn evaluate(args: &AutofocusArgs, measure: FocusMeasure) -> Result<Outcome> {
                 seed: args.seed,
                 threads: args.threads,
             };
-            let mut focuser = Focuser::new(&compiled, view.pose, settings)?;
-            let truth = match earlier_truths.as_ref().and_then(|t| t.get(&id, p)) {
+            let mut focuser = Focuser::new(&compiled, view.pose, settings.clone())?;
+            let truth = match earlier_truths.as_ref().and_then(|t| t.get(&id, p, args.spp)) {
                 Some(truth) => truth,
                 None => focuser.ground_truth()?,
             };
             let dof = focuser.depth_of_focus_mm(truth.sensor_z_mm);
-            let mut results = Vec::new();
-            for (_, strategy) in STRATEGIES {
-                let strategy = match strategy {
-                    Strategy::EarlyExit { .. } => Strategy::EarlyExit {
-                        patience: args.patience,
-                    },
-                    s => s,
-                };
-                results.push(focuser.run(strategy)?);
+            // (seed, result) of every run: all strategies with the first seed, then the cheap ones with the rest.
+            let mut results: Vec<(u32, AutofocusResult)> = Vec::new();
+            for run in 0..args.seeds {
+                let seed = args.seed.wrapping_add(run);
+                if run > 0 {
+                    focuser = Focuser::new(
+                        &compiled,
+                        view.pose,
+                        AutofocusSettings {
+                            seed,
+                            ..settings.clone()
+                        },
+                    )?;
+                }
+                for (_, strategy) in STRATEGIES {
+                    let strategy = match strategy {
+                        Strategy::Sweep | Strategy::EarlyExit { .. } if run > 0 => continue,
+                        Strategy::EarlyExit { .. } => Strategy::EarlyExit {
+                            patience: args.patience,
+                        },
+                        s => s,
+                    };
+                    results.push((seed, focuser.run(strategy)?));
+                }
             }
             eprintln!("{}", row_text(&id, &truth, dof, &results));
             if let Some(dir) = &args.plots_dir {
@@ -468,9 +495,11 @@ fn evaluate(args: &AutofocusArgs, measure: FocusMeasure) -> Result<Outcome> {
                     path: dir.clone(),
                     source: e,
                 })?;
+                // The first seed's runs: one series per strategy.
                 let series: Vec<Series> = results
                     .iter()
-                    .map(|r| Series {
+                    .filter(|(seed, _)| *seed == args.seed)
+                    .map(|(_, r)| Series {
                         label: r.strategy,
                         points: &r.evaluations,
                         chosen_mm: Some(r.sensor_z_mm),
@@ -486,8 +515,9 @@ fn evaluate(args: &AutofocusArgs, measure: FocusMeasure) -> Result<Outcome> {
                 "rect": p,
                 "truth": truth,
                 "depth_of_focus_mm": dof,
-                "results": results.iter().map(|r| json!({
+                "results": results.iter().map(|(seed, r)| json!({
                     "strategy": r.strategy,
+                    "seed": seed,
                     "sensor_position_mm": r.sensor_z_mm,
                     "error_dof": (r.sensor_z_mm - truth.sensor_z_mm) / dof,
                     "evaluations": r.evaluations.len(),
@@ -518,7 +548,8 @@ fn evaluate(args: &AutofocusArgs, measure: FocusMeasure) -> Result<Outcome> {
     Ok(Outcome::Done)
 }
 
-fn row_text(id: &str, truth: &GroundTruth, dof: f64, results: &[AutofocusResult]) -> String {
+/// One patch's line of the evaluation's progress: its truth and each run's error.
+fn row_text(id: &str, truth: &GroundTruth, dof: f64, results: &[(u32, AutofocusResult)]) -> String {
     let offset = |z: Option<f64>| z.map_or("none".into(), |z| format!("{:+.2} DoF", (z - truth.sensor_z_mm) / dof));
     let mut line = format!(
         "{id:<24} truth {:.4} mm (seed spread {:.2} DoF, {} spp; depth conjugate {}, lens best focus {})",
@@ -528,9 +559,9 @@ fn row_text(id: &str, truth: &GroundTruth, dof: f64, results: &[AutofocusResult]
         offset(truth.depth_conjugate_z_mm),
         offset(truth.lens_best_focus_z_mm),
     );
-    for r in results {
+    for (seed, r) in results {
         line += &format!(
-            " | {} {:+.2} DoF {} evals",
+            " | {} (seed {seed}) {:+.2} DoF {} evals",
             r.strategy,
             (r.sensor_z_mm - truth.sensor_z_mm) / dof,
             r.evaluations.len()
@@ -542,17 +573,19 @@ fn row_text(id: &str, truth: &GroundTruth, dof: f64, results: &[AutofocusResult]
     line
 }
 
-/// A Markdown table: per strategy, patches within 1 DoF, mean |error|, cost relative to the sweep.
+/// A Markdown table: per strategy, runs within 1 DoF, median and max |error|, cost relative to the sweep.
 fn summarize(rows: &[serde_json::Value]) -> String {
     let mut out = String::from(
-        "| strategy | within 1 DoF | median abs error (DoF) | max abs error (DoF) | patch renders (mean) | camera rays vs sweep | seconds (mean) |\n|---|---|---|---|---|---|---|\n",
+        "| strategy | runs within 1 DoF | median abs error (DoF) | max abs error (DoF) | patch renders (mean) | camera rays vs sweep | seconds (mean) |\n|---|---|---|---|---|---|---|\n",
     );
-    let sweep_rays: f64 = rows
+    // The sweep's mean camera rays per run (strategies may have more runs per patch than it).
+    let sweep_runs: Vec<f64> = rows
         .iter()
         .flat_map(|r| r["results"].as_array().into_iter().flatten())
         .filter(|r| r["strategy"] == "sweep")
         .map(|r| r["camera_rays"].as_f64().unwrap_or(0.0))
-        .sum();
+        .collect();
+    let sweep_rays = sweep_runs.iter().sum::<f64>() / sweep_runs.len().max(1) as f64;
     for (name, _) in STRATEGIES {
         let results: Vec<&serde_json::Value> = rows
             .iter()
@@ -579,7 +612,7 @@ fn summarize(rows: &[serde_json::Value]) -> String {
             errors[errors.len() / 2],
             errors.last().copied().unwrap_or(0.0),
             evals / n,
-            100.0 * rays / sweep_rays,
+            100.0 * rays / n / sweep_rays,
             secs / n
         );
     }

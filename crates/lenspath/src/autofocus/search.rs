@@ -74,9 +74,17 @@ pub const FAST_BUDGET_OF_SWEEP: f64 = 0.1;
 const FINE_RENDERS: usize = 9;
 
 /// The most samples the ground truth takes, as a multiple of the strategies'
-/// ([`Focuser::ground_truth`]): at 8× the two seeds of some dim or glassy
-/// patches still disagreed by a DoF, so the truth was itself noisy.
-pub const TRUTH_MAX_SPP_FACTOR: u32 = 32;
+/// ([`Focuser::ground_truth`]): at 32× the two seeds of three dim or glassy
+/// patches still disagreed by 0.9 to 1.6 DoF, so the truth was itself noisy.
+pub const TRUTH_MAX_SPP_FACTOR: u32 = 128;
+
+/// How far apart, in DoF, the ground truth's two seeds may put the peak for
+/// it to count as converged ([`Focuser::ground_truth`]).
+pub const TRUTH_SEED_SPREAD_DOF: f64 = 0.25;
+
+/// Renders on each side of the best that the `fast` search's second fine
+/// round measures again (1 DoF apart).
+const FIT_HALF_WIDTH: usize = 2;
 
 /// Phase-detect readings of the `depth` search (and of `fast`'s start).
 const PHASE_READINGS: usize = 2;
@@ -219,13 +227,22 @@ pub struct GroundTruth {
     pub sensor_z_mm: f64,
     /// How far two independent fine sweeps put the peak apart, in DoF (noise).
     pub seed_spread_dof: f64,
-    /// Samples per pixel that brought the spread under a quarter DoF (or the most tried).
+    /// Samples per pixel that brought the spread within [`TRUTH_SEED_SPREAD_DOF`] (or the most tried).
     pub spp: u32,
     /// The conjugate of the patch's dominant depth, mm behind the stop (`None` if the probes hit nothing).
     pub depth_conjugate_z_mm: Option<f64>,
     /// The lens's best-contrast sensor position for that depth at the patch's
     /// place in the field (what the `depth` strategy starts from).
     pub lens_best_focus_z_mm: Option<f64>,
+}
+
+impl GroundTruth {
+    /// Whether computing it again could not do better: its seeds agree within
+    /// [`TRUTH_SEED_SPREAD_DOF`], or it already took the most samples allowed
+    /// for strategies rendering at `strategy_spp`.
+    pub fn is_settled(&self, strategy_spp: u32) -> bool {
+        self.seed_spread_dof <= TRUTH_SEED_SPREAD_DOF || self.spp >= TRUTH_MAX_SPP_FACTOR * strategy_spp
+    }
 }
 
 /// Where the range finder puts a patch's focus, mm behind the stop.
@@ -525,33 +542,43 @@ impl<'a> Focuser<'a> {
         ))
     }
 
-    /// The fine stage of the contrast search: renders 1 DoF apart around
-    /// `z0` at 1.5× the samples, scored at [`Detail::Fine`], five and then
-    /// more beyond the best (at most [`FINE_RENDERS`]), and the vertex of the
-    /// least-squares log-parabola through them; fewer samples when that would
-    /// take the search past [`FAST_BUDGET_OF_SWEEP`].
+    /// The fine stage of the contrast search, in two rounds scored at
+    /// [`Detail::Fine`]: renders 1 DoF apart around `z0` at 1.5× the samples,
+    /// five and then more beyond the best (at most [`FINE_RENDERS`]), to find
+    /// the peak; then the best and up to two on each side again, with an
+    /// independent seed and the rest of the budget ([`FAST_BUDGET_OF_SWEEP`]);
+    /// the answer is the vertex of the least-squares log-parabola through
+    /// those, their two rounds' scores averaged weighted by samples.
     fn fine_peak(&mut self, z0: f64) -> Result<f64> {
         let (spp, seed) = (self.settings.spp, self.settings.seed);
         let (near, far) = self.range_mm;
-        // The fine stage: renders 1 DoF apart, starting with five around z0
-        // (moved inside the range rather than clamped, so none repeats),
-        // then one more at a time beyond the best while it has fewer than two
-        // neighbours on a side, so the fit sees the peak from both sides;
-        // common random numbers keep neighbouring scores' noise alike. Its
-        // samples are 1.5× the scan's, fewer if its renders (at most
-        // FINE_RENDERS) would take the search past its budget. What was spent
-        // is counted in camera rays (samples per patch pixel): the phase
-        // detection's half-aperture renders are not evaluations.
+        // Both rounds use common random numbers: every render of a round has
+        // the same seed, so neighbouring scores' noise is alike and the
+        // curve's shape is right, but the whole round shares one noise draw,
+        // which tilts it (its error, the noise projected on how the image
+        // changes with focus, shrinks with the round's samples per pixel, not
+        // with its renders). So the first round finds the peak, and the
+        // second spends the rest of the budget on the few renders the fit
+        // uses, with an independent noise draw: averaged, the two rounds'
+        // tilts partly cancel.
+        // Spent and budget are in camera rays per patch pixel (the phase
+        // detection's half-aperture renders count too).
         let patch_pixels = f64::from(self.settings.patch.width * self.settings.patch.height);
-        let spent = self.camera_rays as f64 / patch_pixels;
         let budget = FAST_BUDGET_OF_SWEEP * (self.steps(self.pitch_mm) as u32 * spp) as f64;
-        let affordable = ((budget - spent) / FINE_RENDERS as f64).floor().max(1.0) as u32;
-        let (fine_spp, dof) = ((spp + spp / 2).min(affordable), self.depth_of_focus_mm(z0));
+        let affordable = |spent: u64| (budget - spent as f64 / patch_pixels).max(0.0);
+        // The first round at 1.5× the samples, fewer if its renders (at
+        // most FINE_RENDERS) would take the search past its budget.
+        let locate_spp =
+            (spp + spp / 2).min((affordable(self.camera_rays) / FINE_RENDERS as f64).floor().max(1.0) as u32);
+        let dof = self.depth_of_focus_mm(z0);
+        // The first round: five renders around z0 (moved inside the range
+        // rather than clamped, so none repeats), then one more at a time
+        // beyond the best while it has fewer than two neighbours on a side.
         let first = (z0 - 2.0 * dof).clamp(near, (far - 4.0 * dof).max(near));
         let mut points: Vec<(f64, f64)> = Vec::new();
         for k in 0..5 {
             let z = (first + f64::from(k) * dof).min(far);
-            points.push((z, self.measure_at(z, fine_spp, seed, Detail::Fine)?));
+            points.push((z, self.measure_at(z, locate_spp, seed, Detail::Fine)?));
         }
         while points.len() < FINE_RENDERS {
             let best = peak_index(&points);
@@ -562,13 +589,26 @@ impl<'a> Focuser<'a> {
             } else {
                 break;
             };
-            let score = self.measure_at(z, fine_spp, seed, Detail::Fine)?;
+            let score = self.measure_at(z, locate_spp, seed, Detail::Fine)?;
             let at = points.partition_point(|p| p.0 < z);
             points.insert(at, (z, score));
         }
-        // The least-squares log-parabola through the best and two on each side.
-        let peak = points[peak_index(&points)].0;
-        Ok(log_parabola_peak(&points, peak, 2.01 * dof))
+        // The second round over the best and its neighbours within 2 DoF.
+        let best = peak_index(&points);
+        let window = best.saturating_sub(FIT_HALF_WIDTH)..(best + FIT_HALF_WIDTH + 1).min(points.len());
+        let mut fit = points[window].to_vec();
+        let measure_spp = (affordable(self.camera_rays) / fit.len() as f64).floor() as u32;
+        // At least a pair of samples (one is scored without its noise removed).
+        if measure_spp >= 2 {
+            let measure_seed = stream_seed(seed, 2);
+            let weight = f64::from(measure_spp) / f64::from(measure_spp + locate_spp);
+            for point in &mut fit {
+                let score = self.measure_at(point.0, measure_spp, measure_seed, Detail::Fine)?;
+                point.1 += weight * (score - point.1);
+            }
+        }
+        let peak = fit[peak_index(&fit)].0;
+        Ok(log_parabola_peak(&fit, peak, 2.01 * dof))
     }
 
     /// Camera rays through `k` × `k` points of the patch: what each hits, in
@@ -807,7 +847,8 @@ impl<'a> Focuser<'a> {
     /// least-squares parabola through the log-scores within 1.5 DoF of its
     /// maximum, with two seeds; the
     /// samples are doubled (from 4× the settings', up to
-    /// [`TRUTH_MAX_SPP_FACTOR`]×) until the seeds agree within a quarter DoF.
+    /// [`TRUTH_MAX_SPP_FACTOR`]×) until the seeds agree within
+    /// [`TRUTH_SEED_SPREAD_DOF`].
     /// Its evaluations are not counted anywhere.
     pub fn ground_truth(&mut self) -> Result<GroundTruth> {
         let saved = (std::mem::take(&mut self.evaluations), self.camera_rays);
@@ -865,7 +906,7 @@ impl<'a> Focuser<'a> {
             }
             let z = 0.5 * (peaks[0] + peaks[1]);
             let spread = (peaks[0] - peaks[1]).abs() / self.depth_of_focus_mm(z);
-            if spread <= 0.25 || spp >= TRUTH_MAX_SPP_FACTOR * self.settings.spp {
+            if spread <= TRUTH_SEED_SPREAD_DOF || spp >= TRUTH_MAX_SPP_FACTOR * self.settings.spp {
                 break (z, spread, spp);
             }
             spp *= 2;
