@@ -161,6 +161,9 @@ def test_an_exception_in_the_progress_callback_stops_the_render() -> None:
 @pytest.mark.skipif(not hasattr(signal, "SIGINT") or os.name != "posix", reason="needs POSIX signals")
 def test_ctrl_c_stops_the_render_and_raises_keyboard_interrupt() -> None:
     reports = []
+    # Python's Ctrl-C handler, as an interactive session has it: a process
+    # started as a background job (`cmd &` in a script) inherits SIGINT ignored.
+    previous_handler = signal.signal(signal.SIGINT, signal.default_int_handler)
     # A real SIGINT to this process while the render runs, as Ctrl-C sends.
     timer = threading.Timer(0.3, os.kill, (os.getpid(), signal.SIGINT))
     timer.start()
@@ -171,6 +174,7 @@ def test_ctrl_c_stops_the_render_and_raises_keyboard_interrupt() -> None:
             )
     finally:
         timer.cancel()
+        signal.signal(signal.SIGINT, previous_handler)
     # It stopped where it was, far short of its 184 M samples.
     done, total = reports[-1]
     assert total == 64 * 48 * 60_000
