@@ -202,8 +202,9 @@ def autofocus(
     ``scene`` is a :class:`Scene`, a built-in scene name or a scene file path;
     ``camera`` a ``Camera.realistic(...)`` (None: the scene's lens) whose focus is
     ignored. ``strategy``: "sweep", "early-exit" (stops after ``patience`` steps
-    without a new best), "fast" (phase-detect start, contrast peak), "rangefinder"
-    (probe rays and the lens model) or "depth" (range finder, then phase detection);
+    without a new best), "fast" (range finder, then the contrast peak
+    refocused from a light field), "rangefinder" (probe rays and the lens model) or
+    "depth" (range finder, then a short contrast refinement);
     ``metric`` one of ``focus_measures()``. ``result.camera`` is the camera
     focused there, ready for :func:`render`; ``lenspath.plot.focus_curve(result)``
     draws the search.

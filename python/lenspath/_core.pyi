@@ -336,13 +336,16 @@ class AutofocusResult:
         """The search strategy's name."""
     @property
     def evaluations(self) -> npt.NDArray[np.float64]:
-        """Every patch render as a (sensor_mm, score) row, in the order rendered."""
+        """Every scored patch image as a (sensor_mm, score) row, in order: patch renders and refocused light fields."""
     @property
-    def phase_readings(self) -> int:
-        """Phase-detect readings (four half-aperture patch renders each)."""
+    def patch_renders(self) -> int:
+        """How many of the evaluations are patch renders."""
+    @property
+    def light_fields(self) -> int:
+        """Light fields recorded (the patch with a margin, refocused to many sensor positions)."""
     @property
     def camera_rays(self) -> int:
-        """Camera rays traced (patch samples, half-aperture samples and range-finder probes)."""
+        """Camera rays traced (patch render and light-field samples and range-finder probes)."""
     @property
     def seconds(self) -> float:
         """Wall time."""

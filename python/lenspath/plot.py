@@ -58,8 +58,8 @@ def lens_layout(lens: Lens, ax: Axes | None = None, sensor_diagonal_mm: float | 
 
 
 def focus_curve(result: AutofocusResult, ax: Axes | None = None, label: str | None = None) -> Axes:
-    """An autofocus search: each patch render's score against its sensor position (in render
-    order, numbered), and the chosen position."""
+    """An autofocus search: each evaluation's score (patch renders and patch images refocused
+    from a light field) against its sensor position, and the chosen position."""
     ax = _axes(ax)
     points = np.asarray(result.evaluations)
     order = np.argsort(points[:, 0], kind="stable")

@@ -40,7 +40,7 @@ pub struct AutofocusArgs {
     /// Focus measure: variance, normalized-variance, sml, tenengrad, brenner, laplacian-energy, vollath.
     #[arg(long, default_value = "tenengrad")]
     metric: String,
-    /// Search: sweep, early-exit, fast, rangefinder (probe rays and the lens model) or depth (range finder, then phase detection).
+    /// Search: sweep, early-exit, fast, rangefinder (probe rays and the lens model) or depth (range finder, then a short contrast refinement).
     #[arg(long, default_value = "fast")]
     strategy: String,
     /// early-exit: stop after this many steps without a new best.
@@ -139,11 +139,11 @@ fn summary_line(r: &AutofocusResult, metric: &str, scene_unit_m: f64) -> String 
         None => "focused beyond infinity".to_string(),
     };
     format!(
-        "autofocus ({}, {metric}): sensor {:.4} mm behind the stop, {distance}; {} patch renders, {} phase-detect readings, {:.2} M camera rays, {:.2} s",
+        "autofocus ({}, {metric}): sensor {:.4} mm behind the stop, {distance}; {} patch renders, {} light fields, {:.2} M camera rays, {:.2} s",
         r.strategy,
         r.sensor_z_mm,
-        r.evaluations.len(),
-        r.phase_readings,
+        r.patch_renders(),
+        r.light_fields,
         r.camera_rays as f64 / 1e6,
         r.seconds
     )
@@ -198,7 +198,8 @@ pub fn run(args: AutofocusArgs) -> Result<Outcome> {
             "metric": args.metric,
             "strategy": result.strategy,
             "evaluations": result.evaluations.len(),
-            "phase_readings": result.phase_readings,
+            "patch_renders": result.patch_renders(),
+            "light_fields": result.light_fields,
             "camera_rays": result.camera_rays,
             "seconds": result.seconds,
             "depth_of_focus_mm": focuser.depth_of_focus_mm(result.sensor_z_mm),
@@ -521,7 +522,8 @@ fn evaluate(args: &AutofocusArgs, measure: FocusMeasure) -> Result<Outcome> {
                     "sensor_position_mm": r.sensor_z_mm,
                     "error_dof": (r.sensor_z_mm - truth.sensor_z_mm) / dof,
                     "evaluations": r.evaluations.len(),
-                    "phase_readings": r.phase_readings,
+                    "patch_renders": r.patch_renders(),
+                    "light_fields": r.light_fields,
                     "camera_rays": r.camera_rays,
                     "seconds": r.seconds,
                 })).collect::<Vec<_>>(),
@@ -561,13 +563,13 @@ fn row_text(id: &str, truth: &GroundTruth, dof: f64, results: &[(u32, AutofocusR
     );
     for (seed, r) in results {
         line += &format!(
-            " | {} (seed {seed}) {:+.2} DoF {} evals",
+            " | {} (seed {seed}) {:+.2} DoF {} renders",
             r.strategy,
             (r.sensor_z_mm - truth.sensor_z_mm) / dof,
-            r.evaluations.len()
+            r.patch_renders()
         );
-        if r.phase_readings > 0 {
-            line += &format!(" + {} phase", r.phase_readings);
+        if r.light_fields > 0 {
+            line += &format!(" + {} light field", r.light_fields);
         }
     }
     line
@@ -603,7 +605,7 @@ fn summarize(rows: &[serde_json::Value]) -> String {
         errors.sort_by(f64::total_cmp);
         let within = errors.iter().filter(|&&e| e <= 1.0).count();
         let rays: f64 = results.iter().map(|r| r["camera_rays"].as_f64().unwrap_or(0.0)).sum();
-        let evals: f64 = results.iter().map(|r| r["evaluations"].as_f64().unwrap_or(0.0)).sum();
+        let evals: f64 = results.iter().map(|r| r["patch_renders"].as_f64().unwrap_or(0.0)).sum();
         let secs: f64 = results.iter().map(|r| r["seconds"].as_f64().unwrap_or(0.0)).sum();
         out += &format!(
             "| {name} | {within}/{} ({:.0}%) | {:.2} | {:.2} | {:.1} | {:.1}% | {:.2} |\n",

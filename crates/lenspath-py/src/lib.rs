@@ -1321,11 +1321,14 @@ struct AutofocusResult {
     metric: String,
     /// The strategy's name.
     strategy: String,
-    /// Every patch render: (sensor_mm, score) rows, in the order rendered.
+    /// Every scored patch image: (sensor_mm, score) rows, in order (patch
+    /// renders and refocused light fields).
     evaluations: Py<PyArray2<f64>>,
-    /// Phase-detect readings (four half-aperture patch renders each).
-    phase_readings: usize,
-    /// Camera rays traced (patch samples, half-aperture samples and probe rays).
+    /// How many of the evaluations are patch renders.
+    patch_renders: usize,
+    /// Light fields recorded (the patch with a margin, refocused to many sensor positions).
+    light_fields: usize,
+    /// Camera rays traced (patch render and light-field samples and probe rays).
     camera_rays: u64,
     /// Wall time, seconds.
     seconds: f64,
@@ -1343,11 +1346,12 @@ impl AutofocusResult {
             .map_or_else(|| "None".to_string(), |d| format!("{d:.4}"));
         format!(
             "AutofocusResult(strategy='{}', metric='{}', sensor_mm={:.4}, focus_distance={distance}, \
-             renders={}, camera_rays={})",
+             evaluations={}, patch_renders={}, camera_rays={})",
             self.strategy,
             self.metric,
             self.sensor_mm,
             self.evaluations.bind(py).shape()[0],
+            self.patch_renders,
             self.camera_rays
         )
     }
@@ -1430,7 +1434,8 @@ fn autofocus(
         metric: metric.to_string(),
         strategy: result.strategy.to_string(),
         evaluations,
-        phase_readings: result.phase_readings,
+        patch_renders: result.patch_renders(),
+        light_fields: result.light_fields,
         camera_rays: result.camera_rays,
         seconds: result.seconds,
         depth_of_focus_mm,

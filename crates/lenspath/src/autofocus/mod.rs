@@ -4,8 +4,8 @@
 //! ([`search`]). docs/autofocus.md describes the strategies and how they were
 //! checked against ground truth.
 
+pub mod light_field;
 pub mod measures;
-pub mod phase;
 pub mod plot;
 pub mod search;
 

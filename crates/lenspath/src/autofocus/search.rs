@@ -13,8 +13,8 @@ use std::time::Instant;
 
 use glam::{DVec3, Vec2, Vec3};
 
+use super::light_field::{FilmRegion, LightField, Recording};
 use super::measures::{FocusMeasure, Patch};
-use super::phase::{disparity, PhaseCalibration, Split};
 use crate::camera::{
     ApertureShape, Camera, CameraPose, CameraSample, LensFocus, RealisticCamera, RealisticCameraSettings,
 };
@@ -65,13 +65,28 @@ impl Detail {
 pub const BEST_FOCUS_CYCLES_PER_PIXEL: f64 = 0.15;
 
 /// The `fast` search's budget, as a fraction of the sweep's camera rays: its
-/// fine stage takes fewer samples when the scan and re-scoring have spent
-/// much (low resolutions, where the sweep has few steps).
+/// light field takes fewer samples when the coarse scan has spent much (low
+/// resolutions, where the sweep has few steps).
 pub const FAST_BUDGET_OF_SWEEP: f64 = 0.1;
 
-/// Most renders of the `fast` search's fine stage (five, then more beyond
-/// its best until the best has two on each side).
-const FINE_RENDERS: usize = 9;
+/// The `depth` search's budget, as a fraction of the sweep's camera rays.
+pub const DEPTH_BUDGET_OF_SWEEP: f64 = 0.02;
+
+/// How far, in DoF either way, a light field is refocused from where it was
+/// recorded: the range finder's error on the patches without glass is at
+/// most 1.4 DoF, and the peak's fit needs 2 DoF beyond it. The margin the
+/// patch is recorded with grows with it (1.3 to 1.6× the patch's pixels at
+/// 3.5 DoF, mostly the image's breathing).
+pub const LIGHT_FIELD_REACH_DOF: f64 = 3.5;
+
+/// The most samples a light field keeps (28 bytes each: about 230 MB); a
+/// large patch's light field takes fewer samples per pixel than the budget
+/// allows (its many pixels average the noise out).
+pub const LIGHT_FIELD_MAX_SAMPLES: u64 = 1 << 23;
+
+/// The farthest, in DoF either way, a light field is refocused to reach all
+/// the depths the range finder's probes saw (the margin grows with it).
+pub const LIGHT_FIELD_MAX_REACH_DOF: f64 = 8.0;
 
 /// The most samples the ground truth takes, as a multiple of the strategies'
 /// ([`Focuser::ground_truth`]): at 32× the two seeds of three dim or glassy
@@ -81,26 +96,6 @@ pub const TRUTH_MAX_SPP_FACTOR: u32 = 128;
 /// How far apart, in DoF, the ground truth's two seeds may put the peak for
 /// it to count as converged ([`Focuser::ground_truth`]).
 pub const TRUTH_SEED_SPREAD_DOF: f64 = 0.25;
-
-/// Renders on each side of the best that the `fast` search's second fine
-/// round measures again (1 DoF apart).
-const FIT_HALF_WIDTH: usize = 2;
-
-/// Phase-detect readings of the `depth` search (and of `fast`'s start).
-const PHASE_READINGS: usize = 2;
-
-/// How far, pixels either way, a phase-detect reading looks for the shift
-/// between the halves' images: about 7 DoF at f/2 (a DoF moves them 0.4
-/// pixels apart). The range finder starts it within a few DoF, and a wider
-/// search lets a noise-made peak far out win on dim patches.
-const PHASE_MAX_SHIFT_PX: usize = 3;
-
-/// One phase-detect reading: where it puts the best focus, and its weight
-/// (inverse variance, up to a factor).
-struct PhaseReading {
-    sensor_z_mm: f64,
-    weight: f64,
-}
 
 /// Real-ray height for converting between sensor positions and distances (as the camera focuses).
 const FOCUS_RAY_HEIGHT_MM: f64 = 0.1;
@@ -115,17 +110,18 @@ pub enum Strategy {
         /// Steps without improvement before stopping.
         patience: usize,
     },
-    /// Hybrid search: a start from the range finder and phase detection (or,
-    /// with nothing to range on, a coarse contrast scan of the whole range),
-    /// then a least-squares fit of the contrast peak over fine renders around it.
+    /// Hybrid search: a start from the range finder (or, with nothing to range
+    /// on, a coarse contrast scan of the whole range), then the contrast peak
+    /// around it, refocused from one light field with the rest of 10% of the
+    /// sweep's camera rays.
     Fast,
     /// Range finder: probe rays find the patch's dominant surface, the lens's
     /// through-focus modulation gives its best-contrast sensor position. No
     /// patch renders.
     Rangefinder,
-    /// Range finder, then phase detection: the patch rendered through each
-    /// half of the stop, the shift between the halves' images turned into a
-    /// sensor position by the lens's calibration, twice.
+    /// Range finder, then a short contrast refinement: the contrast peak
+    /// around it, refocused from one light field with the rest of 2% of the
+    /// sweep's camera rays.
     Depth,
 }
 
@@ -187,17 +183,19 @@ pub struct AutofocusSettings {
     pub threads: Option<usize>,
 }
 
-/// One patch render and its score.
+/// One scored patch image: a patch render, or the patch refocused from a light field.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct Evaluation {
     /// Sensor position, mm behind the stop.
     pub sensor_z_mm: f64,
     /// Focus measure of the patch.
     pub score: f64,
-    /// Samples per pixel it was rendered with.
+    /// Samples per pixel it was rendered (or its light field recorded) with.
     pub spp: u32,
     /// The scale it was scored at.
     pub detail: Detail,
+    /// Whether it is the patch refocused from a light field (no render of its own).
+    pub refocused: bool,
 }
 
 /// What a strategy found and what it cost.
@@ -210,14 +208,22 @@ pub struct AutofocusResult {
     /// The distance in focus there, from the sensor plane, in scene units
     /// (`None` when the sensor is nearer than the infinity focus).
     pub focus_distance: Option<f64>,
-    /// Every patch render, in order.
+    /// Every scored patch image, in order: patch renders and refocused light fields.
     pub evaluations: Vec<Evaluation>,
-    /// Phase-detect readings (four half-aperture patch renders at half the samples each).
-    pub phase_readings: usize,
-    /// Camera rays generated: patch samples, half-aperture samples and range-finder probes.
+    /// Light fields recorded ([`LightField`]: the patch with a margin, every
+    /// sample kept, refocused to many sensor positions).
+    pub light_fields: usize,
+    /// Camera rays generated: patch render and light-field samples and range-finder probes.
     pub camera_rays: u64,
     /// Wall time.
     pub seconds: f64,
+}
+
+impl AutofocusResult {
+    /// How many of its evaluations are patch renders (the others are refocused light fields).
+    pub fn patch_renders(&self) -> usize {
+        self.evaluations.iter().filter(|e| !e.refocused).count()
+    }
 }
 
 /// The reference focus of a patch.
@@ -254,6 +260,9 @@ pub struct RangeFocus {
     pub best_focus_z_mm: f64,
     /// The fraction of the probes that hit something and fall in the dominant one-DoF window.
     pub dominant_fraction: f64,
+    /// The conjugates of the farthest and the nearest probe's depth, mm
+    /// behind the stop: the patch's depths, whatever carries its contrast.
+    pub probe_span_z_mm: (f64, f64),
 }
 
 /// Focuses one camera on one patch of one scene.
@@ -267,7 +276,7 @@ pub struct Focuser<'a> {
     exit_pupil: (f64, f64),
     mm_per_scene: f64,
     evaluations: Vec<Evaluation>,
-    phase_readings: usize,
+    light_fields: usize,
     camera_rays: u64,
 }
 
@@ -311,7 +320,7 @@ impl<'a> Focuser<'a> {
             system,
             settings,
             evaluations: Vec::new(),
-            phase_readings: 0,
+            light_fields: 0,
             camera_rays: 0,
         })
     }
@@ -365,21 +374,75 @@ impl<'a> Focuser<'a> {
         for (k, &half) in halves.iter().enumerate().filter(|(_, &h)| h > 0) {
             images.push(self.render_patch(&camera, half, stream_seed(seed, k), detail)?);
         }
-        let s = &self.settings;
-        let (w, h) = (s.patch.width as usize, s.patch.height as usize);
-        let patch = |i: usize| Patch::new(w, h, &images[i]);
-        let score = if images.len() == 2 {
-            s.measure.evaluate_pair(&patch(0)?, &patch(1)?)
-        } else {
-            s.measure.evaluate(&patch(0)?)
-        };
+        let score = self.score(&images)?;
         self.evaluations.push(Evaluation {
             sensor_z_mm: z,
             score,
             spp,
             detail,
+            refocused: false,
         });
         Ok(score)
+    }
+
+    /// The focus measure of one band-passed patch image, or of a pair with
+    /// independent noise ([`FocusMeasure::evaluate_pair`]).
+    fn score(&self, images: &[Vec<f32>]) -> Result<f64> {
+        let s = &self.settings;
+        let (w, h) = (s.patch.width as usize, s.patch.height as usize);
+        let patch = |i: usize| Patch::new(w, h, &images[i]);
+        Ok(if images.len() == 2 {
+            s.measure.evaluate_pair(&patch(0)?, &patch(1)?)
+        } else {
+            s.measure.evaluate(&patch(0)?)
+        })
+    }
+
+    /// The patch's light field recorded with the sensor at `z0` over `region`
+    /// ([`Focuser::light_field_region`]), in two halves with independent
+    /// seeds (scored as a pair, as [`Focuser::measure_at`] does) of together
+    /// `spp` samples per pixel.
+    fn record_light_fields(&mut self, z0: f64, region: FilmRegion, spp: u32) -> Result<[LightField; 2]> {
+        let s = &self.settings;
+        // Past the image's edges, the whole camera's pupil bands.
+        let camera = match region.inside(s.width, s.height) {
+            Some(crop) => RealisticCamera::for_region(self.pose, s.width, s.height, &self.camera_settings(z0), crop)?,
+            None => RealisticCamera::new(self.pose, s.width, s.height, &self.camera_settings(z0))?,
+        };
+        let half = |k: u32| Recording {
+            spp: (spp + k) / 2,
+            seed: stream_seed(s.seed, k as usize),
+            path: s.path,
+            threads: s.threads,
+        };
+        let fields = [
+            LightField::record(self.scene, camera.clone(), region, &half(0))?,
+            LightField::record(self.scene, camera, region, &half(1))?,
+        ];
+        self.camera_rays += fields.iter().map(LightField::samples).sum::<u64>();
+        self.light_fields += 1;
+        Ok(fields)
+    }
+
+    /// The film region a light field recorded at `z0` needs for refocusing
+    /// the patch anywhere in `sensor_z_mm` (near, far).
+    fn light_field_region(&self, z0: f64, sensor_z_mm: (f64, f64)) -> Result<FilmRegion> {
+        let camera = self.patch_camera(z0, self.settings.camera.aperture.clone())?;
+        Ok(LightField::region_for(&camera, self.settings.patch, sensor_z_mm))
+    }
+
+    /// The score of the patch refocused from `fields` to `z`, at
+    /// [`Detail::Fine`]; `None` out of their reach.
+    fn refocused_score(&self, fields: &[LightField], z: f64) -> Result<Option<f64>> {
+        let width = self.settings.patch.width as usize;
+        let mut images = Vec::new();
+        for field in fields {
+            match field.refocus(z, self.settings.patch) {
+                Some(rgb) => images.push(Detail::Fine.band_pass(&rgb, width)),
+                None => return Ok(None),
+            }
+        }
+        self.score(&images).map(Some)
     }
 
     /// The camera for patch renders with the sensor at `z`, its stop opening shaped as `aperture`.
@@ -424,7 +487,7 @@ impl<'a> Focuser<'a> {
     pub fn run(&mut self, strategy: Strategy) -> Result<AutofocusResult> {
         let started = Instant::now();
         self.evaluations.clear();
-        self.phase_readings = 0;
+        self.light_fields = 0;
         self.camera_rays = 0;
         let z = match strategy {
             Strategy::Sweep => self.sweep(None)?,
@@ -438,7 +501,7 @@ impl<'a> Focuser<'a> {
             sensor_z_mm: z,
             focus_distance: self.focus_distance_at(z),
             evaluations: std::mem::take(&mut self.evaluations),
-            phase_readings: self.phase_readings,
+            light_fields: self.light_fields,
             camera_rays: self.camera_rays,
             seconds: started.elapsed().as_secs_f64(),
         })
@@ -476,24 +539,83 @@ impl<'a> Focuser<'a> {
         Ok(best.1)
     }
 
-    /// Hybrid search, as a camera with phase-detect pixels focuses
-    /// (docs/autofocus.md): a start from the range finder and phase detection
-    /// ([`Focuser::phase_focus`]), or, with nothing in the patch to range on,
+    /// Hybrid search, as a camera that ranges and then checks the contrast
+    /// focuses (docs/autofocus.md): a start from the range finder
+    /// ([`Focuser::range_focus`]), or, with nothing in the patch to range on,
     /// from a coarse contrast scan ([`Focuser::coarse_peak`]); then the
-    /// contrast peak near it ([`Focuser::fine_peak`]), which is what the
-    /// search answers to.
+    /// contrast peak near it, refocused from one light field with the rest of
+    /// [`FAST_BUDGET_OF_SWEEP`] ([`Focuser::refocused_peak`]).
     fn fast(&mut self) -> Result<f64> {
-        match self.phase_focus()? {
-            Some(z0) => self.fine_peak(z0),
+        match self.range_focus()? {
+            Some(range) => self.refocused_peak(range.best_focus_z_mm, range.probe_span_z_mm, FAST_BUDGET_OF_SWEEP),
             None => self.contrast_search(),
         }
     }
 
-    /// The contrast search from nothing: the coarse scan's peak, refined by
-    /// the fine stage. What `fast` does when there is nothing to range on.
+    /// The contrast search from nothing: the coarse scan's peak, refined from
+    /// a light field. What `fast` does when there is nothing to range on.
     fn contrast_search(&mut self) -> Result<f64> {
         let z0 = self.coarse_peak()?;
-        self.fine_peak(z0)
+        self.refocused_peak(z0, (z0, z0), FAST_BUDGET_OF_SWEEP)
+    }
+
+    /// The contrast peak near `z0`, refocused from one light field recorded
+    /// there with what is left of `budget_of_sweep` (a fraction of the
+    /// sweep's camera rays):
+    /// 1. the patch refocused in quarter-DoF steps over
+    ///    [`LIGHT_FIELD_REACH_DOF`] either way of `z0` and 2 DoF beyond
+    ///    `span` (the sensor positions of the patch's depths: a wall the
+    ///    range finder ranges on may lie behind the edge that carries the
+    ///    contrast), at most [`LIGHT_FIELD_MAX_REACH_DOF`] from `z0`, scored at
+    ///    [`Detail::Fine`];
+    /// 2. the vertex of the least-squares log-parabola over 2 DoF either side
+    ///    of the best (a Gaussian fit of the peak).
+    ///
+    /// Every refocused image is made of the same samples, so the curve is
+    /// smooth in the sensor position (common random numbers without tracing
+    /// again) and costs one render's rays. It is one noise draw, whose tilt
+    /// (the noise projected on how the image changes with focus) shrinks with
+    /// its samples per pixel, so all the budget goes into one light field.
+    /// `z0` when the budget leaves less than 2 samples per pixel.
+    fn refocused_peak(&mut self, z0: f64, span: (f64, f64), budget_of_sweep: f64) -> Result<f64> {
+        let s = &self.settings;
+        let patch_pixels = f64::from(s.patch.width * s.patch.height);
+        let budget = budget_of_sweep * (self.steps(self.pitch_mm) as u32 * s.spp) as f64 * patch_pixels;
+        let dof = self.depth_of_focus_mm(z0);
+        let (near, far) = self.range_mm;
+        let (reach, max_reach) = (LIGHT_FIELD_REACH_DOF * dof, LIGHT_FIELD_MAX_REACH_DOF * dof);
+        let lo = (z0 - reach).min(span.0 - 2.0 * dof).max(z0 - max_reach).max(near);
+        let hi = (z0 + reach).max(span.1 + 2.0 * dof).min(z0 + max_reach).min(far);
+        let region = self.light_field_region(z0, (lo, hi))?;
+        let left = (budget - self.camera_rays as f64).max(0.0);
+        let region_pixels = f64::from(region.width) * f64::from(region.height);
+        let spp = (left.min(LIGHT_FIELD_MAX_SAMPLES as f64) / region_pixels).floor() as u32;
+        if spp < 2 {
+            return Ok(z0);
+        }
+        let fields = self.record_light_fields(z0, region, spp)?;
+        let steps = ((z0 - lo) / (0.25 * dof)).floor() as i32;
+        let mut curve = Vec::new();
+        for k in -steps.. {
+            let z = z0 + f64::from(k) * 0.25 * dof;
+            if z > hi {
+                break;
+            }
+            if let Some(score) = self.refocused_score(&fields, z)? {
+                curve.push((z, score));
+                self.evaluations.push(Evaluation {
+                    sensor_z_mm: z,
+                    score,
+                    spp,
+                    detail: Detail::Fine,
+                    refocused: true,
+                });
+            }
+        }
+        Ok(match curve.get(peak_index(&curve)) {
+            Some(&(peak, _)) => log_parabola_peak(&curve, peak, 2.01 * dof),
+            None => z0,
+        })
     }
 
     /// The coarse stage of a contrast search from nothing:
@@ -542,75 +664,6 @@ impl<'a> Focuser<'a> {
         ))
     }
 
-    /// The fine stage of the contrast search, in two rounds scored at
-    /// [`Detail::Fine`]: renders 1 DoF apart around `z0` at 1.5× the samples,
-    /// five and then more beyond the best (at most [`FINE_RENDERS`]), to find
-    /// the peak; then the best and up to two on each side again, with an
-    /// independent seed and the rest of the budget ([`FAST_BUDGET_OF_SWEEP`]);
-    /// the answer is the vertex of the least-squares log-parabola through
-    /// those, their two rounds' scores averaged weighted by samples.
-    fn fine_peak(&mut self, z0: f64) -> Result<f64> {
-        let (spp, seed) = (self.settings.spp, self.settings.seed);
-        let (near, far) = self.range_mm;
-        // Both rounds use common random numbers: every render of a round has
-        // the same seed, so neighbouring scores' noise is alike and the
-        // curve's shape is right, but the whole round shares one noise draw,
-        // which tilts it (its error, the noise projected on how the image
-        // changes with focus, shrinks with the round's samples per pixel, not
-        // with its renders). So the first round finds the peak, and the
-        // second spends the rest of the budget on the few renders the fit
-        // uses, with an independent noise draw: averaged, the two rounds'
-        // tilts partly cancel.
-        // Spent and budget are in camera rays per patch pixel (the phase
-        // detection's half-aperture renders count too).
-        let patch_pixels = f64::from(self.settings.patch.width * self.settings.patch.height);
-        let budget = FAST_BUDGET_OF_SWEEP * (self.steps(self.pitch_mm) as u32 * spp) as f64;
-        let affordable = |spent: u64| (budget - spent as f64 / patch_pixels).max(0.0);
-        // The first round at 1.5× the samples, fewer if its renders (at
-        // most FINE_RENDERS) would take the search past its budget.
-        let locate_spp =
-            (spp + spp / 2).min((affordable(self.camera_rays) / FINE_RENDERS as f64).floor().max(1.0) as u32);
-        let dof = self.depth_of_focus_mm(z0);
-        // The first round: five renders around z0 (moved inside the range
-        // rather than clamped, so none repeats), then one more at a time
-        // beyond the best while it has fewer than two neighbours on a side.
-        let first = (z0 - 2.0 * dof).clamp(near, (far - 4.0 * dof).max(near));
-        let mut points: Vec<(f64, f64)> = Vec::new();
-        for k in 0..5 {
-            let z = (first + f64::from(k) * dof).min(far);
-            points.push((z, self.measure_at(z, locate_spp, seed, Detail::Fine)?));
-        }
-        while points.len() < FINE_RENDERS {
-            let best = peak_index(&points);
-            let z = if best < 2 && points[0].0 - dof >= near {
-                points[0].0 - dof
-            } else if best + 2 >= points.len() && points[points.len() - 1].0 + dof <= far {
-                points[points.len() - 1].0 + dof
-            } else {
-                break;
-            };
-            let score = self.measure_at(z, locate_spp, seed, Detail::Fine)?;
-            let at = points.partition_point(|p| p.0 < z);
-            points.insert(at, (z, score));
-        }
-        // The second round over the best and its neighbours within 2 DoF.
-        let best = peak_index(&points);
-        let window = best.saturating_sub(FIT_HALF_WIDTH)..(best + FIT_HALF_WIDTH + 1).min(points.len());
-        let mut fit = points[window].to_vec();
-        let measure_spp = (affordable(self.camera_rays) / fit.len() as f64).floor() as u32;
-        // At least a pair of samples (one is scored without its noise removed).
-        if measure_spp >= 2 {
-            let measure_seed = stream_seed(seed, 2);
-            let weight = f64::from(measure_spp) / f64::from(measure_spp + locate_spp);
-            for point in &mut fit {
-                let score = self.measure_at(point.0, measure_spp, measure_seed, Detail::Fine)?;
-                point.1 += weight * (score - point.1);
-            }
-        }
-        let peak = fit[peak_index(&fit)].0;
-        Ok(log_parabola_peak(&fit, peak, 2.01 * dof))
-    }
-
     /// Camera rays through `k` × `k` points of the patch: what each hits, in
     /// camera space (scene units; the sensor centre is the origin and +z the
     /// view axis, so `z` is the depth along the axis).
@@ -655,12 +708,6 @@ impl<'a> Focuser<'a> {
     /// modulation at their actual positions ([`Focuser::point_best_focus_z`]),
     /// and their median. `None` when no probe hits anything.
     pub fn range_focus(&mut self) -> Result<Option<RangeFocus>> {
-        Ok(self.range_probe()?.map(|(range, _)| range))
-    }
-
-    /// [`Focuser::range_focus`] and the camera-space point of the dominant
-    /// window's median probe.
-    fn range_probe(&mut self) -> Result<Option<(RangeFocus, Vec3)>> {
         let mut probes: Vec<(f64, Vec3)> = self
             .probe_points(8)?
             .into_iter()
@@ -689,13 +736,12 @@ impl<'a> Focuser<'a> {
             })
             .collect();
         best_focus.sort_by(f64::total_cmp);
-        let (conjugate_z_mm, point) = dominant[dominant.len() / 2];
-        let range = RangeFocus {
-            conjugate_z_mm,
+        Ok(Some(RangeFocus {
+            conjugate_z_mm: dominant[dominant.len() / 2].0,
             best_focus_z_mm: best_focus[best_focus.len() / 2],
             dominant_fraction: best_count as f64 / probes.len() as f64,
-        };
-        Ok(Some((range, point)))
+            probe_span_z_mm: (probes[0].0, probes[probes.len() - 1].0),
+        }))
     }
 
     /// The camera-space point `p` (scene units from the sensor centre) in lens
@@ -735,103 +781,15 @@ impl<'a> Focuser<'a> {
         }
     }
 
-    /// Range finder and phase detection ([`Focuser::phase_focus`]); with
-    /// nothing in the patch to range on, the contrast search instead.
+    /// The range finder ([`Focuser::range_focus`]), then a short contrast
+    /// refinement from a light field with the rest of
+    /// [`DEPTH_BUDGET_OF_SWEEP`] ([`Focuser::refocused_peak`]); with nothing
+    /// in the patch to range on, the contrast search instead.
     fn depth(&mut self) -> Result<f64> {
-        match self.phase_focus()? {
-            Some(z) => Ok(z),
+        match self.range_focus()? {
+            Some(range) => self.refocused_peak(range.best_focus_z_mm, range.probe_span_z_mm, DEPTH_BUDGET_OF_SWEEP),
             None => self.contrast_search(),
         }
-    }
-
-    /// The range finder's best focus, corrected by two phase-detect readings
-    /// ([`Focuser::phase_detect`]): one there and one where it points. Both
-    /// are scored at the coarse scale, where a shift of a few pixels still
-    /// correlates and the noise is weak (the fine scale's 8-sample readings
-    /// were noise-led on dim patches), and the answer is their estimates'
-    /// inverse-variance mean (the last alone when the first was more than 2
-    /// DoF from its answer). The lens's calibration comes from the ranged
-    /// point. `None` when no probe hits anything.
-    fn phase_focus(&mut self) -> Result<Option<f64>> {
-        let Some((range, point)) = self.range_probe()? else {
-            return Ok(None);
-        };
-        let mut z = range.best_focus_z_mm;
-        let Some(calibration) = self.phase_calibration(point, z) else {
-            return Ok(Some(z));
-        };
-        let (mut weighted, mut total) = (0.0, 0.0);
-        for _ in 0..PHASE_READINGS {
-            if let Some(reading) = self.phase_detect(z, &calibration)? {
-                // A reading far from focus only points the way: the halves'
-                // images are blurred, and their shift may pass the search's end.
-                if (reading.sensor_z_mm - z).abs() > 2.0 * self.depth_of_focus_mm(z) {
-                    (weighted, total) = (0.0, 0.0);
-                }
-                z = reading.sensor_z_mm;
-                weighted += reading.sensor_z_mm * reading.weight;
-                total += reading.weight;
-            }
-        }
-        Ok(Some(if total > 0.0 { weighted / total } else { z }))
-    }
-
-    /// The phase-detect calibration of both splits of the stop for the
-    /// camera-space point `p` with the sensor near `z`: how fast the halves'
-    /// images separate, and how far the lens's best contrast lies from where
-    /// they coincide. `None` when the lens passes no ray from `p` through a half.
-    fn phase_calibration(&self, p: Vec3, z: f64) -> Option<[PhaseCalibration; 2]> {
-        let best = self.point_best_focus_z(p, z);
-        let bundle = self.system.spot_bundle(self.lens_point(p, best), 32);
-        let calibrate = |split: Split| {
-            let (a, b) = bundle.half_pupil_separation(split.axis())?;
-            Some(PhaseCalibration {
-                separation_per_mm: b,
-                best_minus_zero_mm: best + a / b,
-            })
-        };
-        Some([calibrate(Split::LeftRight)?, calibrate(Split::TopBottom)?])
-    }
-
-    /// One phase-detect reading with the sensor at `z`: the patch rendered
-    /// through each half of the stop for both splits (four renders of half
-    /// the samples, independent seeds), band-passed at the coarse scale; each
-    /// split's shift ([`disparity`]) gives a best-contrast position through
-    /// `calibration`. They are averaged with weights the square of the
-    /// correlation peak's sharpness: the shift's noise is the noise of the
-    /// correlation's slope over that sharpness, and the noise is alike for
-    /// both splits. Searched up to [`PHASE_MAX_SHIFT_PX`] either way. `None`
-    /// when neither split sees shared detail.
-    fn phase_detect(&mut self, z: f64, calibration: &[PhaseCalibration; 2]) -> Result<Option<PhaseReading>> {
-        let (spp, seed) = ((self.settings.spp / 2).max(1), self.settings.seed);
-        let (w, h) = (self.settings.patch.width as usize, self.settings.patch.height as usize);
-        let (sw, sh) = self.settings.camera.sensor_mm;
-        // Lens x runs against the image's columns and lens y along its rows
-        // (the sensor sees the scene upside down; RealisticCamera::film_point).
-        let mm_per_px = [
-            -sw / f64::from(self.settings.width),
-            sh / f64::from(self.settings.height),
-        ];
-        self.phase_readings += 1;
-        let (mut weighted, mut total) = (0.0, 0.0);
-        for (k, split) in Split::BOTH.into_iter().enumerate() {
-            let mut images = Vec::with_capacity(2);
-            for (half, (mw, mh, values)) in split.half_masks().into_iter().enumerate() {
-                let camera = self.patch_camera(z, ApertureShape::mask(mw, mh, values)?)?;
-                images.push(self.render_patch(&camera, spp, stream_seed(seed, 2 * k + half), Detail::Coarse)?);
-            }
-            let axis = split.axis();
-            if let Some(d) = disparity(&images[0], &images[1], w, h, axis, PHASE_MAX_SHIFT_PX) {
-                let weight = d.strength * d.strength;
-                weighted += weight * calibration[k].best_focus_z(z, d.shift_px * mm_per_px[axis]);
-                total += weight;
-            }
-        }
-        let (near, far) = self.range_mm;
-        Ok((total > 0.0).then(|| PhaseReading {
-            sensor_z_mm: (weighted / total).clamp(near, far),
-            weight: total,
-        }))
     }
 
     /// `(z, score)` at each sensor position of `zs`, scored at the fine scale.

@@ -17,7 +17,7 @@ mod aperture;
 mod realistic;
 pub use aperture::{Aperture, ApertureMask, ApertureShape};
 pub use realistic::{
-    sensor_for_image, LensFocus, Radiometry, RealisticCamera, RealisticCameraSettings, DEFAULT_LENS,
+    sensor_for_image, LensFocus, LensSample, Radiometry, RealisticCamera, RealisticCameraSettings, DEFAULT_LENS,
     DEFAULT_SENSOR_WIDTH_MM,
 };
 

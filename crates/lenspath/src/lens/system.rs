@@ -175,11 +175,6 @@ impl LensSystem {
         self.surfaces[0].aperture_radius
     }
 
-    /// Index of the aperture stop among the surfaces, front to rear.
-    pub(crate) fn stop_index(&self) -> usize {
-        self.stop
-    }
-
     /// Current radius of the aperture stop, mm.
     pub fn stop_radius(&self) -> f64 {
         self.surfaces[self.stop].aperture_radius

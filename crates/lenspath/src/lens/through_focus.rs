@@ -10,12 +10,7 @@
 //! Optical Engineering*, 4th ed., §11.7: the MTF of a spot diagram is the
 //! magnitude of the mean of exp(2πi·ν·x) over its ray intercepts).
 //!
-//! The bundle also keeps where each ray crossed the aperture stop, so it can
-//! say what a phase-detect sensor sees: the images through two halves of the
-//! stop, whose centroids separate in proportion to the defocus
-//! ([`SpotBundle::half_pupil_separation`]).
-
-use glam::{DVec2, DVec3};
+use glam::DVec3;
 
 use super::system::{Direction, LensRay, LensSystem};
 
@@ -23,8 +18,6 @@ use super::system::{Direction, LensRay, LensSystem};
 #[derive(Clone, Debug)]
 pub struct SpotBundle {
     rays: Vec<LensRay>,
-    /// Where each ray crossed the aperture stop (x, y in lens coordinates, mm).
-    at_stop: Vec<DVec2>,
 }
 
 impl LensSystem {
@@ -35,7 +28,7 @@ impl LensSystem {
     pub fn spot_bundle(&self, object: DVec3, grid: usize) -> SpotBundle {
         let radius = self.front_aperture_radius();
         let front_z = self.front_z();
-        let (mut rays, mut at_stop) = (Vec::with_capacity(grid * grid), Vec::with_capacity(grid * grid));
+        let mut rays = Vec::with_capacity(grid * grid);
         for j in 0..grid {
             for i in 0..grid {
                 let u = 2.0 * (i as f64 + 0.5) / grid as f64 - 1.0;
@@ -44,20 +37,13 @@ impl LensSystem {
                     continue;
                 }
                 let target = DVec3::new(u * radius, v * radius, front_z);
-                let (mut crossed, mut stop) = (0, DVec3::ZERO);
-                let out = self.trace_visiting(&LensRay::between(object, target), Direction::ToSensor, |p| {
-                    if crossed == self.stop_index() {
-                        stop = p;
-                    }
-                    crossed += 1;
-                });
+                let out = self.trace(&LensRay::between(object, target), Direction::ToSensor);
                 if let Some(out) = out.filter(|o| o.direction.z > 0.0) {
                     rays.push(out);
-                    at_stop.push(stop.truncate());
                 }
             }
         }
-        SpotBundle { rays, at_stop }
+        SpotBundle { rays }
     }
 }
 
@@ -93,33 +79,6 @@ impl SpotBundle {
         }
         let n2 = (self.rays.len() * self.rays.len()) as f64;
         0.5 * ((cx * cx + sx * sx) + (cy * cy + sy * sy)) / n2
-    }
-
-    /// How the images through the two halves of the stop split along `axis`
-    /// (0: x, the halves x > 0 and x < 0; 1: y) move apart with the sensor
-    /// position: `(a, b)` such that the centroid of the + half's spot minus the
-    /// − half's, along that axis at sensor position z, is a + b·z mm (lens
-    /// coordinates). Exactly linear, since every ray's intercept is. The
-    /// separation is zero at z = −a/b, the plane a phase-detect sensor focuses
-    /// on; with spherical aberration that is not the plane of best contrast.
-    /// `None` when a half is empty or the halves do not separate.
-    pub fn half_pupil_separation(&self, axis: usize) -> Option<(f64, f64)> {
-        // Intercept along the axis at z: (origin − direction·origin.z/direction.z) + (direction/direction.z)·z.
-        let mut sums = [[0.0f64; 3]; 2]; // per half: count, Σ intercept at z = 0, Σ slope
-        for (ray, stop) in self.rays.iter().zip(&self.at_stop) {
-            let half = &mut sums[usize::from(stop[axis] > 0.0)];
-            let slope = ray.direction[axis] / ray.direction.z;
-            half[0] += 1.0;
-            half[1] += ray.origin[axis] - slope * ray.origin.z;
-            half[2] += slope;
-        }
-        let [minus, plus] = sums;
-        if minus[0] == 0.0 || plus[0] == 0.0 {
-            return None;
-        }
-        let a = plus[1] / plus[0] - minus[1] / minus[0];
-        let b = plus[2] / plus[0] - minus[2] / minus[0];
-        (b.abs() > 1e-9).then_some((a, b))
     }
 
     /// The sensor position in [`lo`, `hi`] (mm behind the stop) where
@@ -175,8 +134,7 @@ mod tests {
                 LensRay::between(origin, DVec3::new(0.0, 0.0, 10.0))
             })
             .collect();
-        let at_stop = rays.iter().map(|r: &LensRay| r.origin.truncate()).collect();
-        let bundle = SpotBundle { rays, at_stop };
+        let bundle = SpotBundle { rays };
         for (delta, nu) in [(0.5, 3.0), (1.0, 2.0), (2.0, 1.3)] {
             let w = 2.0 * delta / 10.0;
             let x = std::f64::consts::PI * nu * w;
@@ -187,12 +145,6 @@ mod tests {
         assert!((bundle.modulation_energy(10.0, 5.0) - 1.0).abs() < 1e-12);
         let best = bundle.best_focus_z(8.0, 13.0, 500, 2.0).unwrap();
         assert!((best - 10.0).abs() < 1e-3, "{best}");
-        // The halves x > 0 and x < 0 have centroids ±0.5 mm at z = 0 and meet
-        // at z = 10: separation 1 − 0.1·z mm. Likewise in y.
-        for axis in [0, 1] {
-            let (a, b) = bundle.half_pupil_separation(axis).unwrap();
-            assert!((a - 1.0).abs() < 1e-9 && (b + 0.1).abs() < 1e-9, "axis {axis}: {a} {b}");
-        }
     }
 
     #[test]
@@ -213,33 +165,6 @@ mod tests {
         let peak = bundle.modulation_energy(best, 10.0);
         assert!(peak > 0.99, "{peak}");
         assert!(bundle.modulation_energy(best + 0.5, 10.0) < 0.85 * peak);
-    }
-
-    #[test]
-    fn stopped_down_the_half_pupils_meet_at_the_conjugate() {
-        // At f/16 the halves' images coincide where the point is in focus,
-        // and separate by about the pupil centroids' spacing over the
-        // distance behind the exit pupil per mm of sensor shift.
-        let lens = dgauss50().with_f_number(16.0).unwrap();
-        let conjugate = lens.real_image_z(-2000.0, 0.1).unwrap();
-        let bundle = lens.spot_bundle(DVec3::new(0.0, 0.0, -2000.0), 96);
-        for axis in [0, 1] {
-            let (a, b) = bundle.half_pupil_separation(axis).unwrap();
-            assert!(
-                (-a / b - conjugate).abs() < 0.01,
-                "axis {axis}: zero at {} vs {conjugate}",
-                -a / b
-            );
-            // Half-disks' centroids are 4r/(3π) from the centre; the paraxial exit pupil gives r and its place.
-            let p = lens.paraxial().unwrap();
-            let expected = 2.0 * 4.0 * (0.5 * p.exit_pupil_diameter_mm)
-                / (3.0 * std::f64::consts::PI)
-                / (conjugate - p.exit_pupil_z_mm);
-            assert!(
-                (b.abs() / expected - 1.0).abs() < 0.05,
-                "axis {axis}: {b} vs ∓{expected}"
-            );
-        }
     }
 
     #[test]

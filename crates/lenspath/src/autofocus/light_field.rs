@@ -1,0 +1,277 @@
+//! A patch's light field inside the camera: every sample of a patch render
+//! kept with the line it follows between the film and the lens, so that the
+//! patch can be imaged at any nearby sensor position without tracing a ray
+//! again (synthetic refocusing, as a plenoptic camera does it: Ng et al.
+//! 2005, "Light Field Photography with a Hand-held Plenoptic Camera").
+//!
+//! A sample recorded with the sensor at `z₀` starts at film point `x` and
+//! aims at rear-plane point `q`; with the sensor at `z` it lands at
+//! `q + (x − q)·s`, `s = (z − z_rear) / (z₀ − z_rear)`. Its weight needs no
+//! change: the shear scales film area by `s²` and the `1/d²` of the camera's
+//! `cos⁴θ·A/d²` weight by `1/s²`. Each pixel of the refocused image is the
+//! mean of the samples that land in it (pbrt's film estimate: the ratio of
+//! their sum to their count), so at `z₀` it is exactly the render.
+//!
+//! Samples land up to a blur radius away and the image breathes (grows as
+//! the sensor moves back), so the patch is recorded with a margin that
+//! covers the sensor positions asked for; [`LightField::refocus`] refuses
+//! positions whose samples could come from outside it.
+
+use glam::{DVec3, Vec2, Vec3};
+use rayon::prelude::*;
+
+use crate::camera::{CameraSample, RealisticCamera};
+use crate::error::{Error, Result};
+use crate::film::Filter;
+use crate::integrator::{radiance, PathSettings};
+use crate::render::PixelRect;
+use crate::sampling::Sampler;
+use crate::scene::CompiledScene;
+
+/// One sample of the light field.
+#[derive(Clone, Copy, Debug)]
+struct Record {
+    /// Raster position on the film where it was recorded.
+    film: Vec2,
+    /// Raster position of the rear-plane point its line aims at.
+    rear: Vec2,
+    /// Weighted radiance (zero when the lens blocks it).
+    radiance: Vec3,
+}
+
+/// A rectangle of film pixels that may reach past the image's edges (the
+/// light that would land inside it from there is recorded all the same).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct FilmRegion {
+    /// First column (negative: left of the image).
+    pub x0: i32,
+    /// First row (negative: above the image).
+    pub y0: i32,
+    /// Columns.
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
+}
+
+impl FilmRegion {
+    /// The region as a crop of a `width`×`height` image, when it lies inside it.
+    pub fn inside(&self, width: u32, height: u32) -> Option<PixelRect> {
+        let fits = self.x0 >= 0
+            && self.y0 >= 0
+            && self.x0 as u32 + self.width <= width
+            && self.y0 as u32 + self.height <= height;
+        fits.then_some(PixelRect {
+            x0: self.x0 as u32,
+            y0: self.y0 as u32,
+            width: self.width,
+            height: self.height,
+        })
+    }
+
+    fn contains(&self, p: Vec2) -> bool {
+        p.x >= self.x0 as f32
+            && p.y >= self.y0 as f32
+            && p.x <= (self.x0 + self.width as i32) as f32
+            && p.y <= (self.y0 + self.height as i32) as f32
+    }
+}
+
+/// The corners of `patch`, raster coordinates.
+fn corners(patch: PixelRect) -> [Vec2; 4] {
+    let (x0, y0) = (patch.x0 as f32, patch.y0 as f32);
+    let (x1, y1) = (x0 + patch.width as f32, y0 + patch.height as f32);
+    [
+        Vec2::new(x0, y0),
+        Vec2::new(x1, y0),
+        Vec2::new(x0, y1),
+        Vec2::new(x1, y1),
+    ]
+}
+
+/// Where a line through rear-plane point `rear` that lands at `p` with the
+/// sensor `scale` times as far from the rear plane crossed the recording.
+fn at_recording(p: Vec2, rear: Vec2, scale: f32) -> Vec2 {
+    rear + (p - rear) / scale
+}
+
+/// The samples of a region rendered with the sensor at one position.
+pub struct LightField {
+    camera: RealisticCamera,
+    region: FilmRegion,
+    records: Vec<Record>,
+    /// Bounding box of the records' rear-plane points, raster coordinates.
+    rear_bounds: (Vec2, Vec2),
+}
+
+/// How a light field is recorded.
+#[derive(Clone, Copy, Debug)]
+pub struct Recording {
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Seed of the sample sequences (a render with it has the same samples).
+    pub seed: u32,
+    /// Path depth and light sampling.
+    pub path: PathSettings,
+    /// Worker threads (`None`: all cores).
+    pub threads: Option<usize>,
+}
+
+impl LightField {
+    /// The film region to record so that `patch` can be refocused anywhere
+    /// from `sensor_z_mm.0` to `sensor_z_mm.1` through `camera`: the patch's
+    /// corners carried back to the camera's sensor position along lines
+    /// through the rear aperture's bounding box, plus a pixel.
+    pub fn region_for(camera: &RealisticCamera, patch: PixelRect, sensor_z_mm: (f64, f64)) -> FilmRegion {
+        let (rear_lo, rear_hi) = camera.rear_aperture_raster_bounds();
+        let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
+        for z in [sensor_z_mm.0, sensor_z_mm.1] {
+            let scale = camera.refocus_scale(z) as f32;
+            for c in corners(patch) {
+                for rear in corners_of(rear_lo, rear_hi) {
+                    let p = at_recording(c, rear, scale);
+                    (lo, hi) = (lo.min(p), hi.max(p));
+                }
+            }
+        }
+        let (lo, hi) = (lo.floor() - Vec2::ONE, hi.ceil() + Vec2::ONE);
+        let (x0, y0) = ((lo.x as i32).min(patch.x0 as i32), (lo.y as i32).min(patch.y0 as i32));
+        let x1 = (hi.x as i32).max((patch.x0 + patch.width) as i32);
+        let y1 = (hi.y as i32).max((patch.y0 + patch.height) as i32);
+        FilmRegion {
+            x0,
+            y0,
+            width: (x1 - x0) as u32,
+            height: (y1 - y0) as u32,
+        }
+    }
+
+    /// Renders `region` through `camera` keeping every sample; inside the
+    /// image the samples are those of [`crate::render::render`] with the same
+    /// seed and a box filter. The camera must cover the region (one made by
+    /// [`RealisticCamera::for_region`] for a crop that reaches past it by a
+    /// pixel or two does, as does the whole camera).
+    pub fn record(
+        scene: &CompiledScene,
+        camera: RealisticCamera,
+        region: FilmRegion,
+        recording: &Recording,
+    ) -> Result<LightField> {
+        let Recording {
+            spp,
+            seed,
+            path,
+            threads,
+        } = *recording;
+        if spp == 0 {
+            return Err(Error::InvalidArgument(
+                "a light field needs at least 1 sample per pixel".into(),
+            ));
+        }
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads.unwrap_or(0))
+            .build()
+            .map_err(|e| Error::InvalidArgument(format!("cannot start worker threads: {e}")))?;
+        let rows: Vec<Vec<Record>> = pool.install(|| {
+            (region.y0..region.y0 + region.height as i32)
+                .into_par_iter()
+                .map(|py| {
+                    let mut row = Vec::with_capacity((region.width * spp) as usize);
+                    let mut rays = 0u64;
+                    for px in region.x0..region.x0 + region.width as i32 {
+                        let centre = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
+                        for index in 0..spp {
+                            // Pixels past the image's edges get samplers of their own (wrapped indices).
+                            let mut sampler = Sampler::new(px as u32, py as u32, index, seed);
+                            let film = centre + Filter::Box.sample_offset(sampler.get_2d());
+                            let sample = camera.generate_lens_sample(CameraSample {
+                                film,
+                                lens: sampler.get_2d(),
+                            });
+                            let l = sample.ray.map_or(Vec3::ZERO, |cr| {
+                                cr.weight * radiance(scene, cr.ray, &mut sampler, &path, &mut rays)
+                            });
+                            row.push(Record {
+                                film,
+                                rear: sample.rear_raster,
+                                // A non-finite sample counts as black, as in a render.
+                                radiance: if l.is_finite() { l } else { Vec3::ZERO },
+                            });
+                        }
+                    }
+                    row
+                })
+                .collect()
+        });
+        let records: Vec<Record> = rows.into_iter().flatten().collect();
+        let rear_bounds = records.iter().fold(
+            (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY)),
+            |(lo, hi), r| (lo.min(r.rear), hi.max(r.rear)),
+        );
+        Ok(LightField {
+            camera,
+            region,
+            records,
+            rear_bounds,
+        })
+    }
+
+    /// Samples recorded (camera rays).
+    pub fn samples(&self) -> u64 {
+        self.records.len() as u64
+    }
+
+    /// The sensor position it was recorded at, mm behind the stop.
+    pub fn sensor_z_mm(&self) -> f64 {
+        self.camera.sensor_z_mm()
+    }
+
+    /// Whether every sample that lands in `patch` with the sensor at
+    /// `sensor_z_mm` was recorded: each line through the recorded rear-plane
+    /// points that reaches the patch crossed the recording inside the region.
+    pub fn reaches(&self, sensor_z_mm: f64, patch: PixelRect) -> bool {
+        let scale = self.camera.refocus_scale(sensor_z_mm) as f32;
+        let (rear_lo, rear_hi) = self.rear_bounds;
+        corners(patch).iter().all(|&c| {
+            corners_of(rear_lo, rear_hi)
+                .iter()
+                .all(|&rear| self.region.contains(at_recording(c, rear, scale)))
+        })
+    }
+
+    /// The image of `patch` (RGB, row by row) with the sensor at
+    /// `sensor_z_mm`: each pixel the mean of the samples landing in it (none:
+    /// black). `None` when the patch is out of reach ([`LightField::reaches`]).
+    pub fn refocus(&self, sensor_z_mm: f64, patch: PixelRect) -> Option<Vec<f32>> {
+        if !self.reaches(sensor_z_mm, patch) {
+            return None;
+        }
+        let (w, h) = (patch.width as usize, patch.height as usize);
+        let mut sum = vec![DVec3::ZERO; w * h];
+        let mut count = vec![0u32; w * h];
+        let recorded_here = sensor_z_mm == self.camera.sensor_z_mm();
+        for r in &self.records {
+            let p = if recorded_here {
+                r.film
+            } else {
+                self.camera.refocused_raster(r.film, r.rear, sensor_z_mm)
+            };
+            let (x, y) = (p.x.floor() - patch.x0 as f32, p.y.floor() - patch.y0 as f32);
+            if x >= 0.0 && y >= 0.0 && (x as usize) < w && (y as usize) < h {
+                let k = y as usize * w + x as usize;
+                sum[k] += r.radiance.as_dvec3();
+                count[k] += 1;
+            }
+        }
+        let mut rgb = vec![0f32; 3 * w * h];
+        for ((out, s), &n) in rgb.chunks_exact_mut(3).zip(&sum).zip(&count) {
+            let mean = if n > 0 { *s / f64::from(n) } else { DVec3::ZERO };
+            out.copy_from_slice(&mean.as_vec3().to_array());
+        }
+        Some(rgb)
+    }
+}
+
+/// The four corners of the box from `lo` to `hi`.
+fn corners_of(lo: Vec2, hi: Vec2) -> [Vec2; 4] {
+    [lo, Vec2::new(hi.x, lo.y), Vec2::new(lo.x, hi.y), hi]
+}

@@ -1,0 +1,138 @@
+//! The light field inside the camera: refocused where it was recorded it is
+//! the render, and refocused elsewhere it is what a render there sees (the
+//! same image up to noise), on a checkerboard plane whose sharpness depends
+//! strongly on the sensor position.
+
+use std::sync::atomic::AtomicBool;
+
+use glam::Vec3;
+use lenspath::accel::BvhSettings;
+use lenspath::autofocus::light_field::{LightField, Recording};
+use lenspath::builtin::{add_checkerboard, checker_scene};
+use lenspath::camera::{CameraPose, LensFocus, RealisticCamera, RealisticCameraSettings};
+use lenspath::film::Filter;
+use lenspath::integrator::PathSettings;
+use lenspath::lens::{LensPrescription, LensSystem};
+use lenspath::render::{render, PixelRect, RenderSettings};
+use lenspath::scene::CompiledScene;
+
+const SIZE: (u32, u32) = (320, 240);
+
+/// 32 × 32 pixels, off the axis (the image breathes as the sensor moves).
+const PATCH: PixelRect = PixelRect {
+    x0: 200,
+    y0: 60,
+    width: 32,
+    height: 32,
+};
+
+const PATH: PathSettings = PathSettings {
+    max_depth: 2,
+    light_samples: 1,
+};
+
+fn plane(distance: f32) -> CompiledScene {
+    let mut scene = checker_scene();
+    add_checkerboard(&mut scene, (-2.0, 2.0), (-1.5, 1.5), distance, 0.02);
+    scene.compile(&BvhSettings::default()).unwrap()
+}
+
+fn pose() -> CameraPose {
+    CameraPose::look_at(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y)
+}
+
+fn settings(sensor_z_mm: f64) -> RealisticCameraSettings {
+    RealisticCameraSettings::new(
+        LensPrescription::load("dgauss50").unwrap(),
+        (36.0, 27.0),
+        LensFocus::SensorPositionMm(sensor_z_mm),
+    )
+}
+
+/// The patch rendered with the sensor at `sensor_z_mm`, RGB row by row.
+fn render_patch(scene: &CompiledScene, sensor_z_mm: f64, spp: u32, seed: u32) -> Vec<f32> {
+    let camera = RealisticCamera::for_region(pose(), SIZE.0, SIZE.1, &settings(sensor_z_mm), PATCH).unwrap();
+    let render_settings = RenderSettings {
+        width: SIZE.0,
+        height: SIZE.1,
+        spp,
+        path: PATH,
+        seed,
+        filter: Filter::Box,
+        threads: None,
+        tile_size: 16,
+        crop: Some(PATCH),
+        depth: false,
+    };
+    render(scene, &camera, &render_settings, &|_, _| {}, &AtomicBool::new(false))
+        .unwrap()
+        .image
+        .rgb
+}
+
+/// A light field recorded at `sensor_z_mm` that reaches `reach`.
+fn record(scene: &CompiledScene, sensor_z_mm: f64, reach: (f64, f64), spp: u32, seed: u32) -> LightField {
+    let patch_camera = RealisticCamera::for_region(pose(), SIZE.0, SIZE.1, &settings(sensor_z_mm), PATCH).unwrap();
+    let region = LightField::region_for(&patch_camera, PATCH, reach);
+    let crop = region.inside(SIZE.0, SIZE.1).expect("the region lies inside the image");
+    let camera = RealisticCamera::for_region(pose(), SIZE.0, SIZE.1, &settings(sensor_z_mm), crop).unwrap();
+    let recording = Recording {
+        spp,
+        seed,
+        path: PATH,
+        threads: None,
+    };
+    LightField::record(scene, camera, region, &recording).unwrap()
+}
+
+/// Mean absolute difference of two images.
+fn difference(a: &[f32], b: &[f32]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| f64::from((x - y).abs())).sum::<f64>() / a.len() as f64
+}
+
+/// The sensor position focusing `distance` metres, and the DoF (one pixel of blur) there.
+fn focus(distance: f64) -> (f64, f64) {
+    let system = LensSystem::new(&LensPrescription::load("dgauss50").unwrap());
+    let z = system.sensor_z_for_focus_distance(distance * 1e3, 0.1).unwrap();
+    let paraxial = system.paraxial().unwrap();
+    let pitch = 36.0f64.hypot(27.0) / f64::from(SIZE.0).hypot(f64::from(SIZE.1));
+    (
+        z,
+        pitch * (z - paraxial.exit_pupil_z_mm) / paraxial.exit_pupil_diameter_mm,
+    )
+}
+
+#[test]
+fn refocused_where_it_was_recorded_a_light_field_is_the_render() {
+    let scene = plane(1.5);
+    let (z, dof) = focus(1.5);
+    let field = record(&scene, z, (z - 3.0 * dof, z + 3.0 * dof), 8, 11);
+    assert_eq!(field.samples() % 8, 0);
+    // The same samples, summed in the same order: the same bits.
+    assert_eq!(field.refocus(z, PATCH).unwrap(), render_patch(&scene, z, 8, 11));
+}
+
+#[test]
+fn refocused_elsewhere_a_light_field_sees_what_a_render_there_sees() {
+    let scene = plane(1.5);
+    let (focused, dof) = focus(1.5);
+    // Recorded 3 DoF behind focus, refocused onto the plane and 3 DoF in front.
+    let recorded_at = focused + 3.0 * dof;
+    let field = record(&scene, recorded_at, (focused - 4.0 * dof, recorded_at + dof), 64, 3);
+    for target in [focused, focused - 3.0 * dof] {
+        let refocused = field.refocus(target, PATCH).unwrap();
+        let rendered = render_patch(&scene, target, 64, 5);
+        let noise = difference(&render_patch(&scene, target, 64, 9), &rendered);
+        let error = difference(&refocused, &rendered);
+        // As close to the render as an independent render is, and much
+        // closer than the image where it was recorded (6 pixels of blur apart).
+        let unmoved = difference(&field.refocus(recorded_at, PATCH).unwrap(), &rendered);
+        assert!(
+            error < 1.4 * noise && error < 0.5 * unmoved,
+            "at {:+.1} DoF: {error:.4} from a render there, renders differ by {noise:.4}, the recording by {unmoved:.4}",
+            (target - focused) / dof
+        );
+    }
+    // Beyond the margin it was recorded with, it refuses.
+    assert!(field.refocus(focused - 12.0 * dof, PATCH).is_none());
+}
