@@ -297,11 +297,31 @@ pub fn render_from(
 ) -> Result<RenderOutput> {
     settings.validate()?;
     let tiles = tiles(settings, start)?;
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(settings.threads.unwrap_or(0))
+    worker_pool(settings.threads)?
+        .install(|| render_in_pool(scene, camera, settings, tiles, checkpoints, progress, cancel))
+}
+
+/// A pool of `threads` worker threads (`None`: one per core).
+pub(crate) fn worker_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
         .build()
-        .map_err(|e| Error::InvalidArgument(format!("cannot start worker threads: {e}")))?;
-    pool.install(|| render_in_pool(scene, camera, settings, tiles, checkpoints, progress, cancel))
+        .map_err(|e| Error::InvalidArgument(format!("cannot start worker threads: {e}")))
+}
+
+/// Sample `index` of pixel `(px, py)` under `seed`: its camera sample (the
+/// film position, the pixel centre moved by `filter`'s offset, and the lens
+/// position: the sampler's first two dimensions) and the sampler, which the
+/// path goes on with. Every render and light field draws its samples here,
+/// so the same seed gives the same samples. Pixels past the image's left or
+/// top edge (a light field's margin) get samplers of their own, seeded with
+/// their wrapped coordinates.
+pub(crate) fn pixel_sample(px: i32, py: i32, index: u32, seed: u32, filter: Filter) -> (Sampler, CameraSample) {
+    let mut sampler = Sampler::new(px as u32, py as u32, index, seed);
+    let centre = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
+    let film = centre + filter.sample_offset(sampler.get_2d());
+    let lens = sampler.get_2d();
+    (sampler, CameraSample { film, lens })
 }
 
 /// The region a render covers: its crop, else the whole image.
@@ -427,16 +447,9 @@ fn render_tile(
             let pair = [tx, (tx + 1).min(tile.width - 1)].map(|x| (tile.x0 + x, tile.y0 + ty));
             let slots = [tx, tx + 1].map(|x| (ty * tile.width + x) as usize);
             for index in first..pass_end {
-                let mut samplers = pair.map(|(px, py)| Sampler::new(px, py, index, settings.seed));
-                let samples: [CameraSample; 2] = std::array::from_fn(|k| {
-                    let (px, py) = pair[k];
-                    let centre = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
-                    let film = centre + settings.filter.sample_offset(samplers[k].get_2d());
-                    CameraSample {
-                        film,
-                        lens: samplers[k].get_2d(),
-                    }
-                });
+                let [(sampler_a, sample_a), (sampler_b, sample_b)] =
+                    pair.map(|(px, py)| pixel_sample(px as i32, py as i32, index, settings.seed, settings.filter));
+                let (mut samplers, samples) = ([sampler_a, sampler_b], [sample_a, sample_b]);
                 let rays = if pixels == 2 {
                     camera.generate_ray_pair(samples)
                 } else {

@@ -26,6 +26,16 @@ const PATCH: PixelRect = PixelRect {
     height: 32,
 };
 
+/// 32 × 32 pixels on the image's top edge: refocused toward the lens, its
+/// samples come from film points above the image, which the light field
+/// records all the same.
+const EDGE_PATCH: PixelRect = PixelRect {
+    x0: 200,
+    y0: 0,
+    width: 32,
+    height: 32,
+};
+
 const PATH: PathSettings = PathSettings {
     max_depth: 2,
     light_samples: 1,
@@ -49,9 +59,9 @@ fn settings(sensor_z_mm: f64) -> RealisticCameraSettings {
     )
 }
 
-/// The patch rendered with the sensor at `sensor_z_mm`, RGB row by row.
-fn render_patch(scene: &CompiledScene, sensor_z_mm: f64, spp: u32, seed: u32) -> Vec<f32> {
-    let camera = RealisticCamera::for_region(pose(), SIZE.0, SIZE.1, &settings(sensor_z_mm), PATCH).unwrap();
+/// `patch` rendered with the sensor at `sensor_z_mm`, RGB row by row.
+fn render_patch(scene: &CompiledScene, patch: PixelRect, sensor_z_mm: f64, spp: u32, seed: u32) -> Vec<f32> {
+    let camera = RealisticCamera::for_region(pose(), SIZE.0, SIZE.1, &settings(sensor_z_mm), patch).unwrap();
     let render_settings = RenderSettings {
         width: SIZE.0,
         height: SIZE.1,
@@ -61,7 +71,7 @@ fn render_patch(scene: &CompiledScene, sensor_z_mm: f64, spp: u32, seed: u32) ->
         filter: Filter::Box,
         threads: None,
         tile_size: 16,
-        crop: Some(PATCH),
+        crop: Some(patch),
         depth: false,
     };
     render(scene, &camera, &render_settings, &|_, _| {}, &AtomicBool::new(false))
@@ -70,12 +80,24 @@ fn render_patch(scene: &CompiledScene, sensor_z_mm: f64, spp: u32, seed: u32) ->
         .rgb
 }
 
-/// A light field recorded at `sensor_z_mm` that reaches `reach`.
-fn record(scene: &CompiledScene, sensor_z_mm: f64, reach: (f64, f64), spp: u32, seed: u32) -> LightField {
-    let patch_camera = RealisticCamera::for_region(pose(), SIZE.0, SIZE.1, &settings(sensor_z_mm), PATCH).unwrap();
-    let region = LightField::region_for(&patch_camera, PATCH, reach);
-    let crop = region.inside(SIZE.0, SIZE.1).expect("the region lies inside the image");
-    let camera = RealisticCamera::for_region(pose(), SIZE.0, SIZE.1, &settings(sensor_z_mm), crop).unwrap();
+/// A light field of `patch` recorded at `sensor_z_mm` that reaches `reach`.
+fn record(
+    scene: &CompiledScene,
+    patch: PixelRect,
+    sensor_z_mm: f64,
+    reach: (f64, f64),
+    spp: u32,
+    seed: u32,
+) -> LightField {
+    let settings = settings(sensor_z_mm);
+    let patch_camera = RealisticCamera::for_region(pose(), SIZE.0, SIZE.1, &settings, patch).unwrap();
+    let region = LightField::region_for(&patch_camera, patch, reach);
+    // Past the image's edges, the whole camera's pupil bands.
+    let camera = match region.inside(SIZE.0, SIZE.1) {
+        Some(crop) => RealisticCamera::for_region(pose(), SIZE.0, SIZE.1, &settings, crop),
+        None => RealisticCamera::new(pose(), SIZE.0, SIZE.1, &settings),
+    }
+    .unwrap();
     let recording = Recording {
         spp,
         seed,
@@ -106,10 +128,10 @@ fn focus(distance: f64) -> (f64, f64) {
 fn refocused_where_it_was_recorded_a_light_field_is_the_render() {
     let scene = plane(1.5);
     let (z, dof) = focus(1.5);
-    let field = record(&scene, z, (z - 3.0 * dof, z + 3.0 * dof), 8, 11);
+    let field = record(&scene, PATCH, z, (z - 3.0 * dof, z + 3.0 * dof), 8, 11);
     assert_eq!(field.samples() % 8, 0);
     // The same samples, summed in the same order: the same bits.
-    assert_eq!(field.refocus(z, PATCH).unwrap(), render_patch(&scene, z, 8, 11));
+    assert_eq!(field.refocus(z, PATCH).unwrap(), render_patch(&scene, PATCH, z, 8, 11));
 }
 
 #[test]
@@ -118,21 +140,30 @@ fn refocused_elsewhere_a_light_field_sees_what_a_render_there_sees() {
     let (focused, dof) = focus(1.5);
     // Recorded 3 DoF behind focus, refocused onto the plane and 3 DoF in front.
     let recorded_at = focused + 3.0 * dof;
-    let field = record(&scene, recorded_at, (focused - 4.0 * dof, recorded_at + dof), 64, 3);
-    for target in [focused, focused - 3.0 * dof] {
-        let refocused = field.refocus(target, PATCH).unwrap();
-        let rendered = render_patch(&scene, target, 64, 5);
-        let noise = difference(&render_patch(&scene, target, 64, 9), &rendered);
-        let error = difference(&refocused, &rendered);
-        // As close to the render as an independent render is, and much
-        // closer than the image where it was recorded (6 pixels of blur apart).
-        let unmoved = difference(&field.refocus(recorded_at, PATCH).unwrap(), &rendered);
-        assert!(
-            error < 1.4 * noise && error < 0.5 * unmoved,
-            "at {:+.1} DoF: {error:.4} from a render there, renders differ by {noise:.4}, the recording by {unmoved:.4}",
-            (target - focused) / dof
+    for patch in [PATCH, EDGE_PATCH] {
+        let field = record(
+            &scene,
+            patch,
+            recorded_at,
+            (focused - 4.0 * dof, recorded_at + dof),
+            64,
+            3,
         );
+        for target in [focused, focused - 3.0 * dof] {
+            let refocused = field.refocus(target, patch).unwrap();
+            let rendered = render_patch(&scene, patch, target, 64, 5);
+            let noise = difference(&render_patch(&scene, patch, target, 64, 9), &rendered);
+            let error = difference(&refocused, &rendered);
+            // As close to the render as an independent render is, and much
+            // closer than the image where it was recorded (6 pixels of blur apart).
+            let unmoved = difference(&field.refocus(recorded_at, patch).unwrap(), &rendered);
+            assert!(
+                error < 1.4 * noise && error < 0.5 * unmoved,
+                "{patch:?} at {:+.1} DoF: {error:.4} from a render there, renders differ by {noise:.4}, the recording by {unmoved:.4}",
+                (target - focused) / dof
+            );
+        }
+        // Beyond the margin it was recorded with, it refuses.
+        assert!(field.refocus(focused - 12.0 * dof, patch).is_none());
     }
-    // Beyond the margin it was recorded with, it refuses.
-    assert!(field.refocus(focused - 12.0 * dof, PATCH).is_none());
 }

@@ -20,12 +20,11 @@
 use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
-use crate::camera::{CameraSample, RealisticCamera};
+use crate::camera::RealisticCamera;
 use crate::error::{Error, Result};
 use crate::film::Filter;
 use crate::integrator::{radiance, PathSettings};
-use crate::render::PixelRect;
-use crate::sampling::Sampler;
+use crate::render::{pixel_sample, worker_pool, PixelRect};
 use crate::scene::CompiledScene;
 
 /// One sample of the light field.
@@ -76,22 +75,20 @@ impl FilmRegion {
     }
 }
 
-/// The corners of `patch`, raster coordinates.
-fn corners(patch: PixelRect) -> [Vec2; 4] {
-    let (x0, y0) = (patch.x0 as f32, patch.y0 as f32);
-    let (x1, y1) = (x0 + patch.width as f32, y0 + patch.height as f32);
-    [
-        Vec2::new(x0, y0),
-        Vec2::new(x1, y0),
-        Vec2::new(x0, y1),
-        Vec2::new(x1, y1),
-    ]
-}
-
-/// Where a line through rear-plane point `rear` that lands at `p` with the
-/// sensor `scale` times as far from the rear plane crossed the recording.
-fn at_recording(p: Vec2, rear: Vec2, scale: f32) -> Vec2 {
-    rear + (p - rear) / scale
+/// The bounding box of where the lines through the rear-plane box
+/// `rear_bounds` (raster coordinates) that land in `patch` with the sensor
+/// `scale` times as far from the rear plane crossed the recording's sensor.
+fn preimage_bounds(patch: PixelRect, rear_bounds: (Vec2, Vec2), scale: f32) -> (Vec2, Vec2) {
+    let patch_lo = Vec2::new(patch.x0 as f32, patch.y0 as f32);
+    let patch_hi = patch_lo + Vec2::new(patch.width as f32, patch.height as f32);
+    let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
+    for c in corners_of(patch_lo, patch_hi) {
+        for rear in corners_of(rear_bounds.0, rear_bounds.1) {
+            let p = rear + (c - rear) / scale;
+            (lo, hi) = (lo.min(p), hi.max(p));
+        }
+    }
+    (lo, hi)
 }
 
 /// The samples of a region rendered with the sensor at one position.
@@ -122,17 +119,10 @@ impl LightField {
     /// corners carried back to the camera's sensor position along lines
     /// through the rear aperture's bounding box, plus a pixel.
     pub fn region_for(camera: &RealisticCamera, patch: PixelRect, sensor_z_mm: (f64, f64)) -> FilmRegion {
-        let (rear_lo, rear_hi) = camera.rear_aperture_raster_bounds();
-        let (mut lo, mut hi) = (Vec2::splat(f32::INFINITY), Vec2::splat(f32::NEG_INFINITY));
-        for z in [sensor_z_mm.0, sensor_z_mm.1] {
-            let scale = camera.refocus_scale(z) as f32;
-            for c in corners(patch) {
-                for rear in corners_of(rear_lo, rear_hi) {
-                    let p = at_recording(c, rear, scale);
-                    (lo, hi) = (lo.min(p), hi.max(p));
-                }
-            }
-        }
+        let rear_bounds = camera.rear_aperture_raster_bounds();
+        let bounds = |z: f64| preimage_bounds(patch, rear_bounds, camera.refocus_scale(z) as f32);
+        let ((lo_near, hi_near), (lo_far, hi_far)) = (bounds(sensor_z_mm.0), bounds(sensor_z_mm.1));
+        let (lo, hi) = (lo_near.min(lo_far), hi_near.max(hi_far));
         let (lo, hi) = (lo.floor() - Vec2::ONE, hi.ceil() + Vec2::ONE);
         let (x0, y0) = ((lo.x as i32).min(patch.x0 as i32), (lo.y as i32).min(patch.y0 as i32));
         let x1 = (hi.x as i32).max((patch.x0 + patch.width) as i32);
@@ -167,26 +157,17 @@ impl LightField {
                 "a light field needs at least 1 sample per pixel".into(),
             ));
         }
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads.unwrap_or(0))
-            .build()
-            .map_err(|e| Error::InvalidArgument(format!("cannot start worker threads: {e}")))?;
-        let rows: Vec<Vec<Record>> = pool.install(|| {
+        let rows: Vec<Vec<Record>> = worker_pool(threads)?.install(|| {
             (region.y0..region.y0 + region.height as i32)
                 .into_par_iter()
                 .map(|py| {
                     let mut row = Vec::with_capacity((region.width * spp) as usize);
                     let mut rays = 0u64;
                     for px in region.x0..region.x0 + region.width as i32 {
-                        let centre = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
                         for index in 0..spp {
-                            // Pixels past the image's edges get samplers of their own (wrapped indices).
-                            let mut sampler = Sampler::new(px as u32, py as u32, index, seed);
-                            let film = centre + Filter::Box.sample_offset(sampler.get_2d());
-                            let sample = camera.generate_lens_sample(CameraSample {
-                                film,
-                                lens: sampler.get_2d(),
-                            });
+                            let (mut sampler, camera_sample) = pixel_sample(px, py, index, seed, Filter::Box);
+                            let film = camera_sample.film;
+                            let sample = camera.generate_lens_sample(camera_sample);
                             let l = sample.ray.map_or(Vec3::ZERO, |cr| {
                                 cr.weight * radiance(scene, cr.ray, &mut sampler, &path, &mut rays)
                             });
@@ -220,22 +201,13 @@ impl LightField {
         self.records.len() as u64
     }
 
-    /// The sensor position it was recorded at, mm behind the stop.
-    pub fn sensor_z_mm(&self) -> f64 {
-        self.camera.sensor_z_mm()
-    }
-
     /// Whether every sample that lands in `patch` with the sensor at
     /// `sensor_z_mm` was recorded: each line through the recorded rear-plane
     /// points that reaches the patch crossed the recording inside the region.
     pub fn reaches(&self, sensor_z_mm: f64, patch: PixelRect) -> bool {
         let scale = self.camera.refocus_scale(sensor_z_mm) as f32;
-        let (rear_lo, rear_hi) = self.rear_bounds;
-        corners(patch).iter().all(|&c| {
-            corners_of(rear_lo, rear_hi)
-                .iter()
-                .all(|&rear| self.region.contains(at_recording(c, rear, scale)))
-        })
+        let (lo, hi) = preimage_bounds(patch, self.rear_bounds, scale);
+        self.region.contains(lo) && self.region.contains(hi)
     }
 
     /// The image of `patch` (RGB, row by row) with the sensor at
