@@ -7,7 +7,8 @@ use std::sync::atomic::AtomicBool;
 
 use glam::Vec3;
 use lenspath::accel::BvhSettings;
-use lenspath::autofocus::light_field::{LightField, Recording};
+use lenspath::autofocus::light_field::{LightField, Recording, Splat};
+use lenspath::autofocus::{FocusMeasure, Patch};
 use lenspath::builtin::{add_checkerboard, checker_scene};
 use lenspath::camera::{CameraPose, LensFocus, RealisticCamera, RealisticCameraSettings};
 use lenspath::film::Filter;
@@ -131,7 +132,10 @@ fn refocused_where_it_was_recorded_a_light_field_is_the_render() {
     let field = record(&scene, PATCH, z, (z - 3.0 * dof, z + 3.0 * dof), 8, 11);
     assert_eq!(field.samples() % 8, 0);
     // The same samples, summed in the same order: the same bits.
-    assert_eq!(field.refocus(z, PATCH).unwrap(), render_patch(&scene, PATCH, z, 8, 11));
+    assert_eq!(
+        field.refocus(z, PATCH, Splat::Box).unwrap(),
+        render_patch(&scene, PATCH, z, 8, 11)
+    );
 }
 
 #[test]
@@ -150,13 +154,13 @@ fn refocused_elsewhere_a_light_field_sees_what_a_render_there_sees() {
             3,
         );
         for target in [focused, focused - 3.0 * dof] {
-            let refocused = field.refocus(target, patch).unwrap();
+            let refocused = field.refocus(target, patch, Splat::Box).unwrap();
             let rendered = render_patch(&scene, patch, target, 64, 5);
             let noise = difference(&render_patch(&scene, patch, target, 64, 9), &rendered);
             let error = difference(&refocused, &rendered);
             // As close to the render as an independent render is, and much
             // closer than the image where it was recorded (6 pixels of blur apart).
-            let unmoved = difference(&field.refocus(recorded_at, patch).unwrap(), &rendered);
+            let unmoved = difference(&field.refocus(recorded_at, patch, Splat::Box).unwrap(), &rendered);
             assert!(
                 error < 1.4 * noise && error < 0.5 * unmoved,
                 "{patch:?} at {:+.1} DoF: {error:.4} from a render there, renders differ by {noise:.4}, the recording by {unmoved:.4}",
@@ -164,6 +168,35 @@ fn refocused_elsewhere_a_light_field_sees_what_a_render_there_sees() {
             );
         }
         // Beyond the margin it was recorded with, it refuses.
-        assert!(field.refocus(focused - 12.0 * dof, patch).is_none());
+        assert!(field.refocus(focused - 12.0 * dof, patch, Splat::Box).is_none());
     }
+}
+
+/// Bilinear splats make the refocused image, and so a focus measure of it,
+/// change smoothly with the sensor position; box pixels make it jitter as
+/// samples jump between pixels. Measured as the second differences of the
+/// Tenengrad over quarter-DoF steps through focus, relative to its value
+/// (measured: 0.0044 against 0.024).
+#[test]
+fn bilinear_splats_refocus_smoothly() {
+    let scene = plane(1.5);
+    let (focused, dof) = focus(1.5);
+    let field = record(&scene, PATCH, focused, (focused - 4.0 * dof, focused + 4.0 * dof), 4, 7);
+    let jitter = |splat: Splat| {
+        let scores: Vec<f64> = (-12..=12)
+            .map(|k| {
+                let rgb = field
+                    .refocus(focused + f64::from(k) * 0.25 * dof, PATCH, splat)
+                    .unwrap();
+                FocusMeasure::Tenengrad.evaluate(&Patch::new(32, 32, &rgb).unwrap())
+            })
+            .collect();
+        let rough: f64 = scores
+            .windows(3)
+            .map(|w| ((w[0] - 2.0 * w[1] + w[2]) / w[1]).powi(2))
+            .sum();
+        (rough / (scores.len() - 2) as f64).sqrt()
+    };
+    let (bilinear, boxed) = (jitter(Splat::Bilinear), jitter(Splat::Box));
+    assert!(bilinear < 0.5 * boxed, "bilinear jitter {bilinear:.4}, box {boxed:.4}");
 }
