@@ -404,7 +404,8 @@ impl<'a> Focuser<'a> {
     }
 
     /// The patch's light field recorded with the sensor at `z0` over `region`
-    /// ([`Focuser::light_field_region`]), in [`LIGHT_FIELD_GROUPS`] groups with
+    /// ([`Focuser::light_field_region`]), in [`LIGHT_FIELD_GROUPS`] groups (as
+    /// many as there are samples per pixel, when fewer) with
     /// independent seeds (scored as a U-statistic, as [`Focuser::measure_at`]
     /// scores its pair) of together `spp` samples per pixel.
     fn record_light_fields(&mut self, z0: f64, region: FilmRegion, spp: u32) -> Result<Vec<LightField>> {
@@ -414,10 +415,11 @@ impl<'a> Focuser<'a> {
             Some(crop) => RealisticCamera::for_region(self.pose, s.width, s.height, &self.camera_settings(z0), crop)?,
             None => RealisticCamera::new(self.pose, s.width, s.height, &self.camera_settings(z0))?,
         };
-        let fields = (0..LIGHT_FIELD_GROUPS)
+        let groups = LIGHT_FIELD_GROUPS.min(spp);
+        let fields = (0..groups)
             .map(|k| {
                 let recording = Recording {
-                    spp: (spp + k) / LIGHT_FIELD_GROUPS,
+                    spp: (spp + k) / groups,
                     seed: stream_seed(s.seed, k as usize),
                     path: s.path,
                     threads: s.threads,
@@ -588,7 +590,7 @@ impl<'a> Focuser<'a> {
     /// is one noise draw, whose tilt (the noise projected on how the image
     /// changes with focus) shrinks with its samples per pixel, so all the
     /// budget goes into one light field.
-    /// `z0` when the budget leaves less than a sample per pixel in each group.
+    /// `z0` when the budget leaves less than 2 samples per pixel (two groups).
     fn refocused_peak(&mut self, z0: f64, span: (f64, f64), budget_of_sweep: f64) -> Result<f64> {
         let s = &self.settings;
         let patch_pixels = f64::from(s.patch.width * s.patch.height);
@@ -602,7 +604,7 @@ impl<'a> Focuser<'a> {
         let left = (budget - self.camera_rays as f64).max(0.0);
         let region_pixels = f64::from(region.width) * f64::from(region.height);
         let spp = (left.min(LIGHT_FIELD_MAX_SAMPLES as f64) / region_pixels).floor() as u32;
-        if spp < LIGHT_FIELD_GROUPS {
+        if spp < 2 {
             return Ok(z0);
         }
         let fields = self.record_light_fields(z0, region, spp)?;
