@@ -93,12 +93,7 @@ fn record(
     let settings = settings(sensor_z_mm);
     let patch_camera = RealisticCamera::for_region(pose(), SIZE.0, SIZE.1, &settings, patch).unwrap();
     let region = LightField::region_for(&patch_camera, patch, reach);
-    // Past the image's edges, the whole camera's pupil bands.
-    let camera = match region.inside(SIZE.0, SIZE.1) {
-        Some(crop) => RealisticCamera::for_region(pose(), SIZE.0, SIZE.1, &settings, crop),
-        None => RealisticCamera::new(pose(), SIZE.0, SIZE.1, &settings),
-    }
-    .unwrap();
+    let camera = LightField::recording_camera(pose(), SIZE.0, SIZE.1, &settings, region).unwrap();
     let recording = Recording {
         spp,
         seed,

@@ -21,7 +21,7 @@
 use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
-use crate::camera::RealisticCamera;
+use crate::camera::{CameraPose, RealisticCamera, RealisticCameraSettings};
 use crate::error::{Error, Result};
 use crate::film::Filter;
 use crate::integrator::{radiance, PathSettings};
@@ -136,11 +136,27 @@ impl LightField {
         }
     }
 
+    /// The camera to record `region` of a `width`×`height` image through
+    /// with `settings`: cropped to the region when it lies inside the image;
+    /// past the image's edges, the whole camera, whose pupil bands cover film
+    /// points off the sensor.
+    pub fn recording_camera(
+        pose: CameraPose,
+        width: u32,
+        height: u32,
+        settings: &RealisticCameraSettings,
+        region: FilmRegion,
+    ) -> Result<RealisticCamera> {
+        match region.inside(width, height) {
+            Some(crop) => RealisticCamera::for_region(pose, width, height, settings, crop),
+            None => RealisticCamera::new(pose, width, height, settings),
+        }
+    }
+
     /// Renders `region` through `camera` keeping every sample; inside the
     /// image the samples are those of [`crate::render::render`] with the same
-    /// seed and a box filter. The camera must cover the region (one made by
-    /// [`RealisticCamera::for_region`] for a crop that reaches past it by a
-    /// pixel or two does, as does the whole camera).
+    /// seed and a box filter. The camera must cover the region
+    /// ([`LightField::recording_camera`] makes one that does).
     pub fn record(
         scene: &CompiledScene,
         camera: RealisticCamera,

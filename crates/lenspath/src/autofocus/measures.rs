@@ -91,7 +91,7 @@ impl FocusMeasure {
 
     /// The measure's value on `patch`; 0 for a patch too small for its stencil.
     pub fn evaluate(&self, patch: &Patch) -> f64 {
-        self.evaluate_pair(patch, patch)
+        self.evaluate_groups(std::slice::from_ref(patch))
     }
 
     /// The measure of the noise-free image, estimated from two renders of it
@@ -142,6 +142,10 @@ impl FocusMeasure {
         match *self {
             FocusMeasure::Variance => (0..3).map(over_pairs).sum(),
             FocusMeasure::SumModifiedLaplacian { step } => {
+                let step = step.max(1);
+                if groups.len() == 1 {
+                    return combine(|c| sum_modified_laplacian(first, c, step));
+                }
                 let scale = 1.0 / groups.len() as f32;
                 let mut mean = vec![0f32; first.rgb.len()];
                 for g in groups {
@@ -150,7 +154,7 @@ impl FocusMeasure {
                     }
                 }
                 let m = Patch { rgb: &mean, ..*first };
-                combine(|c| sum_modified_laplacian(&m, c, step.max(1)))
+                combine(|c| sum_modified_laplacian(&m, c, step))
             }
             _ => combine(over_pairs),
         }
