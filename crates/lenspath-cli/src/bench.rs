@@ -140,10 +140,7 @@ pub fn run_bvh(args: BvhArgs) -> Result<Outcome> {
     let stats = *bvh.stats();
     let bounds = bvh.bounds();
     let (lo, hi) = (Vec3::from(bounds.min), Vec3::from(bounds.max));
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(args.threads.unwrap_or(0))
-        .build()
-        .map_err(|e| Error::InvalidArgument(format!("cannot start threads: {e}")))?;
+    let pool = lenspath::render::worker_pool(args.threads)?;
     let coherent = coherent_rays(lo, hi, args.rays);
     let incoherent = incoherent_rays(lo, hi, args.rays);
     let (coherent_mrays, coherent_hits) = trace(&bvh, &coherent, &pool);

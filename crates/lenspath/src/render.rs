@@ -302,7 +302,7 @@ pub fn render_from(
 }
 
 /// A pool of `threads` worker threads (`None`: one per core).
-pub(crate) fn worker_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
+pub fn worker_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads.unwrap_or(0))
         .build()

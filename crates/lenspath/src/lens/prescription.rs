@@ -78,10 +78,7 @@ impl LensPrescription {
                 names.join(", ")
             )));
         }
-        let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
-            path: path.to_path_buf(),
-            source: e,
-        })?;
+        let text = crate::io::read_text(path)?;
         LensPrescription::parse(&text, name_or_path, TableConvention::Auto)
     }
 
@@ -264,6 +261,18 @@ mod tests {
             assert!(lens.surfaces.len() >= 7, "{name}");
             assert!(lens.surfaces[lens.stop_index()].is_stop());
         }
+    }
+
+    #[test]
+    fn a_lens_file_that_is_not_text_is_named_in_the_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("binary.dat");
+        std::fs::write(&path, b"50.0 5.0 1.5 20.0\n\xff\xfe 1 1 8\n").unwrap();
+        let err = LensPrescription::load(path.to_str().unwrap()).unwrap_err().to_string();
+        assert!(
+            err.contains("binary.dat") && err.contains("not UTF-8 text (byte 18"),
+            "{err}"
+        );
     }
 
     #[test]
