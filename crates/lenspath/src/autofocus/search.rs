@@ -907,24 +907,28 @@ fn gaussian_blur(rgb: &[f32], width: usize, sigma: f64) -> Vec<f32> {
     let weights: Vec<f64> = (-radius..=radius)
         .map(|k| (-((k * k) as f64) / (2.0 * sigma * sigma)).exp())
         .collect();
+    // Taps past the patch's edge are left out and the rest renormalised; the
+    // valid taps of a pixel are a contiguous range, summed in order.
     let pass = |src: &[f32], horizontal: bool| -> Vec<f32> {
         let mut out = vec![0.0f32; src.len()];
+        let (along, stride) = if horizontal { (width, 3) } else { (height, 3 * width) };
         for y in 0..height {
             for x in 0..width {
-                for c in 0..3 {
-                    let (mut sum, mut total) = (0.0f64, 0.0f64);
-                    for (k, &w) in (-radius..=radius).zip(&weights) {
-                        let (sx, sy) = if horizontal {
-                            (x as isize + k, y as isize)
-                        } else {
-                            (x as isize, y as isize + k)
-                        };
-                        if sx >= 0 && sy >= 0 && (sx as usize) < width && (sy as usize) < height {
-                            sum += w * f64::from(src[3 * (sy as usize * width + sx as usize) + c]);
-                            total += w;
-                        }
+                let at = if horizontal { x } else { y } as isize;
+                let first = (-radius).max(-at);
+                let last = radius.min(along as isize - 1 - at);
+                let pixel = 3 * (y * width + x);
+                let (mut sum, mut total) = ([0.0f64; 3], 0.0f64);
+                for k in first..=last {
+                    let w = weights[(k + radius) as usize];
+                    let src_pixel = (pixel as isize + k * stride as isize) as usize;
+                    for (c, s) in sum.iter_mut().enumerate() {
+                        *s += w * f64::from(src[src_pixel + c]);
                     }
-                    out[3 * (y * width + x) + c] = (sum / total) as f32;
+                    total += w;
+                }
+                for (c, s) in sum.iter().enumerate() {
+                    out[pixel + c] = (s / total) as f32;
                 }
             }
         }
