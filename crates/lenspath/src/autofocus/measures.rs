@@ -130,11 +130,7 @@ impl FocusMeasure {
             "patches of one size"
         );
         let g = groups.len() as f64;
-        let sum_of_groups: Option<Vec<f32>> = (groups.len() > 1 && self.is_bilinear()).then(|| {
-            (0..first.rgb.len())
-                .map(|i| groups.iter().map(|p| p.rgb[i]).sum())
-                .collect()
-        });
+        let sum_of_groups = (groups.len() > 1 && self.is_bilinear()).then(|| weighted_sum(groups, 1.0));
         // The channel's pair sum averaged over every pair of distinct groups
         // (the one group with itself when there is only one).
         let over_pairs = |c: usize| {
@@ -162,13 +158,7 @@ impl FocusMeasure {
                 if groups.len() == 1 {
                     return combine(|c| sum_modified_laplacian(first, c, step));
                 }
-                let scale = 1.0 / groups.len() as f32;
-                let mut mean = vec![0f32; first.rgb.len()];
-                for g in groups {
-                    for (m, v) in mean.iter_mut().zip(g.rgb) {
-                        *m += scale * v;
-                    }
-                }
+                let mean = weighted_sum(groups, 1.0 / groups.len() as f32);
                 let m = Patch { rgb: &mean, ..*first };
                 combine(|c| sum_modified_laplacian(&m, c, step))
             }
@@ -250,6 +240,18 @@ impl FocusMeasure {
             }
         }
     }
+}
+
+/// Σ_g weight·g over `groups` (patches of one size), pixel by pixel, the
+/// groups added in order: their sum, or with weight 1/G their mean.
+fn weighted_sum(groups: &[Patch], weight: f32) -> Vec<f32> {
+    let mut sum = vec![0f32; groups.first().map_or(0, |g| g.rgb.len())];
+    for g in groups {
+        for (s, v) in sum.iter_mut().zip(g.rgb) {
+            *s += weight * v;
+        }
+    }
+    sum
 }
 
 /// √(Σ_c F_c²) over the three channels; a channel whose estimate came out
