@@ -16,8 +16,9 @@ integrator in `scalar_rgb` and, when it runs here, `llvm_ad_rgb` (Dr.Jit's LLVM 
 needs libLLVM 16 or newer: on Debian 12, `apt-get install libllvm19`; the newest
 libLLVM found is handed to it through DRJIT_LIBLLVM_PATH unless that is set, and
 with 14 or 15 it aborts, "cannot select fminimum"); lenspath on all
-threads with one light sample. Mitsuba's `max_depth` counts the camera segment,
-so it is lenspath's plus one.
+threads with one light sample and, like Mitsuba's default, the `independent`
+sampler (uniform random numbers; lenspath's default scrambled Sobol is timed too).
+Mitsuba's `max_depth` counts the camera segment, so it is lenspath's plus one.
 
 Agreement: both rendered with `--check-spp` samples at `--check-res`, averaged
 over 6 x 6-pixel blocks (so Monte Carlo noise is well below 1%); the mean absolute
@@ -178,14 +179,19 @@ def mitsuba_scene(mi, folder: Path, job: Job):
     )
 
 
-def render_lenspath(job: Job):
+def render_lenspath(job: Job, sampler: str = "independent"):
     import lenspath
 
     started = time.perf_counter()
     scene = lenspath_scene(job)
     resolution = (job.width, job.height)
     image = lenspath.render(
-        scene, lenspath.Camera.pinhole(), spp=job.spp, resolution=resolution, max_depth=job.max_depth
+        scene,
+        lenspath.Camera.pinhole(),
+        spp=job.spp,
+        resolution=resolution,
+        max_depth=job.max_depth,
+        sampler=sampler,
     )
     return image, time.perf_counter() - started
 
@@ -256,12 +262,23 @@ def main() -> int:
         f"(lenspath's; Mitsuba's {job.max_depth + 1}), pinhole"
     )
     ours = min(render_lenspath(job)[1] for _ in range(args.rounds))
-    print(f"  lenspath              {ours:7.2f} s")
-    figures: dict = {"scene": job.scene, "lenspath_s": ours, "mitsuba_s": {}, "agreement": {}}
+    sobol = min(render_lenspath(job, "sobol")[1] for _ in range(args.rounds))
+    print(f"  lenspath independent  {ours:7.2f} s")
+    print(f"  lenspath sobol        {sobol:7.2f} s")
+    figures: dict = {
+        "scene": job.scene,
+        "lenspath_s": ours,
+        "lenspath_sobol_s": sobol,
+        "mitsuba_s": {},
+        "agreement": {},
+    }
     for variant in variants:
         theirs = min(render_mitsuba(variant, job)[1] for _ in range(args.rounds))
         figures["mitsuba_s"][variant] = theirs
-        print(f"  Mitsuba {variant:<13} {theirs:7.2f} s   lenspath time / Mitsuba's: {ours / theirs:.2f}")
+        print(
+            f"  Mitsuba {variant:<13} {theirs:7.2f} s   lenspath time / Mitsuba's: {ours / theirs:.2f} "
+            f"(sobol {sobol / theirs:.2f})"
+        )
     check = Job(args.scene, extra, *args.check_res, args.check_spp, args.max_depth)
     reference, _ = render_lenspath(check)
     for variant in variants:

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable, Sequence
-from typing import Any, overload
+from typing import Any, Literal, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -108,6 +108,7 @@ def render(
     aovs: None = None,
     crop: tuple[int, int, int, int] | None = None,
     progress: bool | Callable[[int, int], Any] = False,
+    sampler: Literal["sobol", "independent"] | None = None,
 ) -> npt.NDArray[np.float32]: ...
 @overload
 def render(
@@ -123,6 +124,7 @@ def render(
     aovs: Sequence[str],
     crop: tuple[int, int, int, int] | None = None,
     progress: bool | Callable[[int, int], Any] = False,
+    sampler: Literal["sobol", "independent"] | None = None,
 ) -> dict[str, npt.NDArray[np.float32]]: ...
 def render(
     scene: Scene | str | os.PathLike[str],
@@ -137,6 +139,7 @@ def render(
     aovs: Sequence[str] | None = None,
     crop: tuple[int, int, int, int] | None = None,
     progress: bool | Callable[[int, int], Any] = False,
+    sampler: Literal["sobol", "independent"] | None = None,
 ) -> npt.NDArray[np.float32] | dict[str, npt.NDArray[np.float32]]:
     """Renders ``scene`` and returns linear RGB, float32, shape (height, width, 3).
 
@@ -148,7 +151,10 @@ def render(
     ``aovs=["depth"]`` the result is a dict with ``"rgb"`` and ``"depth"``
     (distance along the view axis, inf where nothing is hit). ``crop=(x, y,
     width, height)`` renders only that rectangle of pixels, each exactly as in
-    the full image (``lenspath.distributed`` renders tiles so). ``progress``:
+    the full image (``lenspath.distributed`` renders tiles so). ``sampler``:
+    ``"sobol"`` (scrambled Sobol', the default) or ``"independent"``
+    (uniform random numbers, as Mitsuba's and pbrt's ``independent``),
+    default the scene file's. ``progress``:
     True for a tqdm bar, or a callable ``(samples_done, samples_total)``. The
     GIL is released while rendering; Ctrl-C stops the render and raises
     KeyboardInterrupt.
@@ -166,6 +172,7 @@ def render(
             threads=threads,
             crop=crop,
             progress=callback,
+            sampler=sampler,
         )
     return _core.render(
         _as_scene(scene),
@@ -179,6 +186,7 @@ def render(
         aovs=list(aovs),
         crop=crop,
         progress=callback,
+        sampler=sampler,
     )
 
 

@@ -276,6 +276,7 @@ def render(
     aovs: None = None,
     crop: tuple[int, int, int, int] | None = None,
     progress: Callable[[int, int], Any] | None = None,
+    sampler: Literal["sobol", "independent"] | None = None,
 ) -> npt.NDArray[np.float32]: ...
 @overload
 def render(
@@ -291,6 +292,7 @@ def render(
     aovs: list[str],
     crop: tuple[int, int, int, int] | None = None,
     progress: Callable[[int, int], Any] | None = None,
+    sampler: Literal["sobol", "independent"] | None = None,
 ) -> dict[str, npt.NDArray[np.float32]]: ...
 def read(path: str | PathLike[str]) -> npt.NDArray[np.float32]:
     """Reads a PNG, JPEG (decoded from sRGB) or EXR image as linear RGB (H, W, 3)."""

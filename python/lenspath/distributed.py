@@ -25,7 +25,7 @@ import uuid
 from collections import OrderedDict
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import numpy.typing as npt
@@ -41,7 +41,7 @@ __all__ = ["map_renders", "render"]
 Image = npt.NDArray[np.float32] | dict[str, npt.NDArray[np.float32]]
 
 # Keyword arguments of a job, as lenspath.render takes them.
-_RENDER_OPTIONS = frozenset({"spp", "resolution", "seed", "max_depth", "light_samples", "threads", "aovs"})
+_RENDER_OPTIONS = frozenset({"spp", "resolution", "seed", "max_depth", "light_samples", "threads", "aovs", "sampler"})
 # Scenes a worker keeps: enough for a batch alternating between a few scenes.
 _CACHED_SCENES = 4
 
@@ -219,7 +219,7 @@ def map_renders(
     built-in name, a scene file path or a ``Scene`` loaded from one),
     ``camera`` and any of ``spp``, ``resolution``, ``seed``, ``max_depth``,
     ``light_samples``, ``threads`` (per tile; default the worker's cores over
-    its Dask threads) and ``aovs``. Each image is that of
+    its Dask threads), ``aovs`` and ``sampler``. Each image is that of
     ``lenspath.render(**job)``, bit for bit. ``tile_size``: cut each image
     into squares of that many pixels (None: one task per image). ``progress``:
     True for a tqdm bar over tiles, or a callable ``(tiles_done, tiles_total)``.
@@ -295,6 +295,7 @@ def render(
     light_samples: int = 1,
     threads: int | None = None,
     aovs: Sequence[str] | None = None,
+    sampler: Literal["sobol", "independent"] | None = None,
     tile_size: int = 64,
     progress: bool | Callable[[int, int], Any] = True,
 ) -> Image:
@@ -315,6 +316,7 @@ def render(
         "max_depth": max_depth,
         "light_samples": light_samples,
         "threads": threads,
+        "sampler": sampler,
     }
     if aovs is not None:
         job["aovs"] = aovs

@@ -31,19 +31,21 @@ def test_the_mesh_scene_takes_a_triangle_count() -> None:
 
 
 @pytest.mark.parametrize(
-    ("camera", "flags"),
+    ("camera", "sampler", "flags"),
     [
-        (None, []),
-        (lenspath.Camera.pinhole(), ["--camera", "pinhole"]),
+        (None, None, []),
+        (lenspath.Camera.pinhole(), None, ["--camera", "pinhole"]),
         (
             lenspath.Camera.thin_lens(0.05, focus_distance=3.0),
+            None,
             ["--camera", "thin-lens", "--aperture-radius", "0.05", "--focus-distance", "3"],
         ),
-        (lenspath.Camera.realistic("wide22", f_number=4.0), ["--lens", "wide22", "--fstop", "4"]),
+        (lenspath.Camera.realistic("wide22", f_number=4.0), None, ["--lens", "wide22", "--fstop", "4"]),
+        (lenspath.Camera.pinhole(), "independent", ["--camera", "pinhole", "--sampler", "independent"]),
     ],
-    ids=["default", "pinhole", "thin-lens", "realistic"],
+    ids=["default", "pinhole", "thin-lens", "realistic", "independent-sampler"],
 )
-def test_same_settings_give_the_clis_image_bit_for_bit(cli, tmp_path, camera, flags) -> None:
+def test_same_settings_give_the_clis_image_bit_for_bit(cli, tmp_path, camera, sampler, flags) -> None:
     out = tmp_path / "cli.exr"
     subprocess.run(
         [
@@ -66,7 +68,7 @@ def test_same_settings_give_the_clis_image_bit_for_bit(cli, tmp_path, camera, fl
         check=True,
         capture_output=True,
     )
-    ours = lenspath.render("cornell-spheres", camera, spp=3, resolution=(48, 36), seed=5, max_depth=6)
+    ours = lenspath.render("cornell-spheres", camera, spp=3, resolution=(48, 36), seed=5, max_depth=6, sampler=sampler)
     theirs = lenspath.read(out)
     assert np.array_equal(ours, theirs), f"max difference {np.abs(ours - theirs).max()}"
 
@@ -93,7 +95,8 @@ def test_depth_aov_is_the_distance_along_the_view_axis() -> None:
     np.testing.assert_allclose(out["rgb"], np.broadcast_to([0.25, 0.5, 1.0], (10, 20, 3)), rtol=1e-5)
 
 
-def test_a_diffuse_sphere_under_a_uniform_sky_has_its_albedo() -> None:
+@pytest.mark.parametrize("sampler", ["sobol", "independent"])
+def test_a_diffuse_sphere_under_a_uniform_sky_has_its_albedo(sampler: str) -> None:
     # White furnace: a convex diffuse sphere of albedo 0.5 lit by a uniform
     # environment of radiance 1 reflects exactly 0.5 everywhere (every
     # reflected ray escapes); next-event estimation and MIS must not bias it.
@@ -102,7 +105,7 @@ def test_a_diffuse_sphere_under_a_uniform_sky_has_its_albedo() -> None:
     scene.add_sphere((0, 0, -3), 1.0, grey)
     scene.add_environment((1.0, 1.0, 1.0))
     scene.look_at((0, 0, 0), (0, 0, -3), fov_deg=10)
-    image = lenspath.render(scene, lenspath.Camera.pinhole(), spp=64, resolution=(8, 8))
+    image = lenspath.render(scene, lenspath.Camera.pinhole(), spp=64, resolution=(8, 8), sampler=sampler)
     np.testing.assert_allclose(image.mean(), 0.5, rtol=0.01)
 
 
@@ -112,6 +115,11 @@ def test_a_diffuse_sphere_under_a_uniform_sky_has_its_albedo() -> None:
         (lambda: lenspath.render("cornell-spheres", spp=0), ValueError, "samples per pixel must be in 1"),
         (lambda: lenspath.render("cornell-spheres", resolution=(0, 10)), ValueError, "image size must be positive"),
         (lambda: lenspath.render("cornell-spheres", aovs=["normals"]), ValueError, "unknown AOV 'normals'"),
+        (
+            lambda: lenspath.render("cornell-spheres", sampler="halton"),  # type: ignore[call-overload]
+            ValueError,
+            "unknown sampler 'halton'; expected one of: sobol, independent",
+        ),
         (lambda: lenspath.render("no-such-scene.obj"), OSError, "no-such-scene.obj"),
         (lambda: lenspath.render(42), TypeError, "scene must be"),
         (lambda: lenspath.Camera.realistic("nikkor"), ValueError, "unknown built-in lens 'nikkor'"),

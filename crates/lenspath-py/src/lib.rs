@@ -32,6 +32,7 @@ use lenspath::lens::{
 use lenspath::lights::Light;
 use lenspath::materials::Material;
 use lenspath::render::{render as render_scene, NormalizedRect, PixelRect, RenderSettings, DEFAULT_IMAGE_SIZE};
+use lenspath::sampling::SamplerKind;
 use lenspath::scene::{CompiledScene, Scene as CoreScene, SceneView};
 use lenspath::shapes::{Sphere, TriangleMesh};
 use lenspath::Error;
@@ -1195,7 +1196,8 @@ fn rgb_array<'py>(py: Python<'py>, image: &Image) -> Bound<'py, PyArray3<f32>> {
 /// Renders `scene` through `camera` (see the stub for the arguments).
 #[pyfunction]
 #[pyo3(signature = (scene, camera = None, *, spp = 64, resolution = None, seed = 0, max_depth = 16,
-                    light_samples = 1, threads = None, aovs = None, crop = None, progress = None))]
+                    light_samples = 1, threads = None, aovs = None, crop = None, progress = None,
+                    sampler = None))]
 #[allow(clippy::too_many_arguments)]
 fn render<'py>(
     py: Python<'py>,
@@ -1210,7 +1212,18 @@ fn render<'py>(
     aovs: Option<Vec<String>>,
     crop: Option<(u32, u32, u32, u32)>,
     progress: Option<Bound<'py, PyAny>>,
+    sampler: Option<&str>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    // As `lenspath render`: the argument, else the scene file's, else Sobol.
+    let sampler = match sampler {
+        Some(name) => SamplerKind::from_name(name).ok_or_else(|| {
+            value_error(format!(
+                "unknown sampler '{name}'; expected one of: {}",
+                SamplerKind::NAMES.join(", ")
+            ))
+        })?,
+        None => scene.options.sampler.unwrap_or_default(),
+    };
     let want_depth = match aovs.as_deref() {
         None | Some([]) => false,
         Some(names) => {
@@ -1235,6 +1248,7 @@ fn render<'py>(
         tile_size: 16,
         crop: crop.map(|(x0, y0, width, height)| PixelRect { x0, y0, width, height }),
         depth: true,
+        sampler,
     };
     settings.validate().map_err(|e| to_py(e, FileKind::Scene))?;
     let camera = match camera {

@@ -12,7 +12,7 @@ use crate::error::{Error, Result};
 use crate::film::{Filter, Image};
 use crate::integrator::{radiance, PathSettings};
 use crate::math::Rgb;
-use crate::sampling::{Sampler, MAX_SAMPLES_PER_PIXEL};
+use crate::sampling::{Sampler, SamplerKind, MAX_SAMPLES_PER_PIXEL};
 use crate::scene::CompiledScene;
 
 /// Lens samples tried for a pixel's depth: the middle of the lens first,
@@ -35,6 +35,8 @@ pub struct RenderSettings {
     pub path: PathSettings,
     /// Seed of the sample sequences: the same seed gives the same image.
     pub seed: u32,
+    /// The sample sequence: Sobol (the default) or independent.
+    pub sampler: SamplerKind,
     /// Pixel reconstruction filter.
     pub filter: Filter,
     /// Worker threads; `None` uses every core.
@@ -121,6 +123,7 @@ impl Default for RenderSettings {
                 light_samples: 1,
             },
             seed: 0,
+            sampler: SamplerKind::Sobol,
             filter: Filter::Box,
             threads: None,
             tile_size: 16,
@@ -309,15 +312,22 @@ pub fn worker_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
         .map_err(|e| Error::InvalidArgument(format!("cannot start worker threads: {e}")))
 }
 
-/// Sample `index` of pixel `(px, py)` under `seed`: its camera sample (the
+/// Sample `index` of pixel `(px, py)` of the `kind` sequence under `seed`: its camera sample (the
 /// film position, the pixel centre moved by `filter`'s offset, and the lens
 /// position: the sampler's first two dimensions) and the sampler, which the
 /// path goes on with. Every render and light field draws its samples here,
 /// so the same seed gives the same samples. Pixels past the image's left or
 /// top edge (a light field's margin) get samplers of their own, seeded with
 /// their wrapped coordinates.
-pub(crate) fn pixel_sample(px: i32, py: i32, index: u32, seed: u32, filter: Filter) -> (Sampler, CameraSample) {
-    let mut sampler = Sampler::new(px as u32, py as u32, index, seed);
+pub(crate) fn pixel_sample(
+    kind: SamplerKind,
+    px: i32,
+    py: i32,
+    index: u32,
+    seed: u32,
+    filter: Filter,
+) -> (Sampler, CameraSample) {
+    let mut sampler = Sampler::new(kind, px as u32, py as u32, index, seed);
     let centre = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
     let film = centre + filter.sample_offset(sampler.get_2d());
     let lens = sampler.get_2d();
@@ -447,8 +457,16 @@ fn render_tile(
             let pair = [tx, (tx + 1).min(tile.width - 1)].map(|x| (tile.x0 + x, tile.y0 + ty));
             let slots = [tx, tx + 1].map(|x| (ty * tile.width + x) as usize);
             for index in first..pass_end {
-                let [(sampler_a, sample_a), (sampler_b, sample_b)] =
-                    pair.map(|(px, py)| pixel_sample(px as i32, py as i32, index, settings.seed, settings.filter));
+                let [(sampler_a, sample_a), (sampler_b, sample_b)] = pair.map(|(px, py)| {
+                    pixel_sample(
+                        settings.sampler,
+                        px as i32,
+                        py as i32,
+                        index,
+                        settings.seed,
+                        settings.filter,
+                    )
+                });
                 let (mut samplers, samples) = ([sampler_a, sampler_b], [sample_a, sample_b]);
                 let rays = if pixels == 2 {
                     camera.generate_ray_pair(samples)

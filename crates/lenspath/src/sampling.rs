@@ -19,31 +19,83 @@ pub fn hash_u32(mut x: u32) -> u32 {
 /// The most samples per pixel the Sobol sampler supports (a sobol_burley limit).
 pub const MAX_SAMPLES_PER_PIXEL: u32 = 1 << 16;
 
-/// Owen-scrambled Sobol samples (Burley, "Practical Hash-based Owen
-/// Scrambling", JCGT 2020, via the `sobol_burley` crate) for one pixel
-/// sample. The stream depends only on the pixel, the sample index and the
-/// seed, never on the thread or tile that draws it, which makes renders
-/// bit-identical for any thread count.
+/// Which sample sequence a render draws from (pbrt-v4's `Sampler` types
+/// `sobol` and `independent`, Mitsuba 3's `independent`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SamplerKind {
+    /// Owen-scrambled Sobol points: stratified in every dimension, so less
+    /// noise at the same samples per pixel.
+    #[default]
+    Sobol,
+    /// Independent uniform random numbers (PCG32): no stratification, the
+    /// cheapest to draw; what Mitsuba's and pbrt's `independent` samplers give.
+    Independent,
+}
+
+impl SamplerKind {
+    /// The names the CLI, scene files and Python use.
+    pub const NAMES: [&'static str; 2] = ["sobol", "independent"];
+
+    /// The kind called `name` (see [`SamplerKind::NAMES`]).
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "sobol" => Some(SamplerKind::Sobol),
+            "independent" => Some(SamplerKind::Independent),
+            _ => None,
+        }
+    }
+
+    /// Its name (see [`SamplerKind::NAMES`]).
+    pub fn name(self) -> &'static str {
+        match self {
+            SamplerKind::Sobol => "sobol",
+            SamplerKind::Independent => "independent",
+        }
+    }
+}
+
+/// The sample stream of one pixel sample: Owen-scrambled Sobol samples
+/// (Burley, "Practical Hash-based Owen Scrambling", JCGT 2020, via the
+/// `sobol_burley` crate) or independent PCG32 numbers. The stream depends
+/// only on the kind, the pixel, the sample index and the seed, never on the
+/// thread or tile that draws it, which makes renders bit-identical for any
+/// thread count.
 ///
 /// Dimensions are drawn four at a time; past the crate's 256 dimensions
-/// the sequence continues with a re-hashed seed (decorrelated, no longer
-/// stratified against the first dimensions).
+/// the Sobol sequence continues with a re-hashed seed (decorrelated, no
+/// longer stratified against the first dimensions).
 pub struct Sampler {
-    seed: u32,
-    index: u32,
-    next_set: u32,
+    source: Source,
     buffer: [f32; 4],
     used: usize,
 }
 
+/// Where a [`Sampler`]'s numbers come from.
+enum Source {
+    Sobol { seed: u32, index: u32, next_set: u32 },
+    Independent(Pcg32),
+}
+
 impl Sampler {
     /// The sampler of sample `index` of pixel `(x, y)` under `seed`.
-    pub fn new(x: u32, y: u32, index: u32, seed: u32) -> Self {
+    pub fn new(kind: SamplerKind, x: u32, y: u32, index: u32, seed: u32) -> Self {
         let pixel_seed = hash_u32(x.wrapping_mul(0x9E3779B1) ^ hash_u32(y ^ hash_u32(seed.wrapping_add(0x85EBCA6B))));
+        let source = match kind {
+            SamplerKind::Sobol => Source::Sobol {
+                seed: pixel_seed,
+                index,
+                next_set: 0,
+            },
+            // pbrt-v4's IndependentSampler: one PCG32 stream per pixel, each
+            // sample 2^16 numbers further along it.
+            SamplerKind::Independent => {
+                let mut rng = Pcg32::new(u64::from(pixel_seed), u64::from(seed));
+                rng.advance(u64::from(index) << 16);
+                Source::Independent(rng)
+            }
+        };
         Sampler {
-            seed: pixel_seed,
-            index,
-            next_set: 0,
+            source,
             buffer: [0.0; 4],
             used: 4,
         }
@@ -53,15 +105,20 @@ impl Sampler {
     #[inline]
     pub fn get_1d(&mut self) -> f32 {
         if self.used == 4 {
-            let set = self.next_set % sobol_burley::NUM_DIMENSION_SETS_4D;
-            let round = self.next_set / sobol_burley::NUM_DIMENSION_SETS_4D;
-            let seed = if round == 0 {
-                self.seed
-            } else {
-                hash_u32(self.seed ^ round.wrapping_mul(0x632BE5AB))
+            self.buffer = match &mut self.source {
+                Source::Sobol { seed, index, next_set } => {
+                    let set = *next_set % sobol_burley::NUM_DIMENSION_SETS_4D;
+                    let round = *next_set / sobol_burley::NUM_DIMENSION_SETS_4D;
+                    let seed = if round == 0 {
+                        *seed
+                    } else {
+                        hash_u32(*seed ^ round.wrapping_mul(0x632BE5AB))
+                    };
+                    *next_set += 1;
+                    sobol_burley::sample_4d(*index, set, seed)
+                }
+                Source::Independent(rng) => [rng.uniform(), rng.uniform(), rng.uniform(), rng.uniform()],
             };
-            self.buffer = sobol_burley::sample_4d(self.index, set, seed);
-            self.next_set += 1;
             self.used = 0;
         }
         let v = self.buffer[self.used];
@@ -102,6 +159,65 @@ impl Rng {
     /// Uniform in [0, 1).
     pub fn uniform(&mut self) -> f32 {
         (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+    }
+}
+
+/// PCG32 (O'Neill, "PCG: A Family of Simple Fast Space-Efficient
+/// Statistically Good Algorithms for Random Number Generation", 2014;
+/// the XSH-RR variant pbrt-v4's `RNG` uses): 2^63 streams of period 2^64,
+/// with a jump ahead in O(log n) steps.
+#[derive(Clone, Debug)]
+pub struct Pcg32 {
+    state: u64,
+    increment: u64,
+}
+
+const PCG32_MULTIPLIER: u64 = 0x5851_F42D_4C95_7F2D;
+
+impl Pcg32 {
+    /// Stream `sequence`, started from `seed` (pbrt's `SetSequence`).
+    pub fn new(sequence: u64, seed: u64) -> Self {
+        let mut rng = Pcg32 {
+            state: 0,
+            increment: (sequence << 1) | 1,
+        };
+        rng.next_u32();
+        rng.state = rng.state.wrapping_add(seed);
+        rng.next_u32();
+        rng
+    }
+
+    /// The next 32 random bits.
+    #[inline]
+    pub fn next_u32(&mut self) -> u32 {
+        let old = self.state;
+        self.state = old.wrapping_mul(PCG32_MULTIPLIER).wrapping_add(self.increment);
+        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
+        xorshifted.rotate_right((old >> 59) as u32)
+    }
+
+    /// Uniform in [0, 1): the top 24 bits, so every value is exact in f32
+    /// and 1 cannot come out by rounding.
+    #[inline]
+    pub fn uniform(&mut self) -> f32 {
+        (self.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+    }
+
+    /// Skips `delta` numbers (Brown, "Random Number Generation with
+    /// Arbitrary Strides", 1994: the LCG step composed by squaring).
+    pub fn advance(&mut self, mut delta: u64) {
+        let (mut mult, mut plus) = (PCG32_MULTIPLIER, self.increment);
+        let (mut acc_mult, mut acc_plus) = (1u64, 0u64);
+        while delta > 0 {
+            if delta & 1 == 1 {
+                acc_mult = acc_mult.wrapping_mul(mult);
+                acc_plus = acc_plus.wrapping_mul(mult).wrapping_add(plus);
+            }
+            plus = mult.wrapping_add(1).wrapping_mul(plus);
+            mult = mult.wrapping_mul(mult);
+            delta >>= 1;
+        }
+        self.state = acc_mult.wrapping_mul(self.state).wrapping_add(acc_plus);
     }
 }
 
@@ -257,17 +373,69 @@ mod tests {
 
     #[test]
     fn sampler_is_deterministic_and_in_range() {
-        let mut a = Sampler::new(3, 4, 5, 6);
-        let mut b = Sampler::new(3, 4, 5, 6);
-        let mut c = Sampler::new(4, 3, 5, 6);
-        let mut differs = false;
-        for _ in 0..600 {
-            let (x, y, z) = (a.get_1d(), b.get_1d(), c.get_1d());
-            assert_eq!(x, y);
-            assert!((0.0..1.0).contains(&x));
-            differs |= x != z;
+        for kind in [SamplerKind::Sobol, SamplerKind::Independent] {
+            let mut a = Sampler::new(kind, 3, 4, 5, 6);
+            let mut b = Sampler::new(kind, 3, 4, 5, 6);
+            let mut c = Sampler::new(kind, 4, 3, 5, 6);
+            let mut d = Sampler::new(kind, 3, 4, 6, 6);
+            let (mut differs, mut differs_by_index) = (false, false);
+            for _ in 0..600 {
+                let (x, y, z, w) = (a.get_1d(), b.get_1d(), c.get_1d(), d.get_1d());
+                assert_eq!(x, y);
+                assert!((0.0..1.0).contains(&x));
+                differs |= x != z;
+                differs_by_index |= x != w;
+            }
+            assert!(differs, "{kind:?}: different pixels must get different sequences");
+            assert!(
+                differs_by_index,
+                "{kind:?}: different samples must get different sequences"
+            );
         }
-        assert!(differs, "different pixels must get different sequences");
+    }
+
+    /// The jump ahead lands where stepping one by one does.
+    #[test]
+    fn pcg32_advance_matches_stepping() {
+        let mut stepped = Pcg32::new(7, 11);
+        let mut jumped = stepped.clone();
+        for _ in 0..1000 {
+            stepped.next_u32();
+        }
+        jumped.advance(1000);
+        assert_eq!(stepped.next_u32(), jumped.next_u32());
+    }
+
+    /// PCG32's reference output (pcg32-demo's `pcg32_srandom(42, 54)`, the
+    /// first six numbers): the generator is the published one.
+    #[test]
+    fn pcg32_matches_the_reference_stream() {
+        let mut rng = Pcg32::new(54, 42);
+        let first: Vec<u32> = (0..6).map(|_| rng.next_u32()).collect();
+        assert_eq!(
+            first,
+            [0xa15c02b7, 0x7b47f409, 0xba1d3330, 0x83d2f293, 0xbfa4784b, 0xcbed606e]
+        );
+    }
+
+    /// Independent samples are uniform: the mean and the variance of many
+    /// draws match those of U[0, 1) within five standard errors, and
+    /// consecutive draws are uncorrelated.
+    #[test]
+    fn independent_samples_are_uniform_and_uncorrelated() {
+        let n = 100_000;
+        let mut values = Vec::with_capacity(n);
+        for index in 0..(n / 10) as u32 {
+            let mut s = Sampler::new(SamplerKind::Independent, 1, 2, index, 3);
+            values.extend((0..10).map(|_| f64::from(s.get_1d())));
+        }
+        let mean = values.iter().sum::<f64>() / n as f64;
+        let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n as f64;
+        let lag1 = values.windows(2).map(|w| (w[0] - mean) * (w[1] - mean)).sum::<f64>() / (n - 1) as f64 / var;
+        let se = (1.0 / 12.0 / n as f64).sqrt();
+        assert!((mean - 0.5).abs() < 5.0 * se, "mean {mean}");
+        assert!((var - 1.0 / 12.0).abs() < 0.002, "variance {var}");
+        assert!(lag1.abs() < 5.0 / (n as f64).sqrt(), "lag-1 correlation {lag1}");
     }
 
     /// The first dimensions of 256 samples are stratified: each of 256
@@ -276,7 +444,7 @@ mod tests {
     fn sobol_dimension_is_stratified() {
         let mut seen = [0u32; 256];
         for i in 0..256 {
-            let u = Sampler::new(10, 20, i, 1).get_1d();
+            let u = Sampler::new(SamplerKind::Sobol, 10, 20, i, 1).get_1d();
             seen[(u * 256.0) as usize] += 1;
         }
         assert!(seen.iter().all(|&n| n == 1));

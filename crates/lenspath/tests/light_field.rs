@@ -74,6 +74,7 @@ fn render_patch(scene: &CompiledScene, patch: PixelRect, sensor_z_mm: f64, spp: 
         tile_size: 16,
         crop: Some(patch),
         depth: false,
+        ..Default::default()
     };
     render(scene, &camera, &render_settings, &|_, _| {}, &AtomicBool::new(false))
         .unwrap()

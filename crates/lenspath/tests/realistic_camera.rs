@@ -61,6 +61,7 @@ fn shoot(scene: Scene, shot: &Shot) -> Image {
         tile_size: 16,
         crop: None,
         depth: true,
+        ..Default::default()
     };
     let compiled = scene.compile(&BvhSettings::default()).unwrap();
     let out = render(&compiled, &camera(shot), &settings, &|_, _| {}, &AtomicBool::new(false)).unwrap();

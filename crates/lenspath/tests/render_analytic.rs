@@ -14,6 +14,7 @@ use lenspath::lights::Light;
 use lenspath::materials::Material;
 use lenspath::math::Rgb;
 use lenspath::render::{render, RenderSettings};
+use lenspath::sampling::SamplerKind;
 use lenspath::scene::Scene;
 use lenspath::shapes::{Sphere, TriangleMesh};
 
@@ -27,6 +28,7 @@ fn settings(width: u32, height: u32, spp: u32, seed: u32) -> RenderSettings {
             light_samples: 1,
         },
         seed,
+        sampler: SamplerKind::Sobol,
         filter: Filter::Box,
         threads: None,
         tile_size: 16,
@@ -134,58 +136,76 @@ fn closed_emissive_box_reaches_the_geometric_series() {
         }],
         ..Default::default()
     };
-    for light_samples in [1, 4] {
+    for (light_samples, sampler) in [
+        (1, SamplerKind::Sobol),
+        (4, SamplerKind::Sobol),
+        (1, SamplerKind::Independent),
+    ] {
         let pose = CameraPose::look_at(Vec3::new(0.1, 0.2, 0.3), Vec3::new(0.5, -0.3, -1.0), Vec3::Y);
         let camera = PerspectiveCamera::pinhole(pose, 70.0, 24, 24);
         let mut s = settings(24, 24, 64, 2);
         s.path.light_samples = light_samples;
+        s.sampler = sampler;
         let image = render_scene(scene.clone(), &camera, &s);
         let green: Vec<f32> = image.rgb.chunks(3).map(|p| p[1]).collect();
         let (mean, err) = mean_and_error(&green);
         let expected = f64::from(le / (1.0 - albedo));
         assert!(
             (mean - expected).abs() < 4.0 * err + 2e-3,
-            "light samples {light_samples}: {mean} ± {err}, expected {expected}"
+            "{sampler:?}, light samples {light_samples}: {mean} ± {err}, expected {expected}"
         );
     }
 }
 
-/// Two independent seeds of the Cornell box agree on the mean pixel value
-/// within the noise: the estimator converges to one answer.
+/// Two independent seeds of the Cornell box, and the Sobol and independent
+/// samplers, agree on the mean pixel value within the noise: the estimator
+/// converges to one answer whatever the sample sequence.
 #[test]
-fn cornell_box_converges_across_seeds() {
-    let render_seed = |seed| {
+fn cornell_box_converges_across_seeds_and_samplers() {
+    let render_seed = |seed, sampler| {
         let scene = builtin_scene("cornell-spheres", 0).unwrap();
         let view = scene.view.unwrap();
         let camera = PerspectiveCamera::pinhole(view.pose, view.fov_y_deg, 64, 48);
         let mut s = settings(64, 48, 32, seed);
         s.path.max_depth = 16;
         s.path.light_samples = 2;
+        s.sampler = sampler;
         render_scene(scene, &camera, &s)
     };
-    let (a, b) = (render_seed(1), render_seed(2));
-    assert_ne!(a.rgb, b.rgb, "different seeds must give independent images");
-    for c in 0..3 {
-        let diff: Vec<f32> = a.rgb.chunks(3).zip(b.rgb.chunks(3)).map(|(p, q)| p[c] - q[c]).collect();
-        let (mean, err) = mean_and_error(&diff);
-        assert!(err > 0.0);
-        assert!(mean.abs() < 4.0 * err, "channel {c}: seeds differ by {mean} ± {err}");
+    let a = render_seed(1, SamplerKind::Sobol);
+    for (b, what) in [
+        (render_seed(2, SamplerKind::Sobol), "seeds 1 and 2"),
+        (
+            render_seed(1, SamplerKind::Independent),
+            "the Sobol and independent samplers",
+        ),
+    ] {
+        assert_ne!(a.rgb, b.rgb, "{what} must give independent images");
+        for c in 0..3 {
+            let diff: Vec<f32> = a.rgb.chunks(3).zip(b.rgb.chunks(3)).map(|(p, q)| p[c] - q[c]).collect();
+            let (mean, err) = mean_and_error(&diff);
+            assert!(err > 0.0);
+            assert!(mean.abs() < 4.0 * err, "channel {c}: {what} differ by {mean} ± {err}");
+        }
     }
     // The lit box is neither black nor blown out.
     let m = a.mean();
     assert!(m.iter().all(|&v| v > 0.05 && v < 2.0), "mean {m:?}");
 }
 
-/// The same seed gives a byte-identical EXR whether 1 or 2 threads render it.
+/// The same seed gives a byte-identical EXR whether 1 or 2 threads render
+/// it, with either sampler.
 #[test]
 fn same_seed_is_bit_identical_across_thread_counts() {
     let dir = tempfile::tempdir().unwrap();
     let mut files = Vec::new();
-    for (threads, filter) in [
-        (1, Filter::Box),
-        (2, Filter::Box),
-        (1, Filter::GAUSSIAN),
-        (2, Filter::GAUSSIAN),
+    for (threads, filter, sampler) in [
+        (1, Filter::Box, SamplerKind::Sobol),
+        (2, Filter::Box, SamplerKind::Sobol),
+        (1, Filter::GAUSSIAN, SamplerKind::Sobol),
+        (2, Filter::GAUSSIAN, SamplerKind::Sobol),
+        (1, Filter::Box, SamplerKind::Independent),
+        (2, Filter::Box, SamplerKind::Independent),
     ] {
         let scene = builtin_scene("cornell-spheres", 0).unwrap();
         let view = scene.view.unwrap();
@@ -194,9 +214,10 @@ fn same_seed_is_bit_identical_across_thread_counts() {
         s.path.max_depth = 16;
         s.threads = Some(threads);
         s.filter = filter;
+        s.sampler = sampler;
         s.tile_size = if threads == 1 { 16 } else { 8 };
         let image = render_scene(scene, &camera, &s);
-        let path = dir.path().join(format!("t{threads}-{filter:?}.exr"));
+        let path = dir.path().join(format!("t{threads}-{filter:?}-{sampler:?}.exr"));
         write_image(&path, &image, 0.0).unwrap();
         let back = read_exr(&path).unwrap();
         assert_eq!(back.rgb, image.rgb);
@@ -209,7 +230,12 @@ fn same_seed_is_bit_identical_across_thread_counts() {
         files[2] == files[3],
         "Gaussian filter: the EXRs of 1 and 2 threads differ"
     );
+    assert!(
+        files[4] == files[5],
+        "independent sampler: the EXRs of 1 and 2 threads differ"
+    );
     assert!(files[0] != files[2], "the filter must change the image");
+    assert!(files[0] != files[4], "the sampler must change the image");
 }
 
 /// An EXR of many blocks is written byte for byte the same every time: exr

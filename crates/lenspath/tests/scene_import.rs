@@ -13,6 +13,7 @@ use lenspath::io::{load_scene, LoadedScene};
 use lenspath::lights::Light;
 use lenspath::materials::Material;
 use lenspath::render::{render, RenderSettings};
+use lenspath::sampling::SamplerKind;
 
 fn repo(path: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..").join(path)
@@ -296,6 +297,7 @@ width = 32
 height = 24
 [integrator]
 spp = 2
+sampler = "independent"
 [materials.gold]
 type = "conductor"
 eta = [0.143, 0.374, 1.442]
@@ -336,6 +338,7 @@ aperture = "star:5:0.4"
     assert!(matches!(s.lights[..], [Light::Spot { .. }]));
     assert_eq!(loaded.options.resolution, Some((32, 24)));
     assert_eq!(loaded.options.spp, Some(2));
+    assert_eq!(loaded.options.sampler, Some(SamplerKind::Independent));
     assert_eq!(loaded.options.scene_unit_m, Some(0.5));
     let lens = loaded.options.lens.unwrap();
     assert_eq!((lens.lens.as_deref(), lens.f_number), (Some("wide22"), Some(4.0)));

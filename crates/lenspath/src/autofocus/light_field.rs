@@ -26,6 +26,7 @@ use crate::error::{Error, Result};
 use crate::film::Filter;
 use crate::integrator::{radiance, PathSettings};
 use crate::render::{pixel_sample, worker_pool, PixelRect};
+use crate::sampling::SamplerKind;
 use crate::scene::CompiledScene;
 
 /// One sample of the light field.
@@ -106,7 +107,8 @@ pub struct LightField {
 pub struct Recording {
     /// Samples per pixel.
     pub spp: u32,
-    /// Seed of the sample sequences (a render with it has the same samples).
+    /// Seed of the sample sequences (a render with it and the default Sobol
+    /// sampler has the same samples).
     pub seed: u32,
     /// Path depth and light sampling.
     pub path: PathSettings,
@@ -155,7 +157,7 @@ impl LightField {
 
     /// Renders `region` through `camera` keeping every sample; inside the
     /// image the samples are those of [`crate::render::render`] with the same
-    /// seed and a box filter. The camera must cover the region
+    /// seed, the Sobol sampler and a box filter. The camera must cover the region
     /// ([`LightField::recording_camera`] makes one that does).
     pub fn record(
         scene: &CompiledScene,
@@ -182,7 +184,8 @@ impl LightField {
                     let mut rays = 0u64;
                     for px in region.x0..region.x0 + region.width as i32 {
                         for index in 0..spp {
-                            let (mut sampler, camera_sample) = pixel_sample(px, py, index, seed, Filter::Box);
+                            let (mut sampler, camera_sample) =
+                                pixel_sample(SamplerKind::Sobol, px, py, index, seed, Filter::Box);
                             let film = camera_sample.film;
                             let sample = camera.generate_lens_sample(camera_sample);
                             let l = sample.ray.map_or(Vec3::ZERO, |cr| {

@@ -23,6 +23,7 @@ use crate::film::Filter;
 use crate::integrator::PathSettings;
 use crate::lens::{AnalysisSettings, LensAnalysis, LensSystem};
 use crate::render::{render, PixelRect, RenderSettings};
+use crate::sampling::SamplerKind;
 use crate::scene::CompiledScene;
 
 /// The scale of detail a patch render is scored at: the band-pass applied
@@ -472,6 +473,7 @@ impl<'a> Focuser<'a> {
             spp,
             path: s.path,
             seed,
+            sampler: SamplerKind::Sobol,
             filter: Filter::Box,
             threads: s.threads,
             tile_size: 16,

@@ -12,6 +12,7 @@ use crate::camera::CameraPose;
 use crate::lights::Light;
 use crate::materials::Material;
 use crate::math::{Bounds3, Rgb};
+use crate::sampling::SamplerKind;
 use crate::scene::{Scene, SceneView};
 use crate::shapes::{MaterialId, TriangleMesh};
 
@@ -51,6 +52,8 @@ pub struct SceneOptions {
     pub light_samples: Option<u32>,
     /// Seed of the sample sequences.
     pub seed: Option<u32>,
+    /// The sample sequence.
+    pub sampler: Option<SamplerKind>,
     /// Metres per scene unit (COLLADA `<unit meter>`, glTF: 1).
     pub scene_unit_m: Option<f64>,
     /// Lens settings for the realistic camera.

@@ -20,6 +20,7 @@ use crate::error::{Error, Result};
 use crate::lights::Light;
 use crate::materials::Material;
 use crate::math::Rgb;
+use crate::sampling::SamplerKind;
 use crate::scene::{Scene, SceneView};
 use crate::shapes::{Sphere, TriangleMesh};
 
@@ -90,6 +91,7 @@ struct IntegratorSpec {
     max_depth: Option<u32>,
     light_samples: Option<u32>,
     seed: Option<u32>,
+    sampler: Option<String>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -252,6 +254,15 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
         options.max_depth = i.max_depth.or(options.max_depth);
         options.light_samples = i.light_samples.or(options.light_samples);
         options.seed = i.seed.or(options.seed);
+        if let Some(name) = &i.sampler {
+            let kind = SamplerKind::from_name(name).ok_or_else(|| {
+                fail(format!(
+                    "[integrator] sampler must be one of {}, got '{name}'",
+                    SamplerKind::NAMES.join(", ")
+                ))
+            })?;
+            options.sampler = Some(kind);
+        }
     }
 
     // Materials, by name.
