@@ -7,6 +7,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+# numpy's OpenBLAS threads spin after each call, taking a core from the
+# renderers being timed (3% of samples on 2 cores); no benchmark needs them.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
 ROOT = Path(__file__).resolve().parents[2]
 VENV = ROOT / "bench" / ".venv-peers"
 

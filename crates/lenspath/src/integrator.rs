@@ -2,8 +2,9 @@
 //! shadow rays per light, multiple importance sampling with the power
 //! heuristic, and Russian roulette (after pbrt-v4 `PathIntegrator`).
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
+use crate::lights::LightSample;
 use crate::materials::Material;
 use crate::math::{max_component, Frame, Rgb};
 use crate::ray::{offset_origin, Ray};
@@ -124,31 +125,67 @@ fn direct_lighting(
     settings: &PathSettings,
     rays: &mut u64,
 ) -> Rgb {
-    let n_light = settings.light_samples as f32;
+    let mut shading = Shading {
+        scene,
+        hit,
+        material,
+        frame,
+        wo,
+        sampler,
+        settings,
+        rays,
+    };
+    // Two loops, not one over `dyn` lights: each light's sampling inlines.
     let mut sum = Rgb::ZERO;
-    let area = scene.area_lights().iter().map(|a| a as &dyn SampleLight);
-    let other = scene.lights().iter().map(|a| a as &dyn SampleLight);
-    for light in area.chain(other) {
-        for _ in 0..settings.light_samples {
-            let u = sampler.get_2d();
-            let Some(ls) = light.sample_at(hit.p, u) else {
+    for light in scene.area_lights() {
+        sum += shading.light_sum(|p, u| light.sample(p, u));
+    }
+    for light in scene.lights() {
+        sum += shading.light_sum(|p, u| light.sample(p, u));
+    }
+    sum
+}
+
+/// What direct lighting at one hit reads and advances.
+struct Shading<'a> {
+    scene: &'a CompiledScene,
+    hit: &'a SurfaceHit,
+    material: &'a Material,
+    frame: &'a Frame,
+    wo: Vec3,
+    sampler: &'a mut Sampler,
+    settings: &'a PathSettings,
+    rays: &'a mut u64,
+}
+
+impl Shading<'_> {
+    /// One light's `light_samples` shadow rays, its samples drawn by `sample_light`.
+    #[inline(always)]
+    fn light_sum(&mut self, sample_light: impl Fn(Vec3, Vec2) -> Option<LightSample>) -> Rgb {
+        let (hit, material, wo) = (self.hit, self.material, self.wo);
+        let n_light = self.settings.light_samples as f32;
+        let mut sum = Rgb::ZERO;
+        for _ in 0..self.settings.light_samples {
+            let u = self.sampler.get_2d();
+            let Some(ls) = sample_light(hit.p, u) else {
                 continue;
             };
             if ls.pdf <= 0.0 || ls.radiance == Rgb::ZERO {
                 continue;
             }
-            let wi = frame.to_local(ls.wi);
+            let wi = self.frame.to_local(ls.wi);
             let f = material.eval(wo, wi) * wi.z.abs();
             if f == Rgb::ZERO {
                 continue;
             }
-            *rays += 1;
+            *self.rays += 1;
             let origin = offset_origin(hit.p, hit.geometric_normal, ls.wi);
             let blocked = if ls.distance.is_finite() {
                 let target = hit.p + ls.wi * ls.distance;
-                scene.occluded(&Ray::new(origin, target - origin), 1.0 - SHADOW_EPSILON)
+                self.scene
+                    .occluded(&Ray::new(origin, target - origin), 1.0 - SHADOW_EPSILON)
             } else {
-                scene.occluded(&Ray::new(origin, ls.wi), f32::INFINITY)
+                self.scene.occluded(&Ray::new(origin, ls.wi), f32::INFINITY)
             };
             if blocked {
                 continue;
@@ -160,23 +197,6 @@ fn direct_lighting(
             };
             sum += f * ls.radiance * (w / (ls.pdf * n_light));
         }
-    }
-    sum
-}
-
-/// The one operation direct lighting needs of any light.
-trait SampleLight {
-    fn sample_at(&self, p: Vec3, u: glam::Vec2) -> Option<crate::lights::LightSample>;
-}
-
-impl SampleLight for crate::lights::AreaLight {
-    fn sample_at(&self, p: Vec3, u: glam::Vec2) -> Option<crate::lights::LightSample> {
-        self.sample(p, u)
-    }
-}
-
-impl SampleLight for crate::lights::Light {
-    fn sample_at(&self, p: Vec3, u: glam::Vec2) -> Option<crate::lights::LightSample> {
-        self.sample(p, u)
+        sum
     }
 }

@@ -2,7 +2,7 @@
 //! compiled form the integrator traces ([`CompiledScene`]): a BVH over
 //! every primitive plus the area lights made from emissive shapes.
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
 use crate::accel::{Bvh, BvhSettings, PrimGeometry};
 use crate::camera::CameraPose;
@@ -67,8 +67,6 @@ pub struct SurfaceHit {
     pub geometric_normal: Vec3,
     /// Unit shading normal, on the same side as the geometric normal.
     pub shading_normal: Vec3,
-    /// Texture coordinates (zero when the shape has none).
-    pub uv: Vec2,
     /// Material of the surface.
     pub material: MaterialId,
     /// Area light index when the surface emits.
@@ -311,6 +309,7 @@ impl CompiledScene {
     }
 
     /// The closest surface hit along `ray` (unit direction).
+    #[inline(always)]
     pub fn intersect(&self, ray: &Ray) -> Option<SurfaceHit> {
         let hit = self.bvh.intersect(ray, f32::INFINITY)?;
         Some(match self.bvh.tag(hit.prim) {
@@ -327,16 +326,11 @@ impl CompiledScene {
                     .as_ref()
                     .and_then(|ns| (b0 * ns[i0] + hit.b1 * ns[i1] + hit.b2 * ns[i2]).try_normalize())
                     .map_or(geometric_normal, |n| if n.dot(geometric_normal) < 0.0 { -n } else { n });
-                let uv = m
-                    .uvs
-                    .as_ref()
-                    .map_or(Vec2::ZERO, |uv| b0 * uv[i0] + hit.b1 * uv[i1] + hit.b2 * uv[i2]);
                 SurfaceHit {
                     t: hit.t,
                     p,
                     geometric_normal,
                     shading_normal,
-                    uv,
                     material: m.material,
                     area_light: self.mesh_light[mesh as usize],
                 }
@@ -344,16 +338,11 @@ impl CompiledScene {
             PrimRef::Sphere { sphere } => {
                 let s = &self.scene.spheres[sphere as usize];
                 let n = (ray.at(hit.t) - s.center).normalize();
-                let uv = Vec2::new(
-                    (n.z.atan2(n.x) / std::f32::consts::TAU).rem_euclid(1.0),
-                    n.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
-                );
                 SurfaceHit {
                     t: hit.t,
                     p: s.center + s.radius * n,
                     geometric_normal: n,
                     shading_normal: n,
-                    uv,
                     material: s.material,
                     area_light: self.sphere_light[sphere as usize],
                 }
