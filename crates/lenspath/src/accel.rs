@@ -543,6 +543,12 @@ impl<T: Copy> Bvh<T> {
         self.tags[prim as usize]
     }
 
+    /// The geometry of primitive `prim` (traversal order).
+    #[inline]
+    pub fn primitive(&self, prim: u32) -> &PrimGeometry {
+        &self.geometry[prim as usize]
+    }
+
     /// The closest hit with `0 < t < t_max`.
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         self.traverse_wide::<false>(ray, t_max)

@@ -39,21 +39,14 @@ pub struct Scene {
     pub view: Option<SceneView>,
 }
 
-/// Which shape a BVH primitive belongs to.
+/// Which shape a BVH primitive belongs to (its [`PrimGeometry`] says
+/// whether it is a triangle or a sphere).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum PrimRef {
-    /// Triangle `triangle` of mesh `mesh`.
-    Triangle {
-        /// Mesh index.
-        mesh: u32,
-        /// Triangle index in the mesh.
-        triangle: u32,
-    },
-    /// Sphere `sphere`.
-    Sphere {
-        /// Sphere index.
-        sphere: u32,
-    },
+pub struct PrimRef {
+    /// Index of its mesh, or of the sphere.
+    pub shape: u32,
+    /// Triangle index in the mesh (0 for a sphere).
+    pub triangle: u32,
 }
 
 /// Everything the integrator needs about a ray's closest hit.
@@ -230,8 +223,8 @@ impl Scene {
                 if (tri[1] - tri[0]).cross(tri[2] - tri[0]).length_squared() > 0.0 {
                     prims.push((
                         PrimGeometry::Triangle(tri),
-                        PrimRef::Triangle {
-                            mesh: mi as u32,
+                        PrimRef {
+                            shape: mi as u32,
                             triangle: ti as u32,
                         },
                     ));
@@ -244,7 +237,10 @@ impl Scene {
                     center: s.center,
                     radius: s.radius,
                 },
-                PrimRef::Sphere { sphere: si as u32 },
+                PrimRef {
+                    shape: si as u32,
+                    triangle: 0,
+                },
             ));
         }
         let bvh = Bvh::build(prims, settings);
@@ -312,11 +308,12 @@ impl CompiledScene {
     #[inline(always)]
     pub fn intersect(&self, ray: &Ray) -> Option<SurfaceHit> {
         let hit = self.bvh.intersect(ray, f32::INFINITY)?;
-        Some(match self.bvh.tag(hit.prim) {
-            PrimRef::Triangle { mesh, triangle } => {
-                let m = &self.scene.meshes[mesh as usize];
-                let [i0, i1, i2] = m.indices[triangle as usize].map(|i| i as usize);
-                let (p0, p1, p2) = (m.positions[i0], m.positions[i1], m.positions[i2]);
+        let PrimRef { shape, triangle } = self.bvh.tag(hit.prim);
+        // The corners and centres from the BVH's copy (in traversal order,
+        // near the nodes just visited), not through the mesh's indices.
+        Some(match *self.bvh.primitive(hit.prim) {
+            PrimGeometry::Triangle([p0, p1, p2]) => {
+                let m = &self.scene.meshes[shape as usize];
                 let b0 = 1.0 - hit.b1 - hit.b2;
                 // Barycentric interpolation is more accurate than origin + t·direction.
                 let p = b0 * p0 + hit.b1 * p1 + hit.b2 * p2;
@@ -324,7 +321,10 @@ impl CompiledScene {
                 let shading_normal = m
                     .normals
                     .as_ref()
-                    .and_then(|ns| (b0 * ns[i0] + hit.b1 * ns[i1] + hit.b2 * ns[i2]).try_normalize())
+                    .and_then(|ns| {
+                        let [i0, i1, i2] = m.indices[triangle as usize].map(|i| i as usize);
+                        (b0 * ns[i0] + hit.b1 * ns[i1] + hit.b2 * ns[i2]).try_normalize()
+                    })
                     .map_or(geometric_normal, |n| if n.dot(geometric_normal) < 0.0 { -n } else { n });
                 SurfaceHit {
                     t: hit.t,
@@ -332,19 +332,18 @@ impl CompiledScene {
                     geometric_normal,
                     shading_normal,
                     material: m.material,
-                    area_light: self.mesh_light[mesh as usize],
+                    area_light: self.mesh_light[shape as usize],
                 }
             }
-            PrimRef::Sphere { sphere } => {
-                let s = &self.scene.spheres[sphere as usize];
-                let n = (ray.at(hit.t) - s.center).normalize();
+            PrimGeometry::Sphere { center, radius } => {
+                let n = (ray.at(hit.t) - center).normalize();
                 SurfaceHit {
                     t: hit.t,
-                    p: s.center + s.radius * n,
+                    p: center + radius * n,
                     geometric_normal: n,
                     shading_normal: n,
-                    material: s.material,
-                    area_light: self.sphere_light[sphere as usize],
+                    material: self.scene.spheres[shape as usize].material,
+                    area_light: self.sphere_light[shape as usize],
                 }
             }
         })
