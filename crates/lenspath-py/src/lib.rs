@@ -1247,7 +1247,7 @@ fn render<'py>(
         threads,
         tile_size: 16,
         crop: crop.map(|(x0, y0, width, height)| PixelRect { x0, y0, width, height }),
-        depth: true,
+        depth: want_depth,
         sampler,
     };
     settings.validate().map_err(|e| to_py(e, FileKind::Scene))?;
