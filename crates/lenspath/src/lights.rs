@@ -52,6 +52,8 @@ pub enum AreaShape {
     Triangles {
         /// Corners of each triangle.
         triangles: Vec<[Vec3; 3]>,
+        /// Unit normal of each triangle's front face.
+        normals: Vec<Vec3>,
         /// Triangle choice proportional to area.
         by_area: Distribution1D,
     },
@@ -83,6 +85,11 @@ impl AreaLight {
             .map(|[a, b, c]| 0.5 * (*b - *a).cross(*c - *a).length())
             .collect();
         let area: f32 = areas.iter().sum();
+        // Zero-area triangles are never chosen; their normal is left zero.
+        let normals = triangles
+            .iter()
+            .map(|[a, b, c]| (*b - *a).cross(*c - *a).normalize_or_zero())
+            .collect();
         if area <= 0.0 || !area.is_finite() {
             return None;
         }
@@ -90,6 +97,7 @@ impl AreaLight {
             shape: AreaShape::Triangles {
                 by_area: Distribution1D::new(&areas),
                 triangles,
+                normals,
             },
             radiance,
             area,
@@ -108,11 +116,15 @@ impl AreaLight {
     /// A point on the light, uniform by area: position and outward normal.
     fn sample_point(&self, u: Vec2) -> (Vec3, Vec3) {
         match &self.shape {
-            AreaShape::Triangles { triangles, by_area } => {
+            AreaShape::Triangles {
+                triangles,
+                normals,
+                by_area,
+            } => {
                 let (i, _, ux) = by_area.sample(u.x);
                 let [a, b, c] = triangles[i];
                 let [b0, b1, b2] = uniform_triangle(Vec2::new(ux, u.y));
-                (b0 * a + b1 * b + b2 * c, (b - a).cross(c - a).normalize())
+                (b0 * a + b1 * b + b2 * c, normals[i])
             }
             AreaShape::Sphere { center, radius } => {
                 let n = uniform_sphere(u.x, u.y);
@@ -130,7 +142,7 @@ impl AreaLight {
             return None;
         }
         let distance = dist2.sqrt();
-        let wi = to_light / distance;
+        let wi = to_light * distance.recip();
         let cos_light = -n.dot(wi);
         if cos_light <= 0.0 {
             return None; // the back faces p

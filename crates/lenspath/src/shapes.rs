@@ -95,17 +95,19 @@ impl TriangleRay {
     /// Precomputes the permutation and shear for `ray`.
     #[inline]
     pub fn new(ray: &Ray) -> Self {
-        let d = ray.direction;
-        let kz = d.abs().max_position();
+        let d = ray.direction.to_array();
+        let kz = ray.direction.abs().max_position();
         let kx = if kz == 2 { 0 } else { kz + 1 };
         let ky = if kx == 2 { 0 } else { kx + 1 };
-        let dz = d[kz];
+        // One division, not three: every triangle sees the same shear, so
+        // the test stays watertight.
+        let inv_dz = 1.0 / d[kz];
         TriangleRay {
             origin: ray.origin,
             kx,
             ky,
             kz,
-            shear: Vec3::new(-d[kx] / dz, -d[ky] / dz, 1.0 / dz),
+            shear: Vec3::new(-d[kx] * inv_dz, -d[ky] * inv_dz, inv_dz),
         }
     }
 }
