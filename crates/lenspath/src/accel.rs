@@ -125,6 +125,16 @@ struct Node {
     axis: u16,
 }
 
+impl Node {
+    /// Its box.
+    fn bounds(&self) -> Bounds3 {
+        Bounds3 {
+            min: Vec3A::from_array(self.min),
+            max: Vec3A::from_array(self.max),
+        }
+    }
+}
+
 /// A node of the 4-wide tree: its children's boxes side by side (one SIMD
 /// lane each, as Embree and tinybvh lay them out), so one slab test meets all
 /// four. A child is a leaf when its `count` (of primitives) is non-zero:
@@ -531,10 +541,7 @@ impl<T: Copy> Bvh<T> {
 
     /// Bounds of everything in the tree (empty for an empty tree).
     pub fn bounds(&self) -> Bounds3 {
-        self.nodes.first().map_or(Bounds3::EMPTY, |n| Bounds3 {
-            min: Vec3A::from_array(n.min),
-            max: Vec3A::from_array(n.max),
-        })
+        self.nodes.first().map_or(Bounds3::EMPTY, Node::bounds)
     }
 
     /// The caller's tag of primitive `prim` (traversal order).
@@ -886,12 +893,7 @@ fn collapse(nodes: &[Node], geometry: &[PrimGeometry]) -> (Vec<WideNode>, Vec<Tr
         return (Vec::new(), Vec::new());
     }
     let range = subtree_ranges(nodes);
-    let bounds = |i: usize| Bounds3 {
-        min: Vec3A::from_array(nodes[i].min),
-        max: Vec3A::from_array(nodes[i].max),
-    };
     let leaf = leaf_choice(nodes, &range);
-    let is_leaf = |i: usize| leaf[i];
     let empty = WideNode {
         min: [Vec4::ZERO; 3],
         max: [Vec4::ZERO; 3],
@@ -903,7 +905,7 @@ fn collapse(nodes: &[Node], geometry: &[PrimGeometry]) -> (Vec<WideNode>, Vec<Tr
     let mut wide = vec![empty];
     let mut packs = Vec::new();
     // A leaf root becomes one wide node with a single leaf lane.
-    let mut pending = vec![(0usize, if is_leaf(0) { None } else { Some(0usize) })];
+    let mut pending = vec![(0usize, if leaf[0] { None } else { Some(0usize) })];
     while let Some((slot, binary)) = pending.pop() {
         // Up to four children, on the stack (no allocation per node).
         let (mut children, mut len) = match binary {
@@ -914,8 +916,8 @@ fn collapse(nodes: &[Node], geometry: &[PrimGeometry]) -> (Vec<WideNode>, Vec<Tr
             let widest = children[..len]
                 .iter()
                 .enumerate()
-                .filter(|(_, &c)| !is_leaf(c))
-                .map(|(k, &c)| (k, c, bounds(c).surface_area()))
+                .filter(|(_, &c)| !leaf[c])
+                .map(|(k, &c)| (k, c, nodes[c].bounds().surface_area()))
                 .max_by(|a, b| a.2.total_cmp(&b.2));
             let Some((k, c, _)) = widest else { break };
             children[k] = c + 1;
@@ -930,7 +932,7 @@ fn collapse(nodes: &[Node], geometry: &[PrimGeometry]) -> (Vec<WideNode>, Vec<Tr
                 node.max[axis][lane] = hi[axis];
             }
             node.lanes |= 1 << lane;
-            if is_leaf(c) {
+            if leaf[c] {
                 let (first, end) = range[c];
                 node.child[lane] = packs.len() as u32;
                 node.count[lane] = (end - first) as u16;
@@ -971,13 +973,7 @@ fn subtree_ranges(nodes: &[Node]) -> Vec<(u32, u32)> {
 /// and every subtree of at most [`WIDE_LEAF_PRIMITIVES`] primitives whose box
 /// is small (see [`WIDE_LEAF_MAX_AREA_FRACTION`]).
 fn leaf_choice(nodes: &[Node], range: &[(u32, u32)]) -> Vec<bool> {
-    let area = |n: &Node| {
-        Bounds3 {
-            min: Vec3A::from_array(n.min),
-            max: Vec3A::from_array(n.max),
-        }
-        .surface_area()
-    };
+    let area = |n: &Node| n.bounds().surface_area();
     let limit = WIDE_LEAF_MAX_AREA_FRACTION * area(&nodes[0]);
     nodes
         .iter()

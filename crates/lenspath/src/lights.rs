@@ -80,19 +80,14 @@ pub struct AreaLight {
 impl AreaLight {
     /// An area light over `triangles`; `None` when they have no area.
     pub fn from_triangles(triangles: Vec<[Vec3; 3]>, radiance: Rgb) -> Option<Self> {
-        let areas: Vec<f32> = triangles
-            .iter()
-            .map(|[a, b, c]| 0.5 * (*b - *a).cross(*c - *a).length())
-            .collect();
+        let crosses: Vec<Vec3> = triangles.iter().map(|[a, b, c]| (*b - *a).cross(*c - *a)).collect();
+        let areas: Vec<f32> = crosses.iter().map(|n| 0.5 * n.length()).collect();
         let area: f32 = areas.iter().sum();
-        // Zero-area triangles are never chosen; their normal is left zero.
-        let normals = triangles
-            .iter()
-            .map(|[a, b, c]| (*b - *a).cross(*c - *a).normalize_or_zero())
-            .collect();
         if area <= 0.0 || !area.is_finite() {
             return None;
         }
+        // Zero-area triangles are never chosen; their normal is left zero.
+        let normals = crosses.iter().map(|n| n.normalize_or_zero()).collect();
         Some(AreaLight {
             shape: AreaShape::Triangles {
                 by_area: Distribution1D::new(&areas),

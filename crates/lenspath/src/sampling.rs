@@ -44,14 +44,6 @@ impl SamplerKind {
             _ => None,
         }
     }
-
-    /// Its name (see [`SamplerKind::NAMES`]).
-    pub fn name(self) -> &'static str {
-        match self {
-            SamplerKind::Sobol => "sobol",
-            SamplerKind::Independent => "independent",
-        }
-    }
 }
 
 /// The sample stream of one pixel sample: Owen-scrambled Sobol samples
@@ -188,7 +180,7 @@ impl Rng {
 /// the XSH-RR variant pbrt-v4's `RNG` and Mitsuba's `PCG32` use): 2^63 streams of
 /// period 2^64.
 #[derive(Clone, Debug)]
-pub struct Pcg32 {
+struct Pcg32 {
     state: u64,
     increment: u64,
 }
@@ -197,7 +189,7 @@ const PCG32_MULTIPLIER: u64 = 0x5851_F42D_4C95_7F2D;
 
 impl Pcg32 {
     /// Stream `sequence`, started from `seed` (pbrt's `SetSequence`).
-    pub fn new(sequence: u64, seed: u64) -> Self {
+    fn new(sequence: u64, seed: u64) -> Self {
         let mut rng = Pcg32 {
             state: 0,
             increment: (sequence << 1) | 1,
@@ -210,7 +202,7 @@ impl Pcg32 {
 
     /// The next 32 random bits.
     #[inline]
-    pub fn next_u32(&mut self) -> u32 {
+    fn next_u32(&mut self) -> u32 {
         let old = self.state;
         self.state = old.wrapping_mul(PCG32_MULTIPLIER).wrapping_add(self.increment);
         let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
@@ -220,7 +212,7 @@ impl Pcg32 {
     /// Uniform in [0, 1): the top 24 bits, so every value is exact in f32
     /// and 1 cannot come out by rounding.
     #[inline]
-    pub fn uniform(&mut self) -> f32 {
+    fn uniform(&mut self) -> f32 {
         (self.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
     }
 }
