@@ -129,6 +129,7 @@ impl AreaLight {
     }
 
     /// Samples the light as seen from `p`, uniformly by area (pbrt-v4 §12.2).
+    #[inline(always)]
     pub fn sample(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
         let (q, n) = self.sample_point(u);
         let to_light = q - p;

@@ -124,6 +124,7 @@ impl Material {
     }
 
     /// Samples an incident direction for `wo`; `uc` picks a lobe, `u` the direction.
+    #[inline(always)]
     pub fn sample(&self, wo: Vec3, uc: f32, u: Vec2) -> Option<BsdfSample> {
         if wo.z == 0.0 {
             return None;

@@ -3,7 +3,7 @@
 //! unit square, and a piecewise-constant 1D distribution.
 
 use glam::{Vec2, Vec3};
-use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
+use std::f32::consts::{FRAC_PI_4, PI};
 
 /// Hash of 32 bits (Wellons' "lowbias32", a well-mixed integer hash).
 #[inline]
@@ -236,12 +236,28 @@ pub fn concentric_disk(u: Vec2) -> Vec2 {
     if o.x == 0.0 && o.y == 0.0 {
         return Vec2::ZERO;
     }
-    let (r, theta) = if o.x.abs() > o.y.abs() {
-        (o.x, FRAC_PI_4 * (o.y / o.x))
+    // The angle from the major axis is π/4 · minor/major, within ±π/4, where
+    // two short polynomials give its sine and cosine (no libm call: that
+    // was 3% of a render).
+    if o.x.abs() > o.y.abs() {
+        let (sin, cos) = sin_cos_quarter_turn(FRAC_PI_4 * (o.y / o.x));
+        o.x * Vec2::new(cos, sin)
     } else {
-        (o.y, FRAC_PI_2 - FRAC_PI_4 * (o.x / o.y))
-    };
-    r * Vec2::new(theta.cos(), theta.sin())
+        // θ = π/2 − φ: cos θ = sin φ and sin θ = cos φ.
+        let (sin, cos) = sin_cos_quarter_turn(FRAC_PI_4 * (o.x / o.y));
+        o.y * Vec2::new(sin, cos)
+    }
+}
+
+/// `(sin x, cos x)` for |x| ≤ π/4, without range reduction: the minimax
+/// polynomials of Moshier's Cephes `sinf` and `cosf` (relative error
+/// 1.7·10⁻⁸ in exact arithmetic; within 2·10⁻⁷ in `f32`, see the test).
+#[inline]
+fn sin_cos_quarter_turn(x: f32) -> (f32, f32) {
+    let z = x * x;
+    let sin = ((-1.951_529_6e-4 * z + 8.332_161e-3) * z - 1.666_665_5e-1) * z * x + x;
+    let cos = ((2.443_315_7e-5 * z - 1.388_731_6e-3) * z + 4.166_664_6e-2) * z * z - 0.5 * z + 1.0;
+    (sin, cos)
 }
 
 /// Cosine-weighted direction in the +z hemisphere (Malley's method); pdf cosθ/π.
@@ -432,6 +448,39 @@ mod tests {
             seen[(u * 256.0) as usize] += 1;
         }
         assert!(seen.iter().all(|&n| n == 1));
+    }
+
+    /// The polynomials agree with the exact sine and cosine over ±π/4 to
+    /// float precision, and the disk map with its textbook form (the angle
+    /// measured from +x, through libm in f64).
+    #[test]
+    fn quarter_turn_sin_cos_and_disk_are_exact_to_float_precision() {
+        let n = 200_000;
+        let worst = (0..=n)
+            .map(|k| {
+                let x = FRAC_PI_4 * (2.0 * k as f32 / n as f32 - 1.0);
+                let (sin, cos) = sin_cos_quarter_turn(x);
+                let exact = f64::from(x).sin_cos();
+                (f64::from(sin) - exact.0).abs().max((f64::from(cos) - exact.1).abs())
+            })
+            .fold(0.0, f64::max);
+        assert!(worst < 2e-7, "largest error {worst:e}");
+        let mut rng = Rng::new(7);
+        for _ in 0..100_000 {
+            let u = Vec2::new(rng.uniform(), rng.uniform());
+            let o = (2.0 * u - Vec2::ONE).as_dvec2();
+            let (r, theta) = if o.x.abs() > o.y.abs() {
+                (o.x, std::f64::consts::FRAC_PI_4 * (o.y / o.x))
+            } else {
+                (
+                    o.y,
+                    std::f64::consts::FRAC_PI_2 - std::f64::consts::FRAC_PI_4 * (o.x / o.y),
+                )
+            };
+            let exact = r * glam::DVec2::new(theta.cos(), theta.sin());
+            let error = (concentric_disk(u).as_dvec2() - exact).length();
+            assert!(error < 3e-7, "u {u}: {error:e}");
+        }
     }
 
     #[test]

@@ -24,7 +24,7 @@ use rayon::prelude::*;
 use crate::camera::{CameraPose, RealisticCamera, RealisticCameraSettings};
 use crate::error::{Error, Result};
 use crate::film::Filter;
-use crate::integrator::{radiance, PathSettings};
+use crate::integrator::{trace_path, PathSettings};
 use crate::render::{pixel_sample, worker_pool, PixelRect};
 use crate::sampling::SamplerKind;
 use crate::scene::CompiledScene;
@@ -165,42 +165,15 @@ impl LightField {
         region: FilmRegion,
         recording: &Recording,
     ) -> Result<LightField> {
-        let Recording {
-            spp,
-            seed,
-            path,
-            threads,
-        } = *recording;
-        if spp == 0 {
+        if recording.spp == 0 {
             return Err(Error::InvalidArgument(
                 "a light field needs at least 1 sample per pixel".into(),
             ));
         }
-        let rows: Vec<Vec<Record>> = worker_pool(threads)?.install(|| {
+        let rows: Vec<Vec<Record>> = worker_pool(recording.threads)?.install(|| {
             (region.y0..region.y0 + region.height as i32)
                 .into_par_iter()
-                .map(|py| {
-                    let mut row = Vec::with_capacity((region.width * spp) as usize);
-                    let mut rays = 0u64;
-                    for px in region.x0..region.x0 + region.width as i32 {
-                        for index in 0..spp {
-                            let (mut sampler, camera_sample) =
-                                pixel_sample(SamplerKind::Sobol, px, py, index, seed, Filter::Box);
-                            let film = camera_sample.film;
-                            let sample = camera.generate_lens_sample(camera_sample);
-                            let l = sample.ray.map_or(Vec3::ZERO, |cr| {
-                                cr.weight * radiance(scene, cr.ray, &mut sampler, &path, &mut rays)
-                            });
-                            row.push(Record {
-                                film,
-                                rear: sample.rear_raster,
-                                // A non-finite sample counts as black, as in a render.
-                                radiance: if l.is_finite() { l } else { Vec3::ZERO },
-                            });
-                        }
-                    }
-                    row
-                })
+                .map(|py| record_row(scene, &camera, region, py, recording))
                 .collect()
         });
         let records: Vec<Record> = rows.into_iter().flatten().collect();
@@ -298,4 +271,36 @@ pub enum Splat {
 /// The four corners of the box from `lo` to `hi`.
 fn corners_of(lo: Vec2, hi: Vec2) -> [Vec2; 4] {
     [lo, Vec2::new(hi.x, lo.y), Vec2::new(lo.x, hi.y), hi]
+}
+
+/// Row `py` of `region`'s samples, in pixel then sample order. Compiled for
+/// x86-64-v3 too, like [`crate::render`]'s tiles (the path tracer inlines).
+#[multiversion::multiversion(targets("x86_64+avx+avx2+fma+bmi1+bmi2+lzcnt+movbe+f16c"))]
+fn record_row(
+    scene: &CompiledScene,
+    camera: &RealisticCamera,
+    region: FilmRegion,
+    py: i32,
+    recording: &Recording,
+) -> Vec<Record> {
+    let Recording { spp, seed, path, .. } = *recording;
+    let mut row = Vec::with_capacity((region.width * spp) as usize);
+    let mut rays = 0u64;
+    for px in region.x0..region.x0 + region.width as i32 {
+        for index in 0..spp {
+            let (mut sampler, camera_sample) = pixel_sample(SamplerKind::Sobol, px, py, index, seed, Filter::Box);
+            let film = camera_sample.film;
+            let sample = camera.generate_lens_sample(camera_sample);
+            let l = sample.ray.map_or(Vec3::ZERO, |cr| {
+                cr.weight * trace_path(scene, cr.ray, &mut sampler, &path, &mut rays)
+            });
+            row.push(Record {
+                film,
+                rear: sample.rear_raster,
+                // A non-finite sample counts as black, as in a render.
+                radiance: if l.is_finite() { l } else { Vec3::ZERO },
+            });
+        }
+    }
+    row
 }
