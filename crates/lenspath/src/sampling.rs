@@ -88,7 +88,7 @@ impl Sampler {
     }
 
     /// The next dimension, in [0, 1).
-    #[inline]
+    #[inline(always)]
     pub fn get_1d(&mut self) -> f32 {
         match &mut self.0 {
             Source::Sobol(sobol) => sobol.next(),
@@ -97,7 +97,7 @@ impl Sampler {
     }
 
     /// The next two dimensions, in [0, 1)².
-    #[inline]
+    #[inline(always)]
     pub fn get_2d(&mut self) -> Vec2 {
         match &mut self.0 {
             Source::Sobol(sobol) => {
