@@ -83,9 +83,10 @@ impl CameraPose {
 #[derive(Clone, Debug)]
 pub struct PerspectiveCamera {
     pose: CameraPose,
-    width: f32,
-    height: f32,
-    tan_half_fov_y: f32,
+    /// Raster position → point on the camera-space plane z = 1: `scale · film + offset`
+    /// (precomputed: no division per ray).
+    plane_from_raster_scale: Vec2,
+    plane_from_raster_offset: Vec2,
     aperture_radius: f32,
     focus_distance: f32,
     /// `None`: the full circle.
@@ -107,11 +108,16 @@ impl PerspectiveCamera {
         aperture_radius: f32,
         focus_distance: f32,
     ) -> Self {
+        let tan_half_fov_y = (0.5 * fov_y_deg.to_radians()).tan();
+        let tan_half_fov_x = tan_half_fov_y * (width as f32 / height as f32);
         PerspectiveCamera {
             pose,
-            width: width as f32,
-            height: height as f32,
-            tan_half_fov_y: (0.5 * fov_y_deg.to_radians()).tan(),
+            // x from −tan(fov_x/2) at the left edge to +tan at the right; y from +tan at the top down.
+            plane_from_raster_scale: Vec2::new(
+                2.0 * tan_half_fov_x / width as f32,
+                -2.0 * tan_half_fov_y / height as f32,
+            ),
+            plane_from_raster_offset: Vec2::new(-tan_half_fov_x, tan_half_fov_y),
             aperture_radius,
             focus_distance,
             aperture: None,
@@ -127,10 +133,8 @@ impl PerspectiveCamera {
 
     /// Camera-space direction (not normalised, z = 1) through a raster position.
     fn direction_through(&self, film: Vec2) -> Vec3 {
-        let aspect = self.width / self.height;
-        let x = (2.0 * film.x / self.width - 1.0) * self.tan_half_fov_y * aspect;
-        let y = (1.0 - 2.0 * film.y / self.height) * self.tan_half_fov_y;
-        Vec3::new(x, y, 1.0)
+        let p = self.plane_from_raster_scale * film + self.plane_from_raster_offset;
+        Vec3::new(p.x, p.y, 1.0)
     }
 }
 
