@@ -129,6 +129,8 @@ impl AreaLight {
     }
 
     /// Samples the light as seen from `p`, uniformly by area (pbrt-v4 §12.2).
+    // Inlined into every copy of the path loop (see `render::render_tile`),
+    // which the compiler does not do by itself once there are several.
     #[inline(always)]
     pub fn sample(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
         let (q, n) = self.sample_point(u);

@@ -124,6 +124,8 @@ impl Material {
     }
 
     /// Samples an incident direction for `wo`; `uc` picks a lobe, `u` the direction.
+    // Inlined into every copy of the path loop (see `render::render_tile`),
+    // which the compiler does not do by itself once there are several.
     #[inline(always)]
     pub fn sample(&self, wo: Vec3, uc: f32, u: Vec2) -> Option<BsdfSample> {
         if wo.z == 0.0 {
