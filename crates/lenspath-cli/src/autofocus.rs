@@ -44,16 +44,16 @@ pub struct AutofocusArgs {
     #[arg(long, default_value = "fast")]
     strategy: String,
     /// early-exit: stop after this many steps without a new best.
-    #[arg(long, default_value_t = 12)]
+    #[arg(long, default_value_t = DEFAULT_PATIENCE)]
     patience: usize,
     /// Samples per pixel of each patch render.
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = PATCH_SPP)]
     spp: u32,
     /// Image size, WIDTHxHEIGHT [default: the scene file's, else 640x480].
     #[arg(long, value_parser = parse_resolution)]
     res: Option<Resolution>,
     /// Maximum path depth of the patch renders.
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, default_value_t = PATCH_MAX_DEPTH)]
     max_depth: u32,
     /// Seed of the patch renders.
     #[arg(long, default_value_t = 0)]
@@ -98,6 +98,62 @@ pub struct AutofocusArgs {
     /// now allowed.
     #[arg(long, value_name = "FILE", requires = "evaluate")]
     truths: Option<PathBuf>,
+}
+
+/// `--patience`'s default.
+pub const DEFAULT_PATIENCE: usize = 12;
+/// `--spp`'s default: samples per pixel of a patch render.
+pub const PATCH_SPP: u32 = 16;
+/// `--max-depth`'s default: path depth of the patch renders.
+pub const PATCH_MAX_DEPTH: u32 = 8;
+
+/// How the patch renders of a search are made.
+#[derive(Clone, Copy, Debug)]
+pub struct PatchRenders {
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Maximum path depth.
+    pub max_depth: u32,
+    /// Seed.
+    pub seed: u32,
+}
+
+impl Default for PatchRenders {
+    /// `lenspath autofocus`'s defaults.
+    fn default() -> Self {
+        PatchRenders {
+            spp: PATCH_SPP,
+            max_depth: PATCH_MAX_DEPTH,
+            seed: 0,
+        }
+    }
+}
+
+/// The search of `patch` of a `width` × `height` image through `camera`, as
+/// `lenspath autofocus` runs it (one shadow ray per light); `lenspath view`
+/// runs the same, so that a click and the command give the same answer.
+pub fn patch_search(
+    camera: &RealisticCameraSettings,
+    (width, height): (u32, u32),
+    patch: NormalizedRect,
+    measure: FocusMeasure,
+    renders: PatchRenders,
+    threads: Option<usize>,
+) -> AutofocusSettings {
+    AutofocusSettings {
+        camera: camera.clone(),
+        width,
+        height,
+        patch: patch.to_pixels(width, height),
+        measure,
+        spp: renders.spp,
+        path: PathSettings {
+            max_depth: renders.max_depth,
+            light_samples: 1,
+        },
+        seed: renders.seed,
+        threads,
+    }
 }
 
 /// Focuses `lens` on `patch` with the fast strategy before a render, saying what it found on stderr.
@@ -174,20 +230,12 @@ pub fn run(args: AutofocusArgs) -> Result<Outcome> {
     let lens = args.lens.settings(&options, &view, width, height)?;
     let compiled = scene.compile(&BvhSettings::default())?;
     let patch = args.patch.expect("clap requires --patch without --evaluate");
-    let settings = AutofocusSettings {
-        camera: lens.clone(),
-        width,
-        height,
-        patch: patch.to_pixels(width, height),
-        measure,
+    let renders = PatchRenders {
         spp: args.spp,
-        path: PathSettings {
-            max_depth: args.max_depth,
-            light_samples: 1,
-        },
+        max_depth: args.max_depth,
         seed: args.seed,
-        threads: args.threads,
     };
+    let settings = patch_search(&lens, (width, height), patch, measure, renders, args.threads);
     let mut focuser = Focuser::new(&compiled, view.pose, settings)?;
     let result = focuser.run(strategy)?;
     if args.json {

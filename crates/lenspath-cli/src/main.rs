@@ -10,6 +10,7 @@ mod info;
 mod lens;
 mod progress;
 mod render;
+mod view;
 
 use std::process::ExitCode;
 
@@ -35,6 +36,9 @@ enum Command {
     Info(info::InfoArgs),
     /// Analyse a lens: focal lengths, pupils, focus, a layout plot.
     Lens(lens::LensArgs),
+    /// Look through the lens in a browser: a local server that renders as you
+    /// change lens, f-stop, focus and aperture, and focuses where you click.
+    View(view::ViewArgs),
     /// Measure performance.
     Bench(BenchArgs),
 }
@@ -83,6 +87,7 @@ fn main() -> ExitCode {
         Command::Bokeh(args) => bokeh::run(args),
         Command::Info(args) => info::run(args),
         Command::Lens(args) => lens::run(args),
+        Command::View(args) => view::run(args),
         Command::Bench(BenchArgs {
             what: BenchCommand::Bvh(args),
         }) => bench::run_bvh(args),

@@ -133,6 +133,15 @@ fn bad_input_gives_one_error_line_and_exit_code_2() {
         (vec!["render", "--no-such-flag"], "--no-such-flag"),
         (vec!["bench", "bvh", "missing.ply"], "missing.ply"),
         (vec!["bench", "bvh", "--procedural", "10"], "512"),
+        (vec!["view", "--lens", "nosuch.dat"], "unknown lens 'nosuch.dat'"),
+        (vec!["view", "/no/such/scene.dae"], "/no/such/scene.dae"),
+        (vec!["view", "--res", "0x10"], "must be positive"),
+        (vec!["view", "--host", "localhost"], "--host"),
+        // An address of no interface here (TEST-NET-1): the bind fails, nothing is sent.
+        (
+            vec!["view", "--host", "192.0.2.1", "--port", "0"],
+            "cannot listen on 192.0.2.1:0",
+        ),
     ];
     for (args, expected) in cases {
         let o = lenspath(&args);

@@ -428,6 +428,47 @@ fn accumulation(tiles: &[Tile], region: PixelRect) -> Accumulation {
     a
 }
 
+/// The depth of pixel `(px, py)` along the view `axis` (origin, direction),
+/// along the first lens position the optics let through (infinite when
+/// nothing is hit), and the camera rays that took (0 or 1).
+#[inline(always)]
+fn pixel_depth(
+    scene: &CompiledScene,
+    camera: &dyn Camera,
+    axis: (glam::Vec3, glam::Vec3),
+    px: u32,
+    py: u32,
+) -> (f32, u64) {
+    let film = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
+    let ray = depth_lens_samples().find_map(|lens| camera.generate_ray(CameraSample { film, lens }));
+    let depth = ray
+        .and_then(|cr| scene.intersect(&cr.ray))
+        .map_or(f32::INFINITY, |hit| (hit.p - axis.0).dot(axis.1));
+    (depth, u64::from(ray.is_some()))
+}
+
+/// The depth channel alone, row by row over the image (or its crop): what a
+/// render with `settings.depth` computes in its first pass, bit for bit. For
+/// renders made without it (`lenspath view` leaves it to the EXR download,
+/// so its first preview comes sooner).
+pub fn render_depth(scene: &CompiledScene, camera: &dyn Camera, settings: &RenderSettings) -> Result<Vec<f32>> {
+    settings.validate()?;
+    let region = region(settings);
+    let axis = camera.view_axis();
+    let mut depth = vec![f32::INFINITY; region.width as usize * region.height as usize];
+    worker_pool(settings.threads)?.install(|| {
+        depth
+            .par_chunks_mut(region.width as usize)
+            .enumerate()
+            .for_each(|(row, line)| {
+                for (x, d) in line.iter_mut().enumerate() {
+                    *d = pixel_depth(scene, camera, axis, region.x0 + x as u32, region.y0 + row as u32).0;
+                }
+            });
+    });
+    Ok(depth)
+}
+
 /// Renders the samples `tile.spp_done..pass_end` of every pixel of `tile`
 /// (and its depth, when it has no samples yet); returns (rays, invalid samples).
 // Compiled twice, for the baseline and for x86-64-v3 (AVX2, FMA: Haswell,
@@ -447,15 +488,11 @@ fn render_tile(
     let mut tile_rays = 0u64;
     let mut tile_invalid = 0u64;
     for ty in 0..tile.height {
-        // Depth, in the first pass: along the first lens position the optics let through.
+        // Depth, in the first pass.
         for tx in (0..tile.width).filter(|_| first == 0 && settings.depth) {
-            let (px, py) = (tile.x0 + tx, tile.y0 + ty);
-            let film = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
-            let ray = depth_lens_samples().find_map(|lens| camera.generate_ray(CameraSample { film, lens }));
-            tile_rays += u64::from(ray.is_some());
-            if let Some(hit) = ray.and_then(|cr| scene.intersect(&cr.ray)) {
-                tile.depth[(ty * tile.width + tx) as usize] = (hit.p - axis_origin).dot(axis_dir);
-            }
+            let (depth, rays) = pixel_depth(scene, camera, (axis_origin, axis_dir), tile.x0 + tx, tile.y0 + ty);
+            tile_rays += rays;
+            tile.depth[(ty * tile.width + tx) as usize] = depth;
         }
         // Pixels in pairs, so a camera can trace two rays at once
         // (the realistic camera does); every pixel keeps its own

@@ -44,6 +44,14 @@ impl SamplerKind {
             _ => None,
         }
     }
+
+    /// Its name (one of [`SamplerKind::NAMES`]).
+    pub fn name(self) -> &'static str {
+        match self {
+            SamplerKind::Sobol => "sobol",
+            SamplerKind::Independent => "independent",
+        }
+    }
 }
 
 /// The sample stream of one pixel sample: Owen-scrambled Sobol samples

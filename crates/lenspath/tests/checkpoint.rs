@@ -9,7 +9,7 @@ use lenspath::accel::BvhSettings;
 use lenspath::builtin::builtin_scene;
 use lenspath::camera::PerspectiveCamera;
 use lenspath::io::checkpoint::{read_checkpoint, write_checkpoint};
-use lenspath::render::{render, render_from, Accumulation, Checkpoints, PixelRect, RenderSettings};
+use lenspath::render::{render, render_depth, render_from, Accumulation, Checkpoints, PixelRect, RenderSettings};
 use lenspath::scene::CompiledScene;
 
 fn setup() -> (CompiledScene, PerspectiveCamera) {
@@ -109,6 +109,35 @@ fn a_continued_render_is_bit_identical_to_an_uninterrupted_one() {
         48 * 36 * 8,
         "only the 8 new samples per pixel were taken"
     );
+}
+
+/// A render without the depth channel has the same colours, and
+/// `render_depth` gives the channel a render with it computes: what `lenspath
+/// view` relies on to show its first preview sooner and still save the
+/// render's EXR.
+#[test]
+fn the_depth_channel_alone_is_the_renders() {
+    let (scene, camera) = setup();
+    let never = AtomicBool::new(false);
+    for crop in [
+        None,
+        Some(PixelRect {
+            x0: 5,
+            y0: 7,
+            width: 21,
+            height: 13,
+        }),
+    ] {
+        let with = RenderSettings { crop, ..settings(3) };
+        let without = RenderSettings { depth: false, ..with };
+        let full = render(&scene, &camera, &with, &|_, _| {}, &never).unwrap().image;
+        let mut colours = render(&scene, &camera, &without, &|_, _| {}, &never).unwrap().image;
+        assert_eq!(colours.rgb, full.rgb);
+        assert!(colours.depth.iter().all(|d| d.is_infinite()));
+        colours.depth = render_depth(&scene, &camera, &with).unwrap();
+        assert_eq!(colours, full);
+        assert!(full.depth.iter().any(|d| d.is_finite()), "the box is in view");
+    }
 }
 
 #[test]

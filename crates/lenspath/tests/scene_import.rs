@@ -359,6 +359,83 @@ aperture = "star:5:0.4"
     );
 }
 
+/// What `lenspath view` saves reads back to the same bits: the pose from the
+/// same eye, target and up, the sensor's place, the f-number, the aperture and
+/// the render settings, over a built-in scene or a scene file.
+#[test]
+fn settings_file_reads_back_exactly() {
+    use glam::Vec3;
+    use lenspath::camera::{CameraPose, LensFocus, RealisticCameraSettings};
+    use lenspath::io::scene_file::{SceneBase, SceneSettingsFile};
+    let dir = tempfile::tempdir().unwrap();
+    let mut written = SceneSettingsFile {
+        base: SceneBase::Builtin("cornell-spheres".into()),
+        scene_unit_m: 0.1 + 0.2,
+        eye: Vec3::new(0.1, 1.0 / 3.0, 3.7e-7),
+        look_at: Vec3::new(-0.25, 0.7, 1e6 / 7.0),
+        up: Vec3::new(0.01, 1.0, 0.0),
+        lens: "wide22".into(),
+        f_number: Some(2.0_f64.sqrt() * 4.0),
+        sensor_width_mm: 36.0 / 7.0,
+        sensor_depth_mm: 51.234_567_890_123_45,
+        aperture: ApertureShape::parse("blades:7:12.345678901:0.3").unwrap(),
+        resolution: (123, 45),
+        spp: 37,
+        max_depth: 9,
+        light_samples: 3,
+        seed: 4_000_000_000,
+        sampler: SamplerKind::Independent,
+    };
+    let base_file = dir.path().join("base.toml");
+    std::fs::write(
+        &base_file,
+        "[[shapes]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nemission = 1\n",
+    )
+    .unwrap();
+    for base in [SceneBase::Builtin("cornell-spheres".into()), SceneBase::File(base_file)] {
+        written.base = base;
+        let path = dir.path().join("saved.toml");
+        std::fs::write(&path, written.to_toml().unwrap()).unwrap();
+        let loaded = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+        let view = loaded.scene.view.unwrap();
+        assert_eq!(view.pose, CameraPose::look_at(written.eye, written.look_at, written.up));
+        let o = &loaded.options;
+        assert_eq!(o.resolution, Some(written.resolution));
+        assert_eq!((o.spp, o.max_depth, o.light_samples), (Some(37), Some(9), Some(3)));
+        assert_eq!(
+            (o.seed, o.sampler),
+            (Some(4_000_000_000), Some(SamplerKind::Independent))
+        );
+        assert_eq!(o.scene_unit_m, Some(written.scene_unit_m));
+        let camera = RealisticCameraSettings::for_scene(o, &view, 123, 45).unwrap();
+        assert_eq!(camera.focus, LensFocus::SensorPositionMm(written.sensor_depth_mm));
+        assert_eq!(camera.f_number, written.f_number);
+        assert_eq!(camera.sensor_mm.0, written.sensor_width_mm);
+        assert_eq!(camera.aperture, written.aperture);
+        assert_eq!(camera.lens.name(), "wide22");
+    }
+    // A mask cannot be spelt; a file with both bases, or both focus keys, is an error.
+    written.aperture = ApertureShape::mask(2, 2, vec![1.0; 4]).unwrap();
+    assert!(written.to_toml().unwrap_err().to_string().contains("mask"));
+    let path = dir.path().join("both.toml");
+    for (text, message) in [
+        ("builtin = \"cornell-spheres\"\nbase = \"x.dae\"\n", "base or builtin"),
+        ("builtin = \"cornell-nothing\"\n", "builtin: unknown"),
+        (
+            "builtin = \"cornell-spheres\"\n[camera]\neye = [0, 1, 4]\nlook_at = [0, 1, 0]\nfocus_distance = 2\nsensor_depth_mm = 50\n",
+            "not both",
+        ),
+        (
+            "builtin = \"cornell-spheres\"\n[camera]\neye = [0, 1, 4]\nlook_at = [0, 1, 0]\nsensor_depth_mm = -1\n",
+            "sensor_depth_mm must be positive",
+        ),
+    ] {
+        std::fs::write(&path, text).unwrap();
+        let e = load_scene(&path).unwrap_err().to_string();
+        assert!(e.contains("both.toml") && e.contains(message), "{e}");
+    }
+}
+
 /// Hand-made broken files under tests/data/broken, each with the message it must give:
 /// the file name, the line or element, and what is wrong; never a panic.
 #[test]

@@ -273,6 +273,9 @@ pub struct RangeFocus {
     pub probe_span_z_mm: (f64, f64),
 }
 
+/// What [`Focuser::on_evaluation`] calls.
+type EvaluationObserver<'a> = Box<dyn FnMut(&Evaluation) + Send + 'a>;
+
 /// Focuses one camera on one patch of one scene.
 pub struct Focuser<'a> {
     scene: &'a CompiledScene,
@@ -284,6 +287,8 @@ pub struct Focuser<'a> {
     exit_pupil: (f64, f64),
     mm_per_scene: f64,
     evaluations: Vec<Evaluation>,
+    /// Told of each evaluation as it is made (`lenspath view` draws the curve).
+    observer: Option<EvaluationObserver<'a>>,
     light_fields: usize,
     camera_rays: u64,
 }
@@ -328,9 +333,23 @@ impl<'a> Focuser<'a> {
             system,
             settings,
             evaluations: Vec::new(),
+            observer: None,
             light_fields: 0,
             camera_rays: 0,
         })
+    }
+
+    /// Calls `observer` with every evaluation as it is made, so a front end
+    /// can show the search while it runs.
+    pub fn on_evaluation(&mut self, observer: impl FnMut(&Evaluation) + Send + 'a) {
+        self.observer = Some(Box::new(observer));
+    }
+
+    fn record(&mut self, evaluation: Evaluation) {
+        if let Some(observer) = &mut self.observer {
+            observer(&evaluation);
+        }
+        self.evaluations.push(evaluation);
     }
 
     /// Infinity-focus and close-focus sensor positions, mm behind the stop.
@@ -383,7 +402,7 @@ impl<'a> Focuser<'a> {
             images.push(self.render_patch(&camera, half, stream_seed(seed, k), detail)?);
         }
         let score = self.score(&images)?;
-        self.evaluations.push(Evaluation {
+        self.record(Evaluation {
             sensor_z_mm: z,
             score,
             spp,
@@ -616,7 +635,7 @@ impl<'a> Focuser<'a> {
             }
             if let Some(score) = self.refocused_score(&fields, z)? {
                 curve.push((z, score));
-                self.evaluations.push(Evaluation {
+                self.record(Evaluation {
                     sensor_z_mm: z,
                     score,
                     spp,

@@ -163,6 +163,25 @@ impl ApertureShape {
         Ok(shape)
     }
 
+    /// The spelling [`ApertureShape::parse`] reads back to this shape exactly
+    /// (`None` for a mask, which is an image, not a spelling).
+    pub fn spelling(&self) -> Option<String> {
+        match self {
+            ApertureShape::Circle => Some("circle".into()),
+            ApertureShape::Blades {
+                count,
+                rotation_deg,
+                curvature,
+            } => Some(format!("blades:{count}:{rotation_deg}:{curvature}")),
+            ApertureShape::Star {
+                points,
+                inner_ratio,
+                rotation_deg,
+            } => Some(format!("star:{points}:{inner_ratio}:{rotation_deg}")),
+            ApertureShape::Mask(_) => None,
+        }
+    }
+
     fn validate(&self) -> Result<()> {
         let bad = |why: String| Err(Error::InvalidArgument(format!("aperture shape: {why}")));
         match *self {

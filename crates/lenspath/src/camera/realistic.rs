@@ -102,7 +102,7 @@ impl RealisticCameraSettings {
     }
 
     /// What a scene file asks for (its `[camera]` lens, sensor, f-number,
-    /// aperture shape and focus distance, its scene unit), else the defaults:
+    /// aperture shape and focus distance or sensor depth, its scene unit), else the defaults:
     /// `dgauss50`, a 36 mm wide sensor, wide open, focused at the view's
     /// subject distance. The sensor's height follows the `width` × `height`
     /// image's aspect. The CLI's flags and the Python camera's arguments
@@ -111,7 +111,10 @@ impl RealisticCameraSettings {
         let file = options.lens.clone().unwrap_or_default();
         let lens = LensPrescription::load(file.lens.as_deref().unwrap_or(DEFAULT_LENS))?;
         let width_mm = file.sensor_mm.map_or(DEFAULT_SENSOR_WIDTH_MM, |(w, _)| w);
-        let focus = LensFocus::Distance(file.focus_distance.unwrap_or(f64::from(view.focus_distance)));
+        let focus = match file.sensor_depth_mm {
+            Some(mm) => LensFocus::SensorPositionMm(mm),
+            None => LensFocus::Distance(file.focus_distance.unwrap_or(f64::from(view.focus_distance))),
+        };
         Ok(RealisticCameraSettings {
             f_number: file.f_number,
             scene_unit_m: options.scene_unit_m.unwrap_or(1.0),

@@ -141,10 +141,21 @@ pub fn check_output_path(path: &Path) -> Result<ImageFormat> {
 /// `exposure` (in stops) scales PNG output only; EXR stays linear.
 pub fn write_image(path: &Path, image: &Image, exposure: f32) -> Result<()> {
     let format = ImageFormat::from_path(path)?;
-    write_atomically(path, |tmp| match format {
-        ImageFormat::Png => write_png(tmp, image, exposure),
-        ImageFormat::Exr => write_exr(tmp, image),
-    })
+    let bytes = encode_image(image, format, exposure)?;
+    write_atomically(path, |tmp| std::fs::write(tmp, &bytes).map_err(|e| io_error(tmp, e)))
+}
+
+/// The bytes of `image` as a `format` file (what [`write_image`] writes).
+pub fn encode_image(image: &Image, format: ImageFormat, exposure: f32) -> Result<Vec<u8>> {
+    match format {
+        ImageFormat::Png => encode_8bit(image, exposure, ::image::ImageFormat::Png),
+        ImageFormat::Exr => encode_exr(image),
+    }
+}
+
+/// A JPEG of `image` (sRGB, `exposure` stops): the small frames `lenspath view` streams.
+pub fn encode_jpeg(image: &Image, exposure: f32) -> Result<Vec<u8>> {
+    encode_8bit(image, exposure, ::image::ImageFormat::Jpeg)
 }
 
 /// 8-bit sRGB bytes of the image after an exposure of `exposure` stops.
@@ -157,23 +168,22 @@ pub fn to_srgb8(image: &Image, exposure: f32) -> Vec<u8> {
         .collect()
 }
 
-fn write_png(tmp: &Path, image: &Image, exposure: f32) -> Result<()> {
+fn encode_8bit(image: &Image, exposure: f32, format: ::image::ImageFormat) -> Result<Vec<u8>> {
     let bytes = to_srgb8(image, exposure);
-    ::image::save_buffer_with_format(
-        tmp,
+    let mut out = std::io::Cursor::new(Vec::new());
+    ::image::write_buffer_with_format(
+        &mut out,
         &bytes,
         image.width,
         image.height,
         ::image::ExtendedColorType::Rgb8,
-        ::image::ImageFormat::Png,
+        format,
     )
-    .map_err(|e| match e {
-        ::image::ImageError::IoError(io) => io_error(tmp, io),
-        other => io_error(tmp, std::io::Error::other(other.to_string())),
-    })
+    .map_err(|e| Error::InvalidArgument(format!("cannot encode the image as {format:?}: {e}")))?;
+    Ok(out.into_inner())
 }
 
-fn write_exr(tmp: &Path, image: &Image) -> Result<()> {
+fn encode_exr(image: &Image) -> Result<Vec<u8>> {
     use exr::prelude::{
         AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Layer, LayerAttributes, LineOrder, SmallVec,
         Text, WritableImage,
@@ -203,10 +213,12 @@ fn write_exr(tmp: &Path, image: &Image) -> Result<()> {
         },
         AnyChannels::sort(list),
     );
+    let mut out = std::io::Cursor::new(Vec::new());
     exr::image::Image::from_layer(layer)
         .write()
-        .to_file(tmp)
-        .map_err(|e| io_error(tmp, std::io::Error::other(e.to_string())))
+        .to_buffered(&mut out)
+        .map_err(|e| Error::InvalidArgument(format!("cannot encode the image as EXR: {e}")))?;
+    Ok(out.into_inner())
 }
 
 /// Reads an EXR: RGB (or a single gray channel, `Y` or the only one), `Z`

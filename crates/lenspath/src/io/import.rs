@@ -71,6 +71,8 @@ pub struct LensOptions {
     pub sensor_mm: Option<(f64, f64)>,
     /// Focus distance from the sensor, scene units.
     pub focus_distance: Option<f64>,
+    /// Focus by the sensor's place instead: mm behind the aperture stop.
+    pub sensor_depth_mm: Option<f64>,
     /// Shape of the aperture (`None`: the circle).
     pub aperture: Option<crate::camera::ApertureShape>,
 }

@@ -73,7 +73,8 @@ fn temp_path(path: &Path) -> PathBuf {
     path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
 }
 
-fn io_error(path: &Path, source: std::io::Error) -> Error {
+/// An I/O error that names the file it happened to.
+pub fn io_error(path: &Path, source: std::io::Error) -> Error {
     Error::Io {
         path: path.to_path_buf(),
         source,

@@ -1,20 +1,23 @@
 //! lenspath's own scene file (TOML, read with serde): camera and lens, film,
 //! integrator settings, named materials, lights, and shapes that are spheres,
 //! quads or mesh files in any format lenspath reads, each with a transform. A
-//! `base` scene file (say a CS184 Cornell box) can be extended. The schema,
-//! with examples, is docs/scene-format.md; unknown keys are errors, so a typo
-//! never passes silently.
+//! `base` scene file (say a CS184 Cornell box) or a `builtin` scene can be
+//! extended. The schema, with examples, is docs/scene-format.md; unknown keys
+//! are errors, so a typo never passes silently. [`SceneSettingsFile`] writes
+//! the camera and render settings over a base scene (what `lenspath view`
+//! saves).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use glam::{Mat4, Vec3};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use super::import::{
     intern_material, scene_bounds, subject_distance, transform_mesh, LensOptions, LoadedScene, SceneOptions, Warnings,
     EMITTER_MATERIAL,
 };
+use crate::builtin::{builtin_scene, DEFAULT_MESH_TRIANGLES};
 use crate::camera::{ApertureShape, CameraPose};
 use crate::error::{Error, Result};
 use crate::lights::Light;
@@ -25,7 +28,7 @@ use crate::scene::{Scene, SceneView};
 use crate::shapes::{Sphere, TriangleMesh};
 
 /// A colour: one grey value or `[r, g, b]`.
-#[derive(Clone, Copy, Debug, Deserialize)]
+#[derive(Clone, Copy, Debug, Deserialize, Serialize)]
 #[serde(untagged)]
 enum Color {
     Grey(f32),
@@ -41,24 +44,26 @@ impl Color {
     }
 }
 
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct SceneFile {
     /// Another scene file whose shapes, materials, lights and camera this one starts from.
     base: Option<PathBuf>,
+    /// A built-in scene to start from instead (`cornell-spheres`, ...).
+    builtin: Option<String>,
     scene_unit_m: Option<f64>,
     camera: Option<CameraSpec>,
     film: Option<FilmSpec>,
     integrator: Option<IntegratorSpec>,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     materials: BTreeMap<String, MaterialSpec>,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     lights: Vec<LightSpec>,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     shapes: Vec<ShapeSpec>,
 }
 
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct CameraSpec {
     eye: [f32; 3],
@@ -67,6 +72,8 @@ struct CameraSpec {
     up: [f32; 3],
     fov_y_deg: Option<f32>,
     focus_distance: Option<f32>,
+    /// Focus by the sensor's place instead: mm behind the aperture stop.
+    sensor_depth_mm: Option<f64>,
     lens: Option<String>,
     f_number: Option<f64>,
     sensor_mm: Option<[f64; 2]>,
@@ -77,14 +84,14 @@ fn y_up() -> [f32; 3] {
     [0.0, 1.0, 0.0]
 }
 
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct FilmSpec {
     width: u32,
     height: u32,
 }
 
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct IntegratorSpec {
     spp: Option<u32>,
@@ -94,7 +101,7 @@ struct IntegratorSpec {
     sampler: Option<String>,
 }
 
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, Serialize)]
 #[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
 enum MaterialSpec {
     Diffuse {
@@ -116,7 +123,7 @@ enum MaterialSpec {
     },
 }
 
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, Serialize)]
 #[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
 enum LightSpec {
     Point {
@@ -140,7 +147,7 @@ enum LightSpec {
     },
 }
 
-#[derive(Debug, Default, Deserialize)]
+#[derive(Debug, Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct TransformSpec {
     scale: Option<Color>,
@@ -149,14 +156,14 @@ struct TransformSpec {
     translate: Option<[f32; 3]>,
 }
 
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct RotationSpec {
     axis: [f32; 3],
     degrees: f32,
 }
 
-#[derive(Debug, Deserialize)]
+#[derive(Debug, Deserialize, Serialize)]
 #[serde(tag = "type", rename_all = "kebab-case", deny_unknown_fields)]
 enum ShapeSpec {
     Sphere {
@@ -226,8 +233,13 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
     };
     let file: SceneFile = toml::from_str(text).map_err(|e| fail(one_line(&e, text)))?;
 
-    let (mut scene, mut options, mut warnings, mut cameras) = match &file.base {
-        Some(base) => {
+    let (mut scene, mut options, mut warnings, mut cameras) = match (&file.base, &file.builtin) {
+        (Some(_), Some(_)) => return Err(fail("give base or builtin, not both".into())),
+        (None, Some(name)) => {
+            let scene = builtin_scene(name, DEFAULT_MESH_TRIANGLES).map_err(|e| fail(format!("builtin: {e}")))?;
+            (scene, SceneOptions::default(), Warnings::default(), 1)
+        }
+        (Some(base), None) => {
             let b = load(base).map_err(|e| fail(format!("base: {e}")))?;
             let mut warnings = Warnings::default();
             for (w, n) in b.warnings.iter() {
@@ -235,7 +247,7 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
             }
             (b.scene, b.options, warnings, b.cameras)
         }
-        None => (Scene::default(), SceneOptions::default(), Warnings::default(), 0),
+        (None, None) => (Scene::default(), SceneOptions::default(), Warnings::default(), 0),
     };
     if let Some(unit) = file.scene_unit_m {
         if !(unit > 0.0 && unit.is_finite()) {
@@ -416,10 +428,22 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
                 Err(e) => return Err(fail(format!("[camera]: {e}"))),
             }),
         };
+        let sensor_depth_mm = match cam.sensor_depth_mm {
+            Some(_) if cam.focus_distance.is_some() => {
+                return Err(fail(
+                    "[camera]: give focus_distance or sensor_depth_mm, not both".into(),
+                ))
+            }
+            Some(mm) if !(mm > 0.0 && mm.is_finite()) => {
+                return Err(fail(format!("[camera]: sensor_depth_mm must be positive, got {mm}")))
+            }
+            depth => depth,
+        };
         if cam.lens.is_some()
             || cam.f_number.is_some()
             || cam.sensor_mm.is_some()
             || cam.focus_distance.is_some()
+            || sensor_depth_mm.is_some()
             || aperture.is_some()
         {
             options.lens = Some(LensOptions {
@@ -427,6 +451,7 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
                 f_number: cam.f_number,
                 sensor_mm: cam.sensor_mm.map(|[w, h]| (w, h)),
                 focus_distance: cam.focus_distance.map(f64::from),
+                sensor_depth_mm,
                 aperture,
             });
         }
@@ -439,6 +464,104 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
         warnings,
         "lenspath TOML",
     ))
+}
+
+/// The scene a [`SceneSettingsFile`] starts from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SceneBase {
+    /// A built-in scene by name (`builtin = "..."`).
+    Builtin(String),
+    /// A scene file of any format lenspath reads (`base = "..."`).
+    File(PathBuf),
+}
+
+/// A scene file that sets only the view, the realistic camera and the render
+/// over a base scene: what `lenspath view` saves, so that `lenspath render
+/// FILE` gives the image the viewer showed, bit for bit. Every number is
+/// written in its shortest exact form, so it reads back to the same bits.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneSettingsFile {
+    /// The scene.
+    pub base: SceneBase,
+    /// Metres per scene unit.
+    pub scene_unit_m: f64,
+    /// The camera's place, scene units.
+    pub eye: Vec3,
+    /// The point it looks at.
+    pub look_at: Vec3,
+    /// Its up direction.
+    pub up: Vec3,
+    /// Built-in lens name or lens table path.
+    pub lens: String,
+    /// f-number (`None`: wide open).
+    pub f_number: Option<f64>,
+    /// Sensor width in mm (its height follows the image aspect).
+    pub sensor_width_mm: f64,
+    /// The sensor's place, mm behind the aperture stop.
+    pub sensor_depth_mm: f64,
+    /// The aperture's shape (a mask cannot be written: it is an image).
+    pub aperture: ApertureShape,
+    /// Image width and height in pixels.
+    pub resolution: (u32, u32),
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Maximum path depth.
+    pub max_depth: u32,
+    /// Shadow rays per light per hit.
+    pub light_samples: u32,
+    /// Seed of the sample sequences.
+    pub seed: u32,
+    /// The sample sequence.
+    pub sampler: SamplerKind,
+}
+
+impl SceneSettingsFile {
+    /// The file's text.
+    pub fn to_toml(&self) -> Result<String> {
+        let aperture = self
+            .aperture
+            .spelling()
+            .ok_or_else(|| Error::InvalidArgument("a mask aperture cannot be written into a scene file".into()))?;
+        let (builtin, base) = match &self.base {
+            SceneBase::Builtin(name) => (Some(name.clone()), None),
+            SceneBase::File(path) => (None, Some(path.clone())),
+        };
+        let file = SceneFile {
+            base,
+            builtin,
+            scene_unit_m: Some(self.scene_unit_m),
+            camera: Some(CameraSpec {
+                eye: self.eye.to_array(),
+                look_at: self.look_at.to_array(),
+                up: self.up.to_array(),
+                fov_y_deg: None,
+                focus_distance: None,
+                sensor_depth_mm: Some(self.sensor_depth_mm),
+                lens: Some(self.lens.clone()),
+                f_number: self.f_number,
+                sensor_mm: Some([
+                    self.sensor_width_mm,
+                    self.sensor_width_mm * f64::from(self.resolution.1) / f64::from(self.resolution.0),
+                ]),
+                aperture: Some(aperture),
+            }),
+            film: Some(FilmSpec {
+                width: self.resolution.0,
+                height: self.resolution.1,
+            }),
+            integrator: Some(IntegratorSpec {
+                spp: Some(self.spp),
+                max_depth: Some(self.max_depth),
+                light_samples: Some(self.light_samples),
+                seed: Some(self.seed),
+                sampler: Some(self.sampler.name().into()),
+            }),
+            materials: BTreeMap::new(),
+            lights: Vec::new(),
+            shapes: Vec::new(),
+        };
+        toml::to_string(&file).map_err(|e| Error::InvalidArgument(format!("cannot write the scene file: {e}")))
+    }
 }
 
 /// The TOML parser's message on one line ("line L, column C: what").

@@ -51,8 +51,20 @@ pub struct Layout {
 /// The layout of `system` with its sensor (`sensor_diagonal_mm`) at the
 /// infinity focus from `analysis`.
 pub fn layout(system: &LensSystem, analysis: &LensAnalysis, sensor_diagonal_mm: f64) -> Layout {
+    layout_focused(system, analysis, sensor_diagonal_mm, analysis.infinity_focus_mm)
+}
+
+/// [`layout`] with the sensor `sensor_z_mm` behind the stop (where it is
+/// focused now): the rays from infinity meet it blurred unless it is at the
+/// infinity focus.
+pub fn layout_focused(
+    system: &LensSystem,
+    analysis: &LensAnalysis,
+    sensor_diagonal_mm: f64,
+    sensor_z_mm: f64,
+) -> Layout {
     let surfaces: Vec<(f64, f64, f64, f64)> = system.surface_layout().collect();
-    let sensor_z = analysis.infinity_focus_mm;
+    let sensor_z = sensor_z_mm;
     let largest_aperture = surfaces.iter().map(|s| s.2).fold(0.0, f64::max);
 
     // Elements: each glass gap between two surfaces.
@@ -83,12 +95,17 @@ pub fn layout(system: &LensSystem, analysis: &LensAnalysis, sensor_diagonal_mm: 
         .collect();
     Layout {
         title: format!(
-            "{} — EFL {:.2} mm, f/{:.2}, {:.1}° diagonal field ({:.0} mm sensor diagonal), focused at infinity",
+            "{} — EFL {:.2} mm, f/{:.2}, {:.1}° diagonal field ({:.0} mm sensor diagonal), {}",
             system.prescription().name(),
             analysis.effective_focal_length_mm,
             analysis.f_number,
             analysis.diagonal_fov_deg,
-            sensor_diagonal_mm
+            sensor_diagonal_mm,
+            if sensor_z == analysis.infinity_focus_mm {
+                "focused at infinity".to_string()
+            } else {
+                format!("sensor {sensor_z:.3} mm behind the stop")
+            }
         ),
         elements,
         stop: [blade(1.0), blade(-1.0)],
@@ -105,7 +122,11 @@ pub fn layout(system: &LensSystem, analysis: &LensAnalysis, sensor_diagonal_mm: 
 /// The SVG drawing of `system` with its sensor (`sensor_diagonal_mm`) at the
 /// infinity focus from `analysis` (see [`layout`]).
 pub fn layout_svg(system: &LensSystem, analysis: &LensAnalysis, sensor_diagonal_mm: f64) -> String {
-    let l = layout(system, analysis, sensor_diagonal_mm);
+    layout_to_svg(&layout(system, analysis, sensor_diagonal_mm))
+}
+
+/// The SVG drawing of a [`Layout`].
+pub fn layout_to_svg(l: &Layout) -> String {
     let (z0, z1) = l.z_range_mm;
     let width_px = 1000.0;
     let scale = width_px / (z1 - z0);

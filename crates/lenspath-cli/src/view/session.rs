@@ -1,0 +1,627 @@
+//! The viewer's state: the settings the page sets, checked like the CLI's
+//! flags, the camera built from them, the render's progress and the last
+//! complete image. Shared by the server's handlers and the render thread.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard};
+use std::time::Instant;
+
+use glam::Vec3;
+use lenspath::camera::{ApertureShape, CameraPose, LensFocus, RealisticCamera, RealisticCameraSettings};
+use lenspath::film::{Filter, Image};
+use lenspath::integrator::PathSettings;
+use lenspath::io::scene_file::{SceneBase, SceneSettingsFile};
+use lenspath::io::SceneOptions;
+use lenspath::lens::{AnalysisSettings, LensAnalysis, LensPrescription, TableConvention, BUILTIN_LENSES};
+use lenspath::render::{NormalizedRect, RenderSettings};
+use lenspath::sampling::SamplerKind;
+use lenspath::scene::{CompiledScene, SceneView};
+use lenspath::{Error, Result};
+use serde::{Deserialize, Serialize};
+use serde_json::{json, Value};
+use tokio::sync::broadcast;
+
+/// Where the page puts the sensor.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "by", rename_all = "kebab-case", deny_unknown_fields)]
+pub enum Focus {
+    /// The sensor this many mm behind the aperture stop (the focus ring, read off the lens).
+    Sensor {
+        /// mm behind the stop.
+        depth_mm: f64,
+    },
+    /// Whatever is this far from the sensor plane in focus (a distance scale).
+    Distance {
+        /// Metres from the sensor plane.
+        distance_m: f64,
+    },
+}
+
+/// Everything the page can set; a change is sent as a JSON object of the
+/// fields that change, merged into these and checked before it applies.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ViewSettings {
+    /// Built-in lens, a table dropped on the page, or a table file the command line allows.
+    pub lens: String,
+    /// f-number to stop down to (`None`: wide open).
+    pub f_number: Option<f64>,
+    /// Focus.
+    pub focus: Focus,
+    /// Aperture shape: circle, blades:N[:ROTATION_DEG[:CURVATURE]], star:N[:INNER_RATIO[:ROTATION_DEG]].
+    pub aperture: String,
+    /// Camera position, scene units.
+    pub eye: [f32; 3],
+    /// The point it looks at (what orbiting turns about).
+    pub target: [f32; 3],
+    /// Up direction.
+    pub up: [f32; 3],
+    /// Refinement stops at this many samples per pixel.
+    pub max_spp: u32,
+    /// Maximum path depth.
+    pub max_depth: u32,
+    /// Shadow rays per light per hit.
+    pub light_samples: u32,
+    /// Seed of the sample sequences.
+    pub seed: u32,
+    /// `sobol` or `independent`.
+    pub sampler: String,
+}
+
+/// The autofocus request of a click or a dragged rectangle.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AutofocusRequest {
+    /// The patch, `[x, y, width, height]` in fractions of the image.
+    pub patch: [f64; 4],
+    /// Focus measure name (as `lenspath autofocus --metric`).
+    #[serde(default = "default_metric")]
+    pub metric: String,
+    /// Strategy name (as `lenspath autofocus --strategy`).
+    #[serde(default = "default_strategy")]
+    pub strategy: String,
+}
+
+fn default_metric() -> String {
+    "tenengrad".into()
+}
+
+fn default_strategy() -> String {
+    "fast".into()
+}
+
+/// The camera that settings describe, built and checked.
+pub struct View {
+    /// The settings.
+    pub settings: ViewSettings,
+    /// The realistic camera's settings, its focus as a sensor position.
+    pub lens_settings: RealisticCameraSettings,
+    /// What the saved scene file names as the lens.
+    pub lens_reference: String,
+    /// The camera.
+    pub camera: RealisticCamera,
+    /// The render's settings (its `spp` is set per refinement step).
+    pub render: RenderSettings,
+    /// Where the camera is.
+    pub pose: CameraPose,
+    /// The sensor's place, mm behind the stop.
+    pub sensor_depth_mm: f64,
+    /// The distance in focus from the sensor plane, metres (`None`: beyond infinity).
+    pub focus_distance_m: Option<f64>,
+    /// Infinity-focus and close-focus sensor positions, mm behind the stop.
+    pub focus_range_mm: (f64, f64),
+    /// Focal length, mm.
+    pub focal_length_mm: f64,
+    /// Wide-open f-number.
+    pub wide_open_f_number: f64,
+    /// The lens layout with the sensor where it is, as SVG.
+    pub layout_svg: String,
+}
+
+/// A finished refinement step: the image every pixel of which has `spp` samples.
+pub struct Frame {
+    /// The settings generation it belongs to.
+    pub generation: u64,
+    /// The image.
+    pub image: Image,
+    /// Its JPEG, what the page shows.
+    pub jpeg: Vec<u8>,
+    /// The view it was rendered with.
+    pub view: Arc<View>,
+}
+
+/// What the render thread and the handlers tell the pages.
+#[derive(Clone)]
+pub enum Event {
+    /// A JPEG frame (a binary WebSocket message).
+    Frame(Arc<Vec<u8>>),
+    /// A JSON message (a text WebSocket message).
+    Message(Arc<String>),
+}
+
+/// What changes while the viewer runs, under one lock.
+pub struct State {
+    /// The current camera.
+    pub view: Arc<View>,
+    /// Bumped by every change of settings: older work is dropped.
+    pub generation: u64,
+    /// When the current generation was asked for (the first preview's latency counts from it).
+    pub changed_at: Instant,
+    /// Pages connected; the render thread sleeps at 0.
+    pub clients: usize,
+    /// A change is being checked and its camera built; the render waits.
+    pub changing: bool,
+    /// An autofocus the render thread has still to run.
+    pub autofocus: Option<AutofocusRequest>,
+    /// The last complete image of the current generation.
+    pub last_frame: Option<Arc<Frame>>,
+}
+
+/// Where a viewer's scene comes from.
+pub struct SceneSource {
+    /// Its name, for the page's title.
+    pub name: String,
+    /// What a saved scene file starts from.
+    pub base: SceneBase,
+    /// The settings its file gives (lens, sensor, scene unit, ...).
+    pub options: SceneOptions,
+    /// Its view, where the camera starts.
+    pub view: SceneView,
+}
+
+/// One viewer: the scene, what the page may load, and the state.
+pub struct Session {
+    /// The compiled scene.
+    pub scene: CompiledScene,
+    /// Its name, for the page's title.
+    pub scene_name: String,
+    /// What views are built from.
+    config: Config,
+    /// Serialises changes, so two at once do not merge into the same old settings.
+    change_lock: Mutex<()>,
+    state: Mutex<State>,
+    /// Wakes the render thread.
+    pub wake: Condvar,
+    /// Stops the render in progress (set by a change or by the last page leaving).
+    pub cancel: AtomicBool,
+    /// Messages to every connected page.
+    pub events: broadcast::Sender<Event>,
+}
+
+/// What settings are checked against and views built from.
+struct Config {
+    base: SceneBase,
+    options: SceneOptions,
+    view: SceneView,
+    resolution: (u32, u32),
+    threads: Option<usize>,
+    /// Folders and files lens paths may name: the scene's folder and the `--lens` files.
+    allowed_lens_paths: Vec<PathBuf>,
+    /// Lens tables dropped on the page, by their file name.
+    dropped_lenses: Mutex<BTreeMap<String, LensPrescription>>,
+}
+
+/// Largest dropped lens table, bytes.
+pub const MAX_LENS_TABLE_BYTES: usize = 64 * 1024;
+
+impl Session {
+    /// A viewer of `scene` as `source` describes it, `resolution` pixels,
+    /// offering the lens tables `lens_files` besides the built-ins.
+    pub fn new(
+        scene: CompiledScene,
+        source: SceneSource,
+        resolution: (u32, u32),
+        threads: Option<usize>,
+        lens_files: &[PathBuf],
+    ) -> Result<Session> {
+        let SceneSource {
+            name: scene_name,
+            base,
+            options,
+            view,
+        } = source;
+        let mut allowed_lens_paths = Vec::new();
+        if let SceneBase::File(path) = &base {
+            if let Some(dir) = path.parent() {
+                allowed_lens_paths.push(dir.to_path_buf());
+            }
+        }
+        for file in lens_files {
+            LensPrescription::load(&file.display().to_string())?;
+            allowed_lens_paths.push(file.canonicalize().map_err(|e| lenspath::io::io_error(file, e))?);
+        }
+        let (width, height) = resolution;
+        let file_camera = RealisticCameraSettings::for_scene(&options, &view, width, height)?;
+        let settings = initial_settings(&options, &view, &file_camera);
+        let config = Config {
+            base,
+            options,
+            view,
+            resolution,
+            threads,
+            allowed_lens_paths,
+            dropped_lenses: Mutex::new(BTreeMap::new()),
+        };
+        let first = config.build_view(settings)?;
+        let (events, _) = broadcast::channel(256);
+        Ok(Session {
+            scene,
+            scene_name,
+            config,
+            change_lock: Mutex::new(()),
+            state: Mutex::new(State {
+                view: Arc::new(first),
+                generation: 0,
+                changed_at: Instant::now(),
+                clients: 0,
+                changing: false,
+                autofocus: None,
+                last_frame: None,
+            }),
+            wake: Condvar::new(),
+            cancel: AtomicBool::new(false),
+            events,
+        })
+    }
+
+    /// Image width and height in pixels.
+    pub fn resolution(&self) -> (u32, u32) {
+        self.config.resolution
+    }
+
+    /// Render threads (`None`: every core).
+    pub fn threads(&self) -> Option<usize> {
+        self.config.threads
+    }
+
+    /// The state, locked (a panicked holder's state is still consistent: every change is one assignment).
+    pub fn lock(&self) -> MutexGuard<'_, State> {
+        self.state.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Merges `change` (a JSON object of [`ViewSettings`] fields) into the
+    /// settings; when they check out, they apply and the render restarts.
+    pub fn change(&self, change: &Value) -> Result<Arc<View>> {
+        let asked_at = Instant::now();
+        let _one_at_a_time = self.change_lock.lock().unwrap_or_else(|e| e.into_inner());
+        let current = {
+            let mut state = self.lock();
+            // The render pauses while the camera is built: both cores go to that.
+            state.changing = true;
+            self.cancel.store(true, Ordering::SeqCst);
+            state.view.settings.clone()
+        };
+        let built = merged(&current, change).and_then(|settings| self.config.build_view(settings).map(Arc::new));
+        let mut state = self.lock();
+        state.changing = false;
+        if let Ok(view) = &built {
+            state.view = view.clone();
+            state.generation += 1;
+            state.changed_at = asked_at;
+            state.last_frame = None;
+        }
+        drop(state);
+        self.wake.notify_all();
+        built
+    }
+
+    /// Queues an autofocus on a patch (checked now; run by the render thread).
+    pub fn request_autofocus(&self, request: AutofocusRequest) -> Result<()> {
+        let [x, y, w, h] = request.patch;
+        NormalizedRect::new(x, y, w, h)?;
+        lenspath::autofocus::FocusMeasure::from_name(&request.metric)?;
+        lenspath::autofocus::Strategy::from_name(&request.strategy, crate::autofocus::DEFAULT_PATIENCE)?;
+        let mut state = self.lock();
+        if state.autofocus.is_some() {
+            return Err(Error::InvalidArgument("an autofocus is already waiting to run".into()));
+        }
+        state.autofocus = Some(request);
+        self.cancel.store(true, Ordering::SeqCst);
+        drop(state);
+        self.wake.notify_all();
+        Ok(())
+    }
+
+    /// Tells every page; nobody listening is fine.
+    pub fn send(&self, message: Value) {
+        let _ = self.events.send(Event::Message(Arc::new(message.to_string())));
+    }
+
+    /// Adds a lens table dropped on the page, under its file name.
+    pub fn add_dropped_lens(&self, name: &str, text: &str) -> Result<()> {
+        self.config.add_dropped_lens(name, text)
+    }
+
+    /// The scene file that reproduces `frame` with `lenspath render FILE`.
+    pub fn settings_file(&self, frame: &Frame) -> Result<String> {
+        let view = &frame.view;
+        let s = &view.settings;
+        SceneSettingsFile {
+            base: self.config.base.clone(),
+            scene_unit_m: self.config.scene_unit_m(),
+            eye: Vec3::from_array(s.eye),
+            look_at: Vec3::from_array(s.target),
+            up: Vec3::from_array(s.up),
+            lens: view.lens_reference.clone(),
+            f_number: s.f_number,
+            sensor_width_mm: view.lens_settings.sensor_mm.0,
+            sensor_depth_mm: view.sensor_depth_mm,
+            aperture: view.lens_settings.aperture.clone(),
+            resolution: self.config.resolution,
+            spp: frame.image.spp_min,
+            max_depth: s.max_depth,
+            light_samples: s.light_samples,
+            seed: s.seed,
+            sampler: view.render.sampler,
+        }
+        .to_toml()
+    }
+
+    /// What the page shows of the state: the settings, the camera's figures, the choices.
+    pub fn describe(&self) -> Value {
+        let state = self.lock();
+        let v = &state.view;
+        json!({
+            "type": "state",
+            "scene": self.scene_name,
+            "resolution": [self.config.resolution.0, self.config.resolution.1],
+            "generation": state.generation,
+            "settings": v.settings,
+            "lenses": self.config.lens_names(),
+            "metrics": lenspath::autofocus::FOCUS_MEASURES.iter().map(|(n, _)| *n).collect::<Vec<_>>(),
+            "strategies": lenspath::autofocus::STRATEGIES.iter().map(|(n, _)| *n).collect::<Vec<_>>(),
+            "sensor_depth_mm": v.sensor_depth_mm,
+            "focus_distance_m": v.focus_distance_m,
+            "focus_range_mm": [v.focus_range_mm.0, v.focus_range_mm.1],
+            "focal_length_mm": v.focal_length_mm,
+            "wide_open_f_number": v.wide_open_f_number,
+            "sensor_mm": [v.lens_settings.sensor_mm.0, v.lens_settings.sensor_mm.1],
+        })
+    }
+}
+
+impl Config {
+    fn add_dropped_lens(&self, name: &str, text: &str) -> Result<()> {
+        if name.is_empty() || name.len() > 128 || name.contains(['/', '\\']) {
+            return Err(Error::InvalidArgument(format!(
+                "a dropped lens needs a plain file name of at most 128 characters, got '{name}'"
+            )));
+        }
+        if text.len() > MAX_LENS_TABLE_BYTES {
+            return Err(Error::InvalidArgument(format!(
+                "lens table '{name}' is {} bytes; at most {MAX_LENS_TABLE_BYTES} are accepted",
+                text.len()
+            )));
+        }
+        let lens = LensPrescription::parse(text, name, TableConvention::Auto)?;
+        // Checks it is a lens that images, before it is offered.
+        LensAnalysis::new(&lenspath::lens::LensSystem::new(&lens), &AnalysisSettings::default())?;
+        self.dropped_lenses
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .insert(name.to_string(), lens);
+        Ok(())
+    }
+
+    /// The lens names the page offers: built-ins, the `--lens` files, the dropped tables.
+    fn lens_names(&self) -> Vec<String> {
+        let mut names: Vec<String> = BUILTIN_LENSES.iter().map(|(n, _)| n.to_string()).collect();
+        names.extend(
+            self.allowed_lens_paths
+                .iter()
+                .filter(|p| p.is_file())
+                .map(|p| p.display().to_string()),
+        );
+        names.extend(
+            self.dropped_lenses
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .keys()
+                .cloned(),
+        );
+        names
+    }
+
+    /// The lens `name` names and what a saved file calls it: a built-in, a
+    /// dropped table, or a table file inside the scene's folder or given with `--lens`.
+    fn resolve_lens(&self, name: &str) -> Result<(LensPrescription, String)> {
+        if BUILTIN_LENSES.iter().any(|(n, _)| *n == name) {
+            return Ok((LensPrescription::load(name)?, name.to_string()));
+        }
+        if let Some(lens) = self.dropped_lenses.lock().unwrap_or_else(|e| e.into_inner()).get(name) {
+            return Ok((lens.clone(), name.to_string()));
+        }
+        let path = Path::new(name);
+        let canonical = path.canonicalize().map_err(|_| {
+            Error::InvalidArgument(format!(
+                "unknown lens '{name}': not a built-in lens, a dropped table or an existing file"
+            ))
+        })?;
+        if !self
+            .allowed_lens_paths
+            .iter()
+            .any(|allowed| canonical.starts_with(allowed))
+        {
+            return Err(Error::InvalidArgument(format!(
+                "lens '{name}' is outside the scene's folder; name it with `lenspath view --lens FILE` to allow it"
+            )));
+        }
+        let reference = canonical.display().to_string();
+        Ok((LensPrescription::load(&reference)?, reference))
+    }
+
+    /// Checks `settings` and builds their camera.
+    fn build_view(&self, settings: ViewSettings) -> Result<View> {
+        let (width, height) = self.resolution;
+        let bad = |m: String| Err(Error::InvalidArgument(m));
+        let (eye, target, up) = (
+            Vec3::from_array(settings.eye),
+            Vec3::from_array(settings.target),
+            Vec3::from_array(settings.up),
+        );
+        if !(eye.is_finite() && target.is_finite() && up.is_finite())
+            || (target - eye).cross(up).length_squared() <= 0.0
+        {
+            return bad(
+                "eye, target and up must be finite, the eye away from the target, up not along the view".into(),
+            );
+        }
+        if !(1..=1 << 16).contains(&settings.max_spp) {
+            return bad(format!("max_spp must be from 1 to 65536, got {}", settings.max_spp));
+        }
+        if !(1..=1024).contains(&settings.max_depth) {
+            return bad(format!("max_depth must be from 1 to 1024, got {}", settings.max_depth));
+        }
+        if !(1..=64).contains(&settings.light_samples) {
+            return bad(format!(
+                "light_samples must be from 1 to 64, got {}",
+                settings.light_samples
+            ));
+        }
+        let sampler = SamplerKind::from_name(&settings.sampler).ok_or_else(|| {
+            Error::InvalidArgument(format!(
+                "sampler must be one of {}, got '{}'",
+                SamplerKind::NAMES.join(", "),
+                settings.sampler
+            ))
+        })?;
+        let aperture = ApertureShape::parse(&settings.aperture)?;
+        if let Some(n) = settings.f_number {
+            if !(n > 0.0 && n.is_finite()) {
+                return bad(format!("f_number must be a positive number, got {n}"));
+            }
+        }
+        let focus = match settings.focus {
+            Focus::Sensor { depth_mm } if depth_mm > 0.0 && depth_mm.is_finite() => {
+                LensFocus::SensorPositionMm(depth_mm)
+            }
+            Focus::Distance { distance_m } if distance_m > 0.0 && distance_m.is_finite() => {
+                LensFocus::Distance(distance_m / self.scene_unit_m())
+            }
+            other => {
+                return bad(format!(
+                    "focus must be a positive sensor depth or distance, got {other:?}"
+                ))
+            }
+        };
+        let (lens, lens_reference) = self.resolve_lens(&settings.lens)?;
+        let mut lens_settings = RealisticCameraSettings::for_scene(&self.options, &self.view, width, height)?;
+        lens_settings.lens = lens;
+        lens_settings.f_number = settings.f_number;
+        lens_settings.aperture = aperture;
+        lens_settings.focus = focus;
+        let pose = CameraPose::look_at(eye, target, up);
+        let camera = RealisticCamera::new(pose, width, height, &lens_settings)?;
+        // The focus is kept as the sensor's place: what a saved file and autofocus speak in.
+        let sensor_depth_mm = camera.sensor_z_mm();
+        lens_settings.focus = LensFocus::SensorPositionMm(sensor_depth_mm);
+        let system = camera.system();
+        let analysis = LensAnalysis::new(
+            system,
+            &AnalysisSettings {
+                sensor_mm: lens_settings.sensor_mm,
+                ..Default::default()
+            },
+        )?;
+        let diagonal_mm = lens_settings.sensor_mm.0.hypot(lens_settings.sensor_mm.1);
+        let layout = lenspath::lens::plot::layout_focused(system, &analysis, diagonal_mm, sensor_depth_mm);
+        let wide_open = LensAnalysis::new(
+            &lenspath::lens::LensSystem::new(&lens_settings.lens),
+            &AnalysisSettings::default(),
+        )?;
+        let render = RenderSettings {
+            width,
+            height,
+            spp: 1,
+            path: PathSettings {
+                max_depth: settings.max_depth,
+                light_samples: settings.light_samples,
+            },
+            seed: settings.seed,
+            sampler,
+            filter: Filter::Box,
+            threads: self.threads,
+            tile_size: 16,
+            crop: None,
+            // Left to the EXR download (`render::render_depth`): the first preview comes sooner.
+            depth: false,
+        };
+        render.validate()?;
+        Ok(View {
+            focus_distance_m: system
+                .focus_distance_mm(sensor_depth_mm, analysis.ray_height_mm)
+                .map(|mm| mm * 1e-3),
+            focus_range_mm: (analysis.infinity_focus_mm, analysis.close_focus_mm),
+            focal_length_mm: analysis.effective_focal_length_mm,
+            wide_open_f_number: wide_open.f_number,
+            layout_svg: lenspath::lens::plot::layout_to_svg(&layout),
+            settings,
+            lens_settings,
+            lens_reference,
+            camera,
+            render,
+            pose,
+            sensor_depth_mm,
+        })
+    }
+
+    fn scene_unit_m(&self) -> f64 {
+        self.options.scene_unit_m.unwrap_or(1.0)
+    }
+}
+
+/// The settings a session starts with: the scene's view and the file's lens settings.
+fn initial_settings(options: &SceneOptions, view: &SceneView, camera: &RealisticCameraSettings) -> ViewSettings {
+    let m = view.pose.render_from_camera;
+    let eye = Vec3::from(m.translation);
+    let target = eye + Vec3::from(m.z_axis) * view.focus_distance;
+    let focus = match camera.focus {
+        LensFocus::SensorPositionMm(depth_mm) => Focus::Sensor { depth_mm },
+        LensFocus::Distance(d) => Focus::Distance {
+            distance_m: d * options.scene_unit_m.unwrap_or(1.0),
+        },
+    };
+    ViewSettings {
+        lens: options
+            .lens
+            .as_ref()
+            .and_then(|l| l.lens.clone())
+            .unwrap_or_else(|| lenspath::camera::DEFAULT_LENS.to_string()),
+        f_number: camera.f_number,
+        focus,
+        aperture: camera.aperture.spelling().unwrap_or_else(|| "circle".into()),
+        eye: eye.to_array(),
+        target: target.to_array(),
+        up: Vec3::from(m.y_axis).to_array(),
+        max_spp: 1024,
+        max_depth: options.max_depth.unwrap_or(16),
+        light_samples: options.light_samples.unwrap_or(1),
+        seed: options.seed.unwrap_or(0),
+        sampler: options.sampler.unwrap_or_default().name().into(),
+    }
+}
+
+/// `current` with the fields of the JSON object `change` replaced; unknown
+/// fields and wrong types are errors naming them.
+fn merged(current: &ViewSettings, change: &Value) -> Result<ViewSettings> {
+    let Value::Object(fields) = change else {
+        return Err(Error::InvalidArgument(
+            "a change must be a JSON object of settings".into(),
+        ));
+    };
+    let mut value = serde_json::to_value(current).map_err(|e| Error::InvalidArgument(e.to_string()))?;
+    if let Value::Object(target) = &mut value {
+        for (k, v) in fields {
+            if !target.contains_key(k) {
+                return Err(Error::InvalidArgument(format!(
+                    "unknown setting '{k}'; the settings are {}",
+                    target.keys().cloned().collect::<Vec<_>>().join(", ")
+                )));
+            }
+            target.insert(k.clone(), v.clone());
+        }
+    }
+    serde_json::from_value(value).map_err(|e| Error::InvalidArgument(format!("bad setting: {e}")))
+}

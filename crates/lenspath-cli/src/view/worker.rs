@@ -1,0 +1,241 @@
+//! The render thread: refines the current view in steps (1, 2, 4, 8 and 16
+//! samples per pixel, then 16 more a step), each continuing the last one's
+//! sums, so the image after a step is the one `lenspath render --spp N`
+//! gives, bit for bit. Each step is sent to the pages as a frame. It runs the
+//! autofocus requests, and sleeps while no page is connected.
+
+use std::sync::atomic::Ordering;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use lenspath::autofocus::{FocusMeasure, Focuser, Strategy};
+use lenspath::io::image::encode_jpeg;
+use lenspath::render::{render_from, Accumulation, Checkpoints, NormalizedRect};
+use lenspath::Result;
+use serde_json::json;
+
+use super::session::{AutofocusRequest, Event, Frame, Session, View};
+use crate::autofocus::{patch_search, PatchRenders, DEFAULT_PATIENCE};
+
+/// Steps double the samples up to this, then add this many.
+const LINEAR_STEP_SPP: u32 = 16;
+
+/// The samples per pixel after the step that follows `spp`.
+fn next_step(spp: u32) -> u32 {
+    if spp < LINEAR_STEP_SPP {
+        (spp * 2).max(1)
+    } else {
+        spp + LINEAR_STEP_SPP
+    }
+}
+
+/// Starts the render thread.
+pub fn spawn(session: Arc<Session>) -> std::io::Result<std::thread::JoinHandle<()>> {
+    std::thread::Builder::new()
+        .name("lenspath-view-render".into())
+        .spawn(move || run(&session))
+}
+
+/// What the thread does next.
+enum Job {
+    Render(Arc<View>),
+    Autofocus(AutofocusRequest, Arc<View>),
+}
+
+/// The refinement of one generation of settings.
+struct Progress {
+    generation: u64,
+    /// The sums so far (`None`: nothing rendered yet).
+    state: Option<Accumulation>,
+    /// Whether the generation's first frame was sent (for the preview latency).
+    shown: bool,
+}
+
+impl Progress {
+    fn spp(&self) -> u32 {
+        self.state.as_ref().map_or(0, Accumulation::spp_min)
+    }
+}
+
+fn run(session: &Session) {
+    let mut progress = Progress {
+        generation: u64::MAX,
+        state: None,
+        shown: false,
+    };
+    loop {
+        let (job, generation, changed_at) = {
+            let mut state = session.lock();
+            let job = loop {
+                if state.clients > 0 && !state.changing {
+                    if let Some(request) = state.autofocus.take() {
+                        break Job::Autofocus(request, state.view.clone());
+                    }
+                    if progress.generation != state.generation {
+                        progress = Progress {
+                            generation: state.generation,
+                            state: None,
+                            shown: false,
+                        };
+                    }
+                    if progress.spp() < state.view.settings.max_spp {
+                        break Job::Render(state.view.clone());
+                    }
+                }
+                state = session.wake.wait(state).unwrap_or_else(|e| e.into_inner());
+            };
+            // Under the lock: a change after this sets it again.
+            session.cancel.store(false, Ordering::SeqCst);
+            (job, state.generation, state.changed_at)
+        };
+        match job {
+            Job::Render(view) => {
+                if let Err(e) = step(session, &mut progress, &view, changed_at) {
+                    session.send(json!({"type": "error", "message": e.to_string()}));
+                    // Nothing more to do for these settings.
+                    progress.generation = generation;
+                    progress.state = None;
+                    let mut state = session.lock();
+                    while state.generation == generation && state.autofocus.is_none() {
+                        state = session.wake.wait(state).unwrap_or_else(|e| e.into_inner());
+                    }
+                }
+            }
+            Job::Autofocus(request, view) => {
+                if let Err(e) = autofocus(session, &request, &view) {
+                    session.send(json!({"type": "autofocus-failed", "message": e.to_string()}));
+                }
+            }
+        }
+    }
+}
+
+/// Renders the next step of `view` and sends it, unless a change stopped it.
+fn step(session: &Session, progress: &mut Progress, view: &Arc<View>, changed_at: Instant) -> Result<()> {
+    let target = next_step(progress.spp()).min(view.settings.max_spp);
+    let settings = lenspath::render::RenderSettings {
+        spp: target,
+        ..view.render
+    };
+    let mut reached = None;
+    let mut keep = |state: &Accumulation| {
+        reached = Some(state.clone());
+        Ok(())
+    };
+    let output = render_from(
+        &session.scene,
+        &view.camera,
+        &settings,
+        progress.state.take(),
+        Some(Checkpoints {
+            // Only the final save, when the step ends or is stopped: the sums to go on from.
+            every: Duration::from_secs(86_400),
+            save: &mut keep,
+        }),
+        &|_, _| {},
+        &session.cancel,
+    )?;
+    progress.state = reached;
+    if output.stats.cancelled {
+        return Ok(());
+    }
+    let jpeg = encode_jpeg(&output.image, 0.0)?;
+    let frame = Arc::new(Frame {
+        generation: progress.generation,
+        image: output.image,
+        jpeg,
+        view: view.clone(),
+    });
+    {
+        let mut state = session.lock();
+        if state.generation != progress.generation {
+            return Ok(());
+        }
+        state.last_frame = Some(frame.clone());
+    }
+    let s = output.stats;
+    let latency_ms = (!progress.shown).then(|| changed_at.elapsed().as_secs_f64() * 1e3);
+    progress.shown = true;
+    session.send(json!({
+        "type": "frame",
+        "generation": frame.generation,
+        "spp": frame.image.spp_min,
+        "max_spp": view.settings.max_spp,
+        "step_seconds": s.seconds,
+        "rays_per_second": s.rays as f64 / s.seconds.max(1e-9),
+        "samples_per_second": s.samples as f64 / s.seconds.max(1e-9),
+        "latency_ms": latency_ms,
+        "sensor_depth_mm": view.sensor_depth_mm,
+    }));
+    let _ = session.events.send(Event::Frame(Arc::new(frame.jpeg.clone())));
+    Ok(())
+}
+
+/// Focuses on the request's patch as `lenspath autofocus` would (the same
+/// search, samples, depth and seed), telling the pages each evaluation, then
+/// moves the sensor there.
+fn autofocus(session: &Session, request: &AutofocusRequest, view: &View) -> Result<()> {
+    let [x, y, w, h] = request.patch;
+    let patch = NormalizedRect::new(x, y, w, h)?;
+    let measure = FocusMeasure::from_name(&request.metric)?;
+    let strategy = Strategy::from_name(&request.strategy, DEFAULT_PATIENCE)?;
+    let settings = patch_search(
+        &view.lens_settings,
+        session.resolution(),
+        patch,
+        measure,
+        PatchRenders {
+            seed: view.settings.seed,
+            ..PatchRenders::default()
+        },
+        session.threads(),
+    );
+    let mut focuser = Focuser::new(&session.scene, view.pose, settings)?;
+    let (infinity_mm, close_mm) = focuser.sweep_range_mm();
+    session.send(json!({
+        "type": "autofocus-start",
+        "patch": request.patch,
+        "metric": request.metric,
+        "strategy": request.strategy,
+        "range_mm": [infinity_mm, close_mm],
+    }));
+    focuser.on_evaluation(|e| {
+        session.send(json!({
+            "type": "autofocus-evaluation",
+            "sensor_depth_mm": e.sensor_z_mm,
+            "score": e.score,
+            "refocused": e.refocused,
+        }))
+    });
+    let result = focuser.run(strategy)?;
+    let view = session.change(&json!({"focus": {"by": "sensor", "depth_mm": result.sensor_z_mm}}))?;
+    session.send(json!({
+        "type": "autofocus-done",
+        "strategy": result.strategy,
+        "metric": request.metric,
+        "sensor_depth_mm": result.sensor_z_mm,
+        "focus_distance_m": view.focus_distance_m,
+        "evaluations": result.evaluations.len(),
+        "camera_rays": result.camera_rays,
+        "seconds": result.seconds,
+    }));
+    session.send(session.describe());
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn steps_double_then_grow_by_sixteen() {
+        let mut spp = 0;
+        let steps: Vec<u32> = (0..8)
+            .map(|_| {
+                spp = next_step(spp);
+                spp
+            })
+            .collect();
+        assert_eq!(steps, [1, 2, 4, 8, 16, 32, 48, 64]);
+    }
+}
