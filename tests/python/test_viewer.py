@@ -106,7 +106,16 @@ def open_page(chromium, viewer: Viewer, max_spp: int):
     page.goto(viewer.url)
     wait_for_spp(page, 1)
     set_number(page, "#max-spp", max_spp)
+    settle(page, viewer)
     return page
+
+
+def settle(page, viewer: Viewer, timeout_s: float = 60) -> None:
+    """Waits until the page shows an image of the server's latest settings."""
+    deadline = time.monotonic() + timeout_s
+    while generation(page) != viewer.state()["generation"]:
+        assert time.monotonic() < deadline, "the page never caught up with the settings"
+        time.sleep(0.05)
 
 
 def set_number(page, selector: str, value: float) -> None:
@@ -115,12 +124,14 @@ def set_number(page, selector: str, value: float) -> None:
 
 
 def generation(page) -> int:
-    return int(page.locator("#spp").get_attribute("data-generation") or -1)
+    """The settings generation of the image the page shows."""
+    return int(page.locator("#frame").get_attribute("data-generation") or -1)
 
 
 def wait_for_spp(page, spp: int, after_generation: int = -1, timeout_s: float = 60) -> None:
+    """Waits until the page shows an image of at least `spp` samples from a generation after `after_generation`."""
     page.wait_for_function(
-        "([spp, g]) => { const e = document.getElementById('spp');"
+        "([spp, g]) => { const e = document.getElementById('frame');"
         " return Number(e.dataset.spp) >= spp && Number(e.dataset.generation) > g; }",
         arg=[spp, after_generation],
         timeout=timeout_s * 1000,
@@ -192,7 +203,9 @@ def test_saved_settings_render_the_saved_image_bit_for_bit(chromium, viewer: Vie
     page.locator("#aperture-kind").select_option("blades")
     set_number(page, "#aperture-count", 5)
     page.locator("#fstop").fill("3")
-    wait_for_spp(page, 3, after_generation=g)
+    wait_for_spp(page, 1, after_generation=g)
+    settle(page, viewer)
+    wait_for_spp(page, 3, after_generation=generation(page) - 1)
     # The downloads the Save links give.
     with page.expect_download() as download:
         page.locator("#save-toml").click()
@@ -203,7 +216,7 @@ def test_saved_settings_render_the_saved_image_bit_for_bit(chromium, viewer: Vie
     download.value.save_as(tmp_path / "viewer.png")
     (tmp_path / "viewer.exr").write_bytes(viewer.get("api/image.exr"))
     text = scene_file.read_text()
-    assert 'aperture = "blades:5:0:0"' in text and "spp = 3" in text
+    assert 'aperture = "blades:5:0:0"' in text and "spp = 3" in text, text
 
     for suffix in ["png", "exr"]:
         subprocess.run(
@@ -215,16 +228,18 @@ def test_saved_settings_render_the_saved_image_bit_for_bit(chromium, viewer: Vie
         assert ours == (tmp_path / f"cli.{suffix}").read_bytes(), f"the {suffix} differs"
 
 
-def test_orbit_and_zoom_move_the_camera_about_its_target(chromium, viewer: Viewer) -> None:
+def test_orbit_zoom_and_pan_move_the_camera(chromium, viewer: Viewer) -> None:
     page = open_page(chromium, viewer, max_spp=1)
     before = viewer.state()["settings"]
     box = page.locator("#frame").bounding_box()
     cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
+    g = generation(page)
     page.mouse.move(cx, cy)
     page.mouse.down(button="right")
     page.mouse.move(cx + 60, cy + 20, steps=4)
     page.mouse.up(button="right")
-    page.wait_for_function(f"document.getElementById('spp').dataset.generation > {generation(page)}")
+    wait_for_spp(page, 1, after_generation=g)
+    settle(page, viewer)
     orbited = viewer.state()["settings"]
 
     def distance(s: dict) -> float:
@@ -234,14 +249,33 @@ def test_orbit_and_zoom_move_the_camera_about_its_target(chromium, viewer: Viewe
     assert orbited["eye"] != before["eye"]
     assert distance(orbited) == pytest.approx(distance(before), rel=1e-5)
 
+    g = generation(page)
     page.mouse.move(cx, cy)
     page.mouse.wheel(0, -300)
-    page.wait_for_function(f"document.getElementById('spp').dataset.generation > {generation(page)}")
-    assert distance(viewer.state()["settings"]) < 0.9 * distance(orbited)
+    wait_for_spp(page, 1, after_generation=g)
+    settle(page, viewer)
+    zoomed = viewer.state()["settings"]
+    assert distance(zoomed) < 0.9 * distance(orbited)
+    assert zoomed["target"] == before["target"]
+
+    # Shift + right-drag pans: eye and target move together.
+    g = generation(page)
+    page.keyboard.down("Shift")
+    page.mouse.down(button="right")
+    page.mouse.move(cx - 40, cy + 30, steps=4)
+    page.mouse.up(button="right")
+    page.keyboard.up("Shift")
+    wait_for_spp(page, 1, after_generation=g)
+    settle(page, viewer)
+    panned = viewer.state()["settings"]
+    moved = [e - z for e, z in zip(panned["eye"], zoomed["eye"], strict=True)]
+    assert any(abs(m) > 1e-3 for m in moved)
+    assert [t - z for t, z in zip(panned["target"], zoomed["target"], strict=True)] == pytest.approx(moved, abs=1e-5)
+    assert distance(panned) == pytest.approx(distance(zoomed), rel=1e-5)
     assert page.errors == []
 
 
-def test_a_dropped_lens_table_is_offered_and_drawn(chromium, viewer: Viewer) -> None:
+def test_a_dropped_lens_table_is_offered_drawn_and_saved(chromium, viewer: Viewer, cli: Path, tmp_path: Path) -> None:
     page = open_page(chromium, viewer, max_spp=1)
     table = (REPO / "crates/lenspath/lenses/wide22.dat").read_text()
     g = generation(page)
@@ -260,6 +294,15 @@ def test_a_dropped_lens_table_is_offered_and_drawn(chromium, viewer: Viewer) -> 
     assert state["focal_length_mm"] == pytest.approx(22, rel=0.05)
     svg = viewer.get("api/layout.svg").decode()
     assert svg.startswith("<svg") and f"sensor {state['sensor_depth_mm']:.3f} mm" in svg
+    # The saved file names the table, to be put beside it; then it renders the same image.
+    settle(page, viewer)
+    text = viewer.get("api/scene.toml").decode()
+    assert "'my-wide.dat' was dropped" in text and 'lens = "my-wide.dat"' in text
+    (tmp_path / "view.toml").write_text(text)
+    (tmp_path / "my-wide.dat").write_text(table)
+    (tmp_path / "viewer.png").write_bytes(viewer.get("api/image.png"))
+    subprocess.run([str(cli), "render", str(tmp_path / "view.toml"), "--out", str(tmp_path / "cli.png")], check=True)
+    assert (tmp_path / "cli.png").read_bytes() == (tmp_path / "viewer.png").read_bytes()
     assert page.errors == []
 
 
@@ -298,7 +341,7 @@ def test_an_error_shows_on_the_page_and_the_viewer_goes_on(chromium, viewer: Vie
     g = generation(page)
     page.locator("#lens").select_option("tele250")
     wait_for_spp(page, 1, after_generation=g)
-    assert page.locator("#error").is_hidden()
+    page.wait_for_selector("#error", state="hidden")
     assert viewer.state()["settings"]["lens"] == "tele250"
 
 

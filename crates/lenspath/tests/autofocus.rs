@@ -112,6 +112,26 @@ fn every_strategy_focuses_a_plane_at_its_conjugate() {
     assert_eq!(sweep.evaluations.len(), steps);
 }
 
+/// The observer sees every evaluation as it is made, in order, run after run
+/// (what `lenspath view` draws as the search goes).
+#[test]
+fn the_observer_sees_every_evaluation_in_order() {
+    let mut scene = checker_scene();
+    add_checkerboard(&mut scene, (-0.8, 0.8), (-0.6, 0.6), 1.5, 0.02);
+    let scene = scene.compile(&BvhSettings::default()).unwrap();
+    let seen = std::sync::Mutex::new(Vec::new());
+    let mut f = focuser(&scene, Some(5.6), CENTRE, 2);
+    f.on_evaluation(|e| seen.lock().unwrap().push(*e));
+    let mut last = 0;
+    for strategy in [Strategy::EarlyExit { patience: 3 }, Strategy::Depth] {
+        let r = f.run(strategy).unwrap();
+        let seen = seen.lock().unwrap();
+        assert_eq!(seen[last..], r.evaluations[..], "{strategy:?}");
+        last = seen.len();
+    }
+    assert!(last > 0, "early-exit renders patches");
+}
+
 /// The depth strategy ranges on what most of the patch sees: a patch mostly on
 /// a near plane with a far plane behind focuses on the near one.
 #[test]

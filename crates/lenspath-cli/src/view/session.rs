@@ -100,6 +100,8 @@ pub struct View {
     pub lens_settings: RealisticCameraSettings,
     /// What the saved scene file names as the lens.
     pub lens_reference: String,
+    /// Whether the lens is a table dropped on the page (no file here to name).
+    pub lens_dropped: bool,
     /// The camera.
     pub camera: RealisticCamera,
     /// The render's settings (its `spp` is set per refinement step).
@@ -334,11 +336,12 @@ impl Session {
         self.config.add_dropped_lens(name, text)
     }
 
-    /// The scene file that reproduces `frame` with `lenspath render FILE`.
+    /// The scene file that reproduces `frame` with `lenspath render FILE`
+    /// (a dropped lens table, named by its file name, must be put beside it).
     pub fn settings_file(&self, frame: &Frame) -> Result<String> {
         let view = &frame.view;
         let s = &view.settings;
-        SceneSettingsFile {
+        let file = SceneSettingsFile {
             base: self.config.base.clone(),
             scene_unit_m: self.config.scene_unit_m(),
             eye: Vec3::from_array(s.eye),
@@ -356,7 +359,15 @@ impl Session {
             seed: s.seed,
             sampler: view.render.sampler,
         }
-        .to_toml()
+        .to_toml()?;
+        Ok(if view.lens_dropped {
+            format!(
+                "# The lens table '{}' was dropped on lenspath view's page: save it beside this file.\n{file}",
+                view.lens_reference
+            )
+        } else {
+            file
+        })
     }
 
     /// What the page shows of the state: the settings, the camera's figures, the choices.
@@ -426,12 +437,12 @@ impl Config {
 
     /// The lens `name` names and what a saved file calls it: a built-in, a
     /// dropped table, or a table file inside the scene's folder or given with `--lens`.
-    fn resolve_lens(&self, name: &str) -> Result<(LensPrescription, String)> {
+    fn resolve_lens(&self, name: &str) -> Result<(LensPrescription, String, bool)> {
         if BUILTIN_LENSES.iter().any(|(n, _)| *n == name) {
-            return Ok((LensPrescription::load(name)?, name.to_string()));
+            return Ok((LensPrescription::load(name)?, name.to_string(), false));
         }
         if let Some(lens) = self.dropped_lenses.lock().unwrap_or_else(|e| e.into_inner()).get(name) {
-            return Ok((lens.clone(), name.to_string()));
+            return Ok((lens.clone(), name.to_string(), true));
         }
         let path = Path::new(name);
         let canonical = path.canonicalize().map_err(|_| {
@@ -449,7 +460,7 @@ impl Config {
             )));
         }
         let reference = canonical.display().to_string();
-        Ok((LensPrescription::load(&reference)?, reference))
+        Ok((LensPrescription::load(&reference)?, reference, false))
     }
 
     /// Checks `settings` and builds their camera.
@@ -506,7 +517,7 @@ impl Config {
                 ))
             }
         };
-        let (lens, lens_reference) = self.resolve_lens(&settings.lens)?;
+        let (lens, lens_reference, lens_dropped) = self.resolve_lens(&settings.lens)?;
         let mut lens_settings = RealisticCameraSettings::for_scene(&self.options, &self.view, width, height)?;
         lens_settings.lens = lens;
         lens_settings.f_number = settings.f_number;
@@ -560,6 +571,7 @@ impl Config {
             settings,
             lens_settings,
             lens_reference,
+            lens_dropped,
             camera,
             render,
             pose,

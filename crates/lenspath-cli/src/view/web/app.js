@@ -44,7 +44,8 @@ async function change(fields) {
     const next = pending;
     pending = null;
     const answer = await post("/api/settings", next);
-    if (answer) showState(answer);
+    // A newer change waiting means the controls already show newer values than this answer.
+    if (answer && !pending) showState(answer);
   }
   inFlight = false;
 }
@@ -59,10 +60,14 @@ function connect() {
   };
   socket.onmessage = async (event) => {
     if (event.data instanceof Blob) {
+      // A frame follows its "frame" message; the canvas says which it shows.
+      const shown = { ...lastFrame };
       const bitmap = await createImageBitmap(event.data);
       canvas.width = bitmap.width;
       canvas.height = bitmap.height;
       context.drawImage(bitmap, 0, 0);
+      canvas.dataset.generation = shown.generation;
+      canvas.dataset.spp = shown.spp;
       return;
     }
     const message = JSON.parse(event.data);
@@ -137,7 +142,11 @@ function fillSelect(select, names, chosen) {
   select.value = chosen;
 }
 
+/** The last "frame" message: which generation and samples the next frame is. */
+let lastFrame = { generation: -1, spp: 0 };
+
 function showFrameStats(m) {
+  lastFrame = { generation: m.generation, spp: m.spp };
   if (state && m.generation !== state.generation) return;
   const spp = $("spp");
   spp.textContent = `${m.spp} / ${m.max_spp} spp`;
