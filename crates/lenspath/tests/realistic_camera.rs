@@ -135,6 +135,53 @@ fn a_uniform_scene_reads_its_radiance_at_the_centre_and_vignettes_symmetrically(
     }
 }
 
+/// A camera moved or resized without being built again traces the rays a
+/// camera built there, or at that size, does; a region's camera is not resized.
+#[test]
+fn moved_and_resized_cameras_are_the_built_ones() {
+    use lenspath::camera::{Camera, CameraSample};
+    use lenspath::render::PixelRect;
+    let mut settings = RealisticCameraSettings::new(
+        LensPrescription::load("dgauss50").unwrap(),
+        (36.0, 24.0),
+        LensFocus::Distance(2.0),
+    );
+    settings.f_number = Some(4.0);
+    settings.aperture = ApertureShape::parse("blades:6").unwrap();
+    let here = CameraPose::look_at(Vec3::ZERO, Vec3::Z, Vec3::Y);
+    let there = CameraPose::look_at(Vec3::new(0.3, 1.0, -2.0), Vec3::new(0.0, 0.5, 1.0), Vec3::Y);
+    let built = RealisticCamera::new(here, 96, 64, &settings).unwrap();
+    let moved = built.with_pose(there);
+    let resized = built.with_image_size(48, 32).unwrap();
+    let built_there = RealisticCamera::new(there, 96, 64, &settings).unwrap();
+    let built_small = RealisticCamera::new(here, 48, 32, &settings).unwrap();
+    let mut rays = 0;
+    for k in 0..2000u32 {
+        // A low-discrepancy spread of film and lens positions (additive recurrences).
+        let u = |a: f64| (f64::from(k) * a).fract() as f32;
+        let (film, lens) = (
+            Vec2::new(u(0.618_034) * 96.0, u(0.754_878) * 64.0),
+            Vec2::new(u(0.569_840), u(0.381_966)),
+        );
+        let ray = |c: &RealisticCamera, film: Vec2| {
+            c.generate_ray(CameraSample { film, lens })
+                .map(|r| (r.ray.origin, r.ray.direction, r.weight))
+        };
+        assert_eq!(ray(&moved, film), ray(&built_there, film));
+        assert_eq!(ray(&resized, film * 0.5), ray(&built_small, film * 0.5));
+        rays += usize::from(ray(&built, film).is_some());
+    }
+    assert!(rays > 1000, "most samples get through: {rays}");
+    let patch = PixelRect {
+        x0: 10,
+        y0: 10,
+        width: 8,
+        height: 8,
+    };
+    let region = RealisticCamera::for_region(here, 96, 64, &settings, patch).unwrap();
+    assert!(region.with_image_size(48, 32).is_err());
+}
+
 #[test]
 fn physical_exposure_darkens_with_the_square_of_the_f_number() {
     let shot = |f_number| Shot {

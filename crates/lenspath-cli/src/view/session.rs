@@ -93,6 +93,7 @@ fn default_strategy() -> String {
 }
 
 /// The camera that settings describe, built and checked.
+#[derive(Clone)]
 pub struct View {
     /// The settings.
     pub settings: ViewSettings,
@@ -246,7 +247,7 @@ impl Session {
             allowed_lens_paths,
             dropped_lenses: Mutex::new(BTreeMap::new()),
         };
-        let first = config.build_view(settings)?;
+        let first = config.build_view(settings, None)?;
         let (events, _) = broadcast::channel(256);
         Ok(Session {
             scene,
@@ -293,9 +294,10 @@ impl Session {
             // The render pauses while the camera is built: both cores go to that.
             state.changing = true;
             self.cancel.store(true, Ordering::SeqCst);
-            state.view.settings.clone()
+            state.view.clone()
         };
-        let built = merged(&current, change).and_then(|settings| self.config.build_view(settings).map(Arc::new));
+        let built = merged(&current.settings, change)
+            .and_then(|settings| self.config.build_view(settings, Some(&current)).map(Arc::new));
         let mut state = self.lock();
         state.changing = false;
         if let Ok(view) = &built {
@@ -463,8 +465,9 @@ impl Config {
         Ok((LensPrescription::load(&reference)?, reference, false))
     }
 
-    /// Checks `settings` and builds their camera.
-    fn build_view(&self, settings: ViewSettings) -> Result<View> {
+    /// Checks `settings` and builds their camera, or moves `previous`'s when
+    /// only the view or the render settings change.
+    fn build_view(&self, settings: ViewSettings, previous: Option<&View>) -> Result<View> {
         let (width, height) = self.resolution;
         let bad = |m: String| Err(Error::InvalidArgument(m));
         let (eye, target, up) = (
@@ -518,30 +521,7 @@ impl Config {
             }
         };
         let (lens, lens_reference, lens_dropped) = self.resolve_lens(&settings.lens)?;
-        let mut lens_settings = RealisticCameraSettings::for_scene(&self.options, &self.view, width, height)?;
-        lens_settings.lens = lens;
-        lens_settings.f_number = settings.f_number;
-        lens_settings.aperture = aperture;
-        lens_settings.focus = focus;
         let pose = CameraPose::look_at(eye, target, up);
-        let camera = RealisticCamera::new(pose, width, height, &lens_settings)?;
-        // The focus is kept as the sensor's place: what a saved file and autofocus speak in.
-        let sensor_depth_mm = camera.sensor_z_mm();
-        lens_settings.focus = LensFocus::SensorPositionMm(sensor_depth_mm);
-        let system = camera.system();
-        let analysis = LensAnalysis::new(
-            system,
-            &AnalysisSettings {
-                sensor_mm: lens_settings.sensor_mm,
-                ..Default::default()
-            },
-        )?;
-        let diagonal_mm = lens_settings.sensor_mm.0.hypot(lens_settings.sensor_mm.1);
-        let layout = lenspath::lens::plot::layout_focused(system, &analysis, diagonal_mm, sensor_depth_mm);
-        let wide_open = LensAnalysis::new(
-            &lenspath::lens::LensSystem::new(&lens_settings.lens),
-            &AnalysisSettings::default(),
-        )?;
         let render = RenderSettings {
             width,
             height,
@@ -560,6 +540,43 @@ impl Config {
             depth: false,
         };
         render.validate()?;
+        // The same optics (a move, or render settings): the camera moves, nothing is built again.
+        if let Some(p) = previous.filter(|p| {
+            let (a, b) = (&p.settings, &settings);
+            (&a.lens, a.f_number, a.focus, &a.aperture) == (&b.lens, b.f_number, b.focus, &b.aperture)
+                && p.lens_settings.lens == lens
+        }) {
+            return Ok(View {
+                camera: p.camera.with_pose(pose),
+                settings,
+                render,
+                pose,
+                ..p.clone()
+            });
+        }
+        let mut lens_settings = RealisticCameraSettings::for_scene(&self.options, &self.view, width, height)?;
+        lens_settings.lens = lens;
+        lens_settings.f_number = settings.f_number;
+        lens_settings.aperture = aperture;
+        lens_settings.focus = focus;
+        let camera = RealisticCamera::new(pose, width, height, &lens_settings)?;
+        // The focus is kept as the sensor's place: what a saved file and autofocus speak in.
+        let sensor_depth_mm = camera.sensor_z_mm();
+        lens_settings.focus = LensFocus::SensorPositionMm(sensor_depth_mm);
+        let system = camera.system();
+        let analysis = LensAnalysis::new(
+            system,
+            &AnalysisSettings {
+                sensor_mm: lens_settings.sensor_mm,
+                ..Default::default()
+            },
+        )?;
+        let diagonal_mm = lens_settings.sensor_mm.0.hypot(lens_settings.sensor_mm.1);
+        let layout = lenspath::lens::plot::layout_focused(system, &analysis, diagonal_mm, sensor_depth_mm);
+        let wide_open = LensAnalysis::new(
+            &lenspath::lens::LensSystem::new(&lens_settings.lens),
+            &AnalysisSettings::default(),
+        )?;
         Ok(View {
             focus_distance_m: system
                 .focus_distance_mm(sensor_depth_mm, analysis.ray_height_mm)

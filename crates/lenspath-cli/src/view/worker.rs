@@ -2,7 +2,10 @@
 //! samples per pixel, then 16 more a step), each continuing the last one's
 //! sums, so the image after a step is the one `lenspath render --spp N`
 //! gives, bit for bit. Each step is sent to the pages as a frame. It runs the
-//! autofocus requests, and sleeps while no page is connected.
+//! autofocus requests, and sleeps while no page is connected. A change is
+//! first shown as a quick preview at half the width and height, one sample
+//! per pixel (a quarter of the work of the first step), which the page scales
+//! up until the first step replaces it.
 
 use std::sync::atomic::Ordering;
 use std::sync::Arc;
@@ -10,7 +13,7 @@ use std::time::{Duration, Instant};
 
 use lenspath::autofocus::{FocusMeasure, Focuser, Strategy};
 use lenspath::io::image::encode_jpeg;
-use lenspath::render::{render_from, Accumulation, Checkpoints, NormalizedRect};
+use lenspath::render::{render, render_from, Accumulation, Checkpoints, NormalizedRect};
 use lenspath::Result;
 use serde_json::json;
 
@@ -47,7 +50,9 @@ struct Progress {
     generation: u64,
     /// The sums so far (`None`: nothing rendered yet).
     state: Option<Accumulation>,
-    /// Whether the generation's first frame was sent (for the preview latency).
+    /// Whether the generation's half-size preview was sent.
+    previewed: bool,
+    /// Whether its first full-size frame was sent.
     shown: bool,
 }
 
@@ -61,6 +66,7 @@ fn run(session: &Session) {
     let mut progress = Progress {
         generation: u64::MAX,
         state: None,
+        previewed: false,
         shown: false,
     };
     loop {
@@ -75,6 +81,7 @@ fn run(session: &Session) {
                         progress = Progress {
                             generation: state.generation,
                             state: None,
+                            previewed: false,
                             shown: false,
                         };
                     }
@@ -110,8 +117,13 @@ fn run(session: &Session) {
     }
 }
 
-/// Renders the next step of `view` and sends it, unless a change stopped it.
+/// Renders the next step of `view` and sends it, unless a change stopped it;
+/// a new generation's half-size preview first.
 fn step(session: &Session, progress: &mut Progress, view: &Arc<View>, changed_at: Instant) -> Result<()> {
+    if !progress.previewed {
+        progress.previewed = preview(session, progress.generation, view, changed_at)?;
+        return Ok(());
+    }
     let target = next_step(progress.spp()).min(view.settings.max_spp);
     let settings = lenspath::render::RenderSettings {
         spp: target,
@@ -154,7 +166,7 @@ fn step(session: &Session, progress: &mut Progress, view: &Arc<View>, changed_at
         state.last_frame = Some(frame.clone());
     }
     let s = output.stats;
-    let latency_ms = (!progress.shown).then(|| changed_at.elapsed().as_secs_f64() * 1e3);
+    let full_latency_ms = (!progress.shown).then(|| changed_at.elapsed().as_secs_f64() * 1e3);
     progress.shown = true;
     session.send(json!({
         "type": "frame",
@@ -164,11 +176,40 @@ fn step(session: &Session, progress: &mut Progress, view: &Arc<View>, changed_at
         "step_seconds": s.seconds,
         "rays_per_second": s.rays as f64 / s.seconds.max(1e-9),
         "samples_per_second": s.samples as f64 / s.seconds.max(1e-9),
-        "latency_ms": latency_ms,
+        "full_latency_ms": full_latency_ms,
         "sensor_depth_mm": view.sensor_depth_mm,
     }));
     let _ = session.events.send(Event::Frame(Arc::new(frame.jpeg.clone())));
     Ok(())
+}
+
+/// Renders and sends the half-size, one-sample preview of a new generation;
+/// whether it was sent (not stopped by a change).
+fn preview(session: &Session, generation: u64, view: &View, changed_at: Instant) -> Result<bool> {
+    let (width, height) = ((view.render.width / 2).max(1), (view.render.height / 2).max(1));
+    let camera = view.camera.with_image_size(width, height)?;
+    let settings = lenspath::render::RenderSettings {
+        width,
+        height,
+        spp: 1,
+        ..view.render
+    };
+    let output = render(&session.scene, &camera, &settings, &|_, _| {}, &session.cancel)?;
+    if output.stats.cancelled || session.lock().generation != generation {
+        return Ok(false);
+    }
+    let jpeg = encode_jpeg(&output.image, 0.0)?;
+    session.send(json!({
+        "type": "frame",
+        "preview": true,
+        "generation": generation,
+        "spp": 0,
+        "max_spp": view.settings.max_spp,
+        "latency_ms": changed_at.elapsed().as_secs_f64() * 1e3,
+        "sensor_depth_mm": view.sensor_depth_mm,
+    }));
+    let _ = session.events.send(Event::Frame(Arc::new(jpeg)));
+    Ok(true)
 }
 
 /// Focuses on the request's patch as `lenspath autofocus` would (the same

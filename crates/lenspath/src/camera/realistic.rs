@@ -207,6 +207,8 @@ pub struct RealisticCamera {
     weight_scale: f64,
     /// A shaped aperture and each band's stop map (`None`: the plain circle).
     shaped: Option<(Arc<Aperture>, Vec<Option<StopMap>>)>,
+    /// Whether its pupil grids cover the whole sensor (not [`RealisticCamera::for_region`]'s).
+    whole_sensor: bool,
 }
 
 impl RealisticCamera {
@@ -339,6 +341,7 @@ impl RealisticCamera {
             pupils,
             weight_scale: 1.0,
             shaped: None,
+            whole_sensor: region.is_none(),
         };
         // Normalise by the centre's irradiance from a uniform unit radiance:
         // with this lens as set, or wide open for physical exposure.
@@ -357,6 +360,30 @@ impl RealisticCamera {
         camera.weight_scale = 1.0 / centre_irradiance;
         camera.shaped = shaped;
         Ok(camera)
+    }
+
+    /// This camera moved to `pose`. Nothing it bounds depends on where it
+    /// is, so this is [`RealisticCamera::new`] at `pose`, ray for ray, at no
+    /// cost (`lenspath view` orbits with it).
+    pub fn with_pose(&self, pose: CameraPose) -> RealisticCamera {
+        RealisticCamera { pose, ..self.clone() }
+    }
+
+    /// This camera for a `width` × `height` image of the same sensor: the
+    /// whole-sensor camera's pupil grids do not depend on the pixel count, so
+    /// this is [`RealisticCamera::new`] at that size, ray for ray (`lenspath
+    /// view`'s quick first previews). A [`RealisticCamera::for_region`]
+    /// camera's grids do, and it is refused.
+    pub fn with_image_size(&self, width: u32, height: u32) -> Result<RealisticCamera> {
+        if !self.whole_sensor {
+            return Err(Error::InvalidArgument(
+                "a camera built for a region of the image cannot change its image size".into(),
+            ));
+        }
+        Ok(RealisticCamera {
+            resolution: (f64::from(width), f64::from(height)),
+            ..self.clone()
+        })
     }
 
     /// The lens as set (stopped down, if asked).

@@ -63,9 +63,8 @@ function connect() {
       // A frame follows its "frame" message; the canvas says which it shows.
       const shown = { ...lastFrame };
       const bitmap = await createImageBitmap(event.data);
-      canvas.width = bitmap.width;
-      canvas.height = bitmap.height;
-      context.drawImage(bitmap, 0, 0);
+      // A half-size preview is scaled up to the image's size.
+      context.drawImage(bitmap, 0, 0, canvas.width, canvas.height);
       canvas.dataset.generation = shown.generation;
       canvas.dataset.spp = shown.spp;
       return;
@@ -103,6 +102,7 @@ function showState(s) {
   state = s;
   const settings = s.settings;
   $("scene").textContent = `${s.scene}, ${s.resolution[0]}×${s.resolution[1]}`;
+  [canvas.width, canvas.height] = s.resolution;
   fillSelect($("lens"), s.lenses, settings.lens);
   fillSelect($("af-metric"), s.metrics, $("af-metric").value || "tenengrad");
   fillSelect($("af-strategy"), s.strategies, $("af-strategy").value || "fast");
@@ -148,12 +148,13 @@ let lastFrame = { generation: -1, spp: 0 };
 function showFrameStats(m) {
   lastFrame = { generation: m.generation, spp: m.spp };
   if (state && m.generation !== state.generation) return;
-  const spp = $("spp");
-  spp.textContent = `${m.spp} / ${m.max_spp} spp`;
-  spp.dataset.spp = m.spp;
-  spp.dataset.generation = m.generation;
+  if (m.preview) {
+    $("spp").textContent = "preview";
+    $("latency").textContent = `first preview ${m.latency_ms.toFixed(0)} ms`;
+    return;
+  }
+  $("spp").textContent = `${m.spp} / ${m.max_spp} spp`;
   $("speed").textContent = `${(m.rays_per_second / 1e6).toFixed(2)} M rays/s`;
-  if (m.latency_ms != null) $("latency").textContent = `first preview ${m.latency_ms.toFixed(0)} ms`;
 }
 
 // ---- The focus curve of an autofocus ----
