@@ -190,10 +190,27 @@ function drawCurve() {
   const ns = "http://www.w3.org/2000/svg";
   svg.replaceChildren();
   if (!curve) return;
-  const [z0, z1] = curve.range;
+  // The axis spans what was searched (with a margin), within the focus range.
+  const zs = curve.points.map((p) => p.sensor_depth_mm).concat(curve.chosen ?? []);
+  const [lo, hi] = zs.length ? [Math.min(...zs), Math.max(...zs)] : curve.range;
+  const margin = 0.1 * Math.max(hi - lo, 0.02 * (curve.range[1] - curve.range[0]));
+  const z0 = Math.max(curve.range[0], lo - margin);
+  const z1 = Math.min(curve.range[1], hi + margin);
   const top = Math.max(...curve.points.map((p) => p.score), 1e-30);
   const x = (z) => 5 + (290 * (z - z0)) / (z1 - z0);
-  const y = (score) => 115 - (105 * score) / top;
+  const y = (score) => 105 - (95 * score) / top;
+  for (const [z, anchor] of [
+    [z0, "start"],
+    [z1, "end"],
+  ]) {
+    const label = document.createElementNS(ns, "text");
+    label.setAttribute("x", x(z));
+    label.setAttribute("y", 118);
+    label.setAttribute("text-anchor", anchor);
+    label.setAttribute("font-size", 9);
+    label.textContent = `${z.toFixed(2)} mm`;
+    svg.append(label);
+  }
   for (const p of curve.points) {
     const dot = document.createElementNS(ns, "circle");
     dot.setAttribute("cx", x(p.sensor_depth_mm));
@@ -207,7 +224,7 @@ function drawCurve() {
     line.setAttribute("x1", x(curve.chosen));
     line.setAttribute("x2", x(curve.chosen));
     line.setAttribute("y1", 5);
-    line.setAttribute("y2", 115);
+    line.setAttribute("y2", 107);
     line.setAttribute("class", "chosen");
     svg.append(line);
   }
