@@ -164,21 +164,19 @@ pub fn focus_before_render(
     render_settings: &RenderSettings,
     patch: NormalizedRect,
 ) -> Result<f64> {
-    let measure = FocusMeasure::Tenengrad;
-    let settings = AutofocusSettings {
-        camera: lens.clone(),
-        width: render_settings.width,
-        height: render_settings.height,
-        patch: patch.to_pixels(render_settings.width, render_settings.height),
-        measure,
+    let renders = PatchRenders {
         spp: RENDER_AUTOFOCUS_SPP,
-        path: PathSettings {
-            max_depth: render_settings.path.max_depth.min(8),
-            light_samples: 1,
-        },
+        max_depth: render_settings.path.max_depth.min(PATCH_MAX_DEPTH),
         seed: render_settings.seed,
-        threads: render_settings.threads,
     };
+    let settings = patch_search(
+        lens,
+        (render_settings.width, render_settings.height),
+        patch,
+        FocusMeasure::Tenengrad,
+        renders,
+        render_settings.threads,
+    );
     let mut focuser = Focuser::new(scene, pose, settings)?;
     let result = focuser.run(Strategy::Fast)?;
     eprintln!("{}", summary_line(&result, "tenengrad", lens.scene_unit_m));
