@@ -197,6 +197,27 @@ def test_click_autofocuses_where_the_cli_does(chromium, viewer: Viewer, cli: Pat
     assert page.errors == []
 
 
+def test_a_dragged_rectangle_is_the_patch(chromium, viewer: Viewer) -> None:
+    page = open_page(chromium, viewer, max_spp=1)
+    page.locator("#af-strategy").select_option("rangefinder")
+    box = page.locator("#frame").bounding_box()
+    corners = [(0.30, 0.55), (0.48, 0.80)]
+    (x0, y0), (x1, y1) = [(box["x"] + x * box["width"], box["y"] + y * box["height"]) for x, y in corners]
+    with page.expect_request("**/api/autofocus") as request:
+        page.mouse.move(x0, y0)
+        page.mouse.down()
+        page.mouse.move(x1, y1, steps=5)
+        page.mouse.up()
+    sent = request.value.post_data_json
+    assert sent["strategy"] == "rangefinder" and sent["metric"] == "tenengrad"
+    assert sent["patch"] == pytest.approx([0.30, 0.55, 0.18, 0.25], abs=2 / box["width"])
+    assert page.locator("#patch-box").is_visible()
+    page.wait_for_function("document.getElementById('af-result').dataset.sensorMm !== undefined", timeout=60_000)
+    lo, hi = viewer.state()["focus_range_mm"]
+    assert lo <= float(page.locator("#af-result").get_attribute("data-sensor-mm")) <= hi
+    assert page.errors == []
+
+
 def test_saved_settings_render_the_saved_image_bit_for_bit(chromium, viewer: Viewer, cli: Path, tmp_path: Path) -> None:
     page = open_page(chromium, viewer, max_spp=3)
     g = generation(page)
