@@ -114,25 +114,28 @@ function showState(s) {
   const steps = Math.max(0, Math.floor(2 * F_STOP_STEPS_PER_STOP * Math.log2(F_STOP_MAX / s.wide_open_f_number)));
   fstop.max = steps;
   const n = settings.f_number ?? s.wide_open_f_number;
-  fstop.value = Math.round(2 * F_STOP_STEPS_PER_STOP * Math.log2(n / s.wide_open_f_number));
+  setValue(fstop, Math.round(2 * F_STOP_STEPS_PER_STOP * Math.log2(n / s.wide_open_f_number)));
   $("fstop-value").textContent = `f/${n.toFixed(1)}`;
 
   const [kind, count] = settings.aperture.split(":");
-  $("aperture-kind").value = kind;
-  if (count) $("aperture-count").value = count;
+  setValue($("aperture-kind"), kind);
+  if (count) setValue($("aperture-count"), count);
   $("aperture-count").disabled = kind === "circle";
 
   const sensor = $("sensor-depth");
   sensor.min = s.focus_range_mm[0];
   sensor.max = s.focus_range_mm[1];
-  sensor.value = s.sensor_depth_mm;
+  setValue(sensor, s.sensor_depth_mm);
   $("sensor-depth-value").textContent = `${s.sensor_depth_mm.toFixed(3)} mm`;
-  if (document.activeElement !== $("focus-distance")) {
-    $("focus-distance").value = s.focus_distance_m == null ? "" : s.focus_distance_m.toFixed(3);
-  }
-  $("max-spp").value = settings.max_spp;
+  setValue($("focus-distance"), s.focus_distance_m == null ? "" : s.focus_distance_m.toFixed(3));
+  setValue($("max-spp"), settings.max_spp);
   $("layout").src = `/api/layout.svg?generation=${s.generation}`;
   $("layout-caption").textContent = `sensor ${s.sensor_depth_mm.toFixed(3)} mm behind the stop`;
+}
+
+/** Shows a value in a control, unless the control has the focus: what is being typed or dragged wins. */
+function setValue(control, value) {
+  if (document.activeElement !== control) control.value = value;
 }
 
 function fillSelect(select, names, chosen) {
