@@ -57,18 +57,23 @@ struct Progress {
 }
 
 impl Progress {
+    /// Nothing done yet for `generation`.
+    fn new(generation: u64) -> Progress {
+        Progress {
+            generation,
+            state: None,
+            previewed: false,
+            shown: false,
+        }
+    }
+
     fn spp(&self) -> u32 {
         self.state.as_ref().map_or(0, Accumulation::spp_min)
     }
 }
 
 fn run(session: &Session) {
-    let mut progress = Progress {
-        generation: u64::MAX,
-        state: None,
-        previewed: false,
-        shown: false,
-    };
+    let mut progress = Progress::new(u64::MAX);
     loop {
         let (job, generation, changed_at) = {
             let mut state = session.lock();
@@ -78,12 +83,7 @@ fn run(session: &Session) {
                         break Job::Autofocus(request, state.view.clone());
                     }
                     if progress.generation != state.generation {
-                        progress = Progress {
-                            generation: state.generation,
-                            state: None,
-                            previewed: false,
-                            shown: false,
-                        };
+                        progress = Progress::new(state.generation);
                     }
                     if progress.spp() < state.view.settings.max_spp {
                         break Job::Render(state.view.clone());
