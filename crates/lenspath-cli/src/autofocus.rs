@@ -491,20 +491,12 @@ fn evaluate(args: &AutofocusArgs, measure: FocusMeasure) -> Result<Outcome> {
                 width: p[2],
                 height: p[3],
             };
-            let settings = AutofocusSettings {
-                camera: lens.clone(),
-                width,
-                height,
-                patch: patch.to_pixels(width, height),
-                measure,
+            let renders = PatchRenders {
                 spp: args.spp,
-                path: PathSettings {
-                    max_depth: args.max_depth,
-                    light_samples: 1,
-                },
+                max_depth: args.max_depth,
                 seed: args.seed,
-                threads: args.threads,
             };
+            let settings = patch_search(&lens, (width, height), patch, measure, renders, args.threads);
             let mut focuser = Focuser::new(&compiled, view.pose, settings.clone())?;
             let truth = match earlier_truths.as_ref().and_then(|t| t.get(&id, p, args.spp)) {
                 Some(truth) => truth,

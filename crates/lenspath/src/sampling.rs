@@ -33,20 +33,19 @@ pub enum SamplerKind {
 }
 
 impl SamplerKind {
+    /// Every kind.
+    pub const ALL: [SamplerKind; 2] = [SamplerKind::Sobol, SamplerKind::Independent];
+
     /// The names the CLI, scene files and Python use.
-    pub const NAMES: [&'static str; 2] = ["sobol", "independent"];
+    pub const NAMES: [&'static str; 2] = [SamplerKind::ALL[0].name(), SamplerKind::ALL[1].name()];
 
     /// The kind called `name` (see [`SamplerKind::NAMES`]).
     pub fn from_name(name: &str) -> Option<Self> {
-        match name {
-            "sobol" => Some(SamplerKind::Sobol),
-            "independent" => Some(SamplerKind::Independent),
-            _ => None,
-        }
+        SamplerKind::ALL.into_iter().find(|kind| kind.name() == name)
     }
 
     /// Its name (one of [`SamplerKind::NAMES`]).
-    pub fn name(self) -> &'static str {
+    pub const fn name(self) -> &'static str {
         match self {
             SamplerKind::Sobol => "sobol",
             SamplerKind::Independent => "independent",

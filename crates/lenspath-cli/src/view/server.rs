@@ -265,13 +265,13 @@ async fn client(mut socket: WebSocket, session: Arc<Session>) {
         .await
         .is_ok();
     if let (true, Some(frame)) = (ok, last_frame) {
-        ok = socket.send(Message::Binary(frame.jpeg.clone().into())).await.is_ok();
+        ok = socket.send(Message::Binary(frame.jpeg.clone())).await.is_ok();
     }
     while ok {
         tokio::select! {
             event = events.recv() => {
                 ok = match event {
-                    Ok(Event::Frame(jpeg)) => socket.send(Message::Binary(jpeg.to_vec().into())).await.is_ok(),
+                    Ok(Event::Frame(jpeg)) => socket.send(Message::Binary(jpeg)).await.is_ok(),
                     Ok(Event::Message(text)) => socket.send(Message::Text(text.as_str().into())).await.is_ok(),
                     // A slow page skips what it missed; the next frame catches it up.
                     Err(RecvError::Lagged(_)) => true,

@@ -8,6 +8,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::Instant;
 
+use axum::body::Bytes;
 use glam::Vec3;
 use lenspath::camera::{ApertureShape, CameraPose, LensFocus, RealisticCamera, RealisticCameraSettings};
 use lenspath::film::{Filter, Image};
@@ -129,8 +130,8 @@ pub struct Frame {
     pub generation: u64,
     /// The image.
     pub image: Image,
-    /// Its JPEG, what the page shows.
-    pub jpeg: Vec<u8>,
+    /// Its JPEG, what the page shows (shared, not copied, with every page).
+    pub jpeg: Bytes,
     /// The view it was rendered with.
     pub view: Arc<View>,
 }
@@ -139,7 +140,7 @@ pub struct Frame {
 #[derive(Clone)]
 pub enum Event {
     /// A JPEG frame (a binary WebSocket message).
-    Frame(Arc<Vec<u8>>),
+    Frame(Bytes),
     /// A JSON message (a text WebSocket message).
     Message(Arc<String>),
 }
@@ -573,10 +574,7 @@ impl Config {
         )?;
         let diagonal_mm = lens_settings.sensor_mm.0.hypot(lens_settings.sensor_mm.1);
         let layout = lenspath::lens::plot::layout_focused(system, &analysis, diagonal_mm, sensor_depth_mm);
-        let wide_open = LensAnalysis::new(
-            &lenspath::lens::LensSystem::new(&lens_settings.lens),
-            &AnalysisSettings::default(),
-        )?;
+        let wide_open = lenspath::lens::LensSystem::new(&lens_settings.lens).paraxial()?;
         Ok(View {
             focus_distance_m: system
                 .focus_distance_mm(sensor_depth_mm, analysis.ray_height_mm)

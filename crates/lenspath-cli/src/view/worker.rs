@@ -11,6 +11,7 @@ use std::sync::atomic::Ordering;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+use axum::body::Bytes;
 use lenspath::autofocus::{FocusMeasure, Focuser, Strategy};
 use lenspath::io::image::encode_jpeg;
 use lenspath::render::{render, render_from, Accumulation, Checkpoints, NormalizedRect};
@@ -151,7 +152,7 @@ fn step(session: &Session, progress: &mut Progress, view: &Arc<View>, changed_at
     if output.stats.cancelled {
         return Ok(());
     }
-    let jpeg = encode_jpeg(&output.image, 0.0)?;
+    let jpeg = Bytes::from(encode_jpeg(&output.image, 0.0)?);
     let frame = Arc::new(Frame {
         generation: progress.generation,
         image: output.image,
@@ -179,7 +180,7 @@ fn step(session: &Session, progress: &mut Progress, view: &Arc<View>, changed_at
         "full_latency_ms": full_latency_ms,
         "sensor_depth_mm": view.sensor_depth_mm,
     }));
-    let _ = session.events.send(Event::Frame(Arc::new(frame.jpeg.clone())));
+    let _ = session.events.send(Event::Frame(frame.jpeg.clone()));
     Ok(())
 }
 
@@ -208,7 +209,7 @@ fn preview(session: &Session, generation: u64, view: &View, changed_at: Instant)
         "latency_ms": changed_at.elapsed().as_secs_f64() * 1e3,
         "sensor_depth_mm": view.sensor_depth_mm,
     }));
-    let _ = session.events.send(Event::Frame(Arc::new(jpeg)));
+    let _ = session.events.send(Event::Frame(jpeg.into()));
     Ok(true)
 }
 

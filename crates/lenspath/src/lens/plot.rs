@@ -54,17 +54,11 @@ pub fn layout(system: &LensSystem, analysis: &LensAnalysis, sensor_diagonal_mm: 
     layout_focused(system, analysis, sensor_diagonal_mm, analysis.infinity_focus_mm)
 }
 
-/// [`layout`] with the sensor `sensor_z_mm` behind the stop (where it is
+/// [`layout`] with the sensor `sensor_z` mm behind the stop (where it is
 /// focused now): the rays from infinity meet it blurred unless it is at the
 /// infinity focus.
-pub fn layout_focused(
-    system: &LensSystem,
-    analysis: &LensAnalysis,
-    sensor_diagonal_mm: f64,
-    sensor_z_mm: f64,
-) -> Layout {
+pub fn layout_focused(system: &LensSystem, analysis: &LensAnalysis, sensor_diagonal_mm: f64, sensor_z: f64) -> Layout {
     let surfaces: Vec<(f64, f64, f64, f64)> = system.surface_layout().collect();
-    let sensor_z = sensor_z_mm;
     let largest_aperture = surfaces.iter().map(|s| s.2).fold(0.0, f64::max);
 
     // Elements: each glass gap between two surfaces.
