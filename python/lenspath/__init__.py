@@ -31,6 +31,7 @@ from ._core import (
     bokeh,
     builtin_lenses,
     builtin_scenes,
+    defaults,
     focus_measure,
     focus_measures,
     lens_blur,
@@ -53,6 +54,7 @@ __all__ = [
     "bokeh",
     "builtin_lenses",
     "builtin_scenes",
+    "defaults",
     "focus_measure",
     "focus_measures",
     "lens_blur",
@@ -99,11 +101,11 @@ def render(
     scene: Scene | str | os.PathLike[str],
     camera: Camera | None = None,
     *,
-    spp: int = 64,
+    spp: int | None = None,
     resolution: tuple[int, int] | None = None,
-    seed: int = 0,
-    max_depth: int = 16,
-    light_samples: int = 1,
+    seed: int | None = None,
+    max_depth: int | None = None,
+    light_samples: int | None = None,
     threads: int | None = None,
     aovs: None = None,
     crop: tuple[int, int, int, int] | None = None,
@@ -115,11 +117,11 @@ def render(
     scene: Scene | str | os.PathLike[str],
     camera: Camera | None = None,
     *,
-    spp: int = 64,
+    spp: int | None = None,
     resolution: tuple[int, int] | None = None,
-    seed: int = 0,
-    max_depth: int = 16,
-    light_samples: int = 1,
+    seed: int | None = None,
+    max_depth: int | None = None,
+    light_samples: int | None = None,
     threads: int | None = None,
     aovs: Sequence[str],
     crop: tuple[int, int, int, int] | None = None,
@@ -130,11 +132,11 @@ def render(
     scene: Scene | str | os.PathLike[str],
     camera: Camera | None = None,
     *,
-    spp: int = 64,
+    spp: int | None = None,
     resolution: tuple[int, int] | None = None,
-    seed: int = 0,
-    max_depth: int = 16,
-    light_samples: int = 1,
+    seed: int | None = None,
+    max_depth: int | None = None,
+    light_samples: int | None = None,
     threads: int | None = None,
     aovs: Sequence[str] | None = None,
     crop: tuple[int, int, int, int] | None = None,
@@ -146,8 +148,11 @@ def render(
     ``scene`` is a :class:`Scene`, a built-in scene name (``"cornell-spheres"``)
     or a scene file path. ``camera=None`` uses the realistic camera with the
     scene's own settings, exactly as ``lenspath render`` does, so the same
-    settings and seed give the CLI's image bit for bit. ``resolution`` is
-    (width, height), default the scene file's, else (640, 480). With
+    settings and seed give the CLI's image bit for bit. Every setting left
+    out (None) is the scene file's, else the library's default (``spp`` 64,
+    ``max_depth`` 16, ``light_samples`` 1, ``seed`` 0, ``resolution``
+    (640, 480): ``lenspath.defaults()``); the library resolves them, as for
+    the CLI. ``resolution`` is (width, height). With
     ``aovs=["depth"]`` the result is a dict with ``"rgb"`` and ``"depth"``
     (distance along the view axis, inf where nothing is hit). ``crop=(x, y,
     width, height)`` renders only that rectangle of pixels, each exactly as in
@@ -195,13 +200,13 @@ def autofocus(
     patch: tuple[float, float, float, float],
     camera: Camera | None = None,
     *,
-    metric: str = "tenengrad",
-    strategy: str = "fast",
-    patience: int = 12,
-    spp: int = 16,
+    metric: str | None = None,
+    strategy: str | None = None,
+    patience: int | None = None,
+    spp: int | None = None,
     resolution: tuple[int, int] | None = None,
-    seed: int = 0,
-    max_depth: int = 8,
+    seed: int | None = None,
+    max_depth: int | None = None,
     threads: int | None = None,
 ) -> AutofocusResult:
     """Focuses a realistic camera on ``patch`` (x, y, width, height as fractions of the
@@ -215,7 +220,10 @@ def autofocus(
     "depth" (range finder, then a short contrast refinement);
     ``metric`` one of ``focus_measures()``. ``result.camera`` is the camera
     focused there, ready for :func:`render`; ``lenspath.plot.focus_curve(result)``
-    draws the search.
+    draws the search. Settings left out (None) are the library's defaults for
+    patch renders (``metric`` "tenengrad", ``strategy`` "fast", ``patience`` 12,
+    ``spp`` 16, ``max_depth`` 8, ``seed`` 0: ``lenspath.defaults()``), and
+    ``resolution`` is the scene file's, else (640, 480).
     """
     x, y, width, height = patch
     return _core.autofocus(

@@ -238,19 +238,21 @@ class Camera:
         """An ideal pinhole; ``fov_deg`` (vertical) defaults to the scene's."""
     @staticmethod
     def thin_lens(
-        aperture_radius: float,
+        aperture_radius: float | None = None,
         focus_distance: float | None = None,
         fov_deg: float | None = None,
         aperture: str | npt.ArrayLike | None = None,
     ) -> Camera:
-        """An ideal thin lens of ``aperture_radius`` (scene units) focused at ``focus_distance``
-        (default: the scene's subject); ``aperture`` a shape: "circle", "blades:N[:ROT[:CURV]]",
-        "star:N[:INNER[:ROT]]", or a 2-D array of transmissions over the stop's bounding square."""
+        """An ideal thin lens of ``aperture_radius`` (scene units; default 0.05) focused at
+        ``focus_distance`` (default: the scene's subject); ``aperture`` a shape (default: the
+        scene file's, else "circle"): "circle", "blades:N[:ROT[:CURV]]", "star:N[:INNER[:ROT]]",
+        or a 2-D array of transmissions over the stop's bounding square."""
     @staticmethod
     def realistic(
         lens: Lens | str | None = None,
         *,
         focus_distance: float | None = None,
+        sensor_depth_mm: float | None = None,
         sensor_mm: float | None = None,
         f_number: float | None = None,
         sensor_width_mm: float | None = None,
@@ -258,8 +260,8 @@ class Camera:
         scene_unit_m: float | None = None,
     ) -> Camera:
         """A real lens (default: the scene file's, else dgauss50) focused at ``focus_distance``
-        (scene units from the sensor) or with the sensor ``sensor_mm`` behind the stop (not
-        both), stopped down to ``f_number``, a ``sensor_width_mm`` wide sensor (default 36;
+        (scene units from the sensor) or with the sensor ``sensor_depth_mm`` behind the stop
+        (not both; ``sensor_mm`` is its deprecated old name), stopped down to ``f_number``, a ``sensor_width_mm`` wide sensor (default 36;
         its height follows the image), an ``aperture`` shape, ``scene_unit_m`` metres per unit."""
 
 @overload
@@ -267,11 +269,11 @@ def render(
     scene: Scene,
     camera: Camera | None = None,
     *,
-    spp: int = 64,
+    spp: int | None = None,
     resolution: tuple[int, int] | None = None,
-    seed: int = 0,
-    max_depth: int = 16,
-    light_samples: int = 1,
+    seed: int | None = None,
+    max_depth: int | None = None,
+    light_samples: int | None = None,
     threads: int | None = None,
     aovs: None = None,
     crop: tuple[int, int, int, int] | None = None,
@@ -283,17 +285,22 @@ def render(
     scene: Scene,
     camera: Camera | None = None,
     *,
-    spp: int = 64,
+    spp: int | None = None,
     resolution: tuple[int, int] | None = None,
-    seed: int = 0,
-    max_depth: int = 16,
-    light_samples: int = 1,
+    seed: int | None = None,
+    max_depth: int | None = None,
+    light_samples: int | None = None,
     threads: int | None = None,
     aovs: list[str],
     crop: tuple[int, int, int, int] | None = None,
     progress: Callable[[int, int], Any] | None = None,
     sampler: Literal["sobol", "independent"] | None = None,
 ) -> dict[str, npt.NDArray[np.float32]]: ...
+def defaults() -> dict[str, Any]:
+    """The library's defaults: what a setting left out of ``render`` or ``autofocus`` becomes
+    when the scene file does not give it (resolution, spp, max_depth, light_samples, seed,
+    sampler, scene_unit_m, lens, sensor_width_mm, thin_lens_aperture_radius, autofocus_*)."""
+
 def read(path: str | PathLike[str]) -> npt.NDArray[np.float32]:
     """Reads a PNG, JPEG (decoded from sRGB) or EXR image as linear RGB (H, W, 3)."""
 
@@ -363,13 +370,13 @@ def autofocus(
     patch: tuple[float, float, float, float],
     camera: Camera | None = None,
     *,
-    metric: str = "tenengrad",
-    strategy: str = "fast",
-    patience: int = 12,
-    spp: int = 16,
+    metric: str | None = None,
+    strategy: str | None = None,
+    patience: int | None = None,
+    spp: int | None = None,
     resolution: tuple[int, int] | None = None,
-    seed: int = 0,
-    max_depth: int = 8,
+    seed: int | None = None,
+    max_depth: int | None = None,
     threads: int | None = None,
 ) -> AutofocusResult:
     """Focuses a realistic camera on ``patch`` (x, y, width, height in fractions of the image)

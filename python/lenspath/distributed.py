@@ -174,8 +174,9 @@ def _render_tile(
 
 
 def _image_size(ref: _SceneRef) -> tuple[int, int]:
-    """The image size of a job that gives none: the scene file's, else 640 × 480."""
-    return _worker_scene(ref).resolution or (640, 480)
+    """The image size of a job that gives none: the scene file's, else the library's default."""
+    resolution: tuple[int, int] = _worker_scene(ref).resolution or _core.defaults()["resolution"]
+    return resolution
 
 
 def _tiles(width: int, height: int, tile_size: int | None) -> list[tuple[int, int, int, int]]:
@@ -288,11 +289,11 @@ def render(
     camera: Camera | None = None,
     *,
     client: Client,
-    spp: int = 64,
+    spp: int | None = None,
     resolution: tuple[int, int] | None = None,
-    seed: int = 0,
-    max_depth: int = 16,
-    light_samples: int = 1,
+    seed: int | None = None,
+    max_depth: int | None = None,
+    light_samples: int | None = None,
     threads: int | None = None,
     aovs: Sequence[str] | None = None,
     sampler: Literal["sobol", "independent"] | None = None,
@@ -303,7 +304,8 @@ def render(
 
     Takes the same arguments (``scene`` a built-in name, a scene file path every
     worker can read, or a ``Scene`` loaded from one) and returns the same image,
-    bit for bit. ``threads`` is per tile (default: a worker's cores over its
+    bit for bit (a setting left out is the scene file's, else the library's
+    default, as there). ``threads`` is per tile (default: a worker's cores over its
     Dask threads). ``progress``: True for a tqdm bar over tiles, or a callable
     ``(tiles_done, tiles_total)``.
     """

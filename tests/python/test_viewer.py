@@ -47,9 +47,9 @@ def find_chromium() -> str:
 class Viewer:
     """A running `lenspath view` and its URL."""
 
-    def __init__(self, cli: Path, *args: str) -> None:
+    def __init__(self, cli: Path, *args: str, resolution: tuple[int, int] = RESOLUTION) -> None:
         self.process = subprocess.Popen(
-            [str(cli), "view", "--port", "0", "--res", f"{RESOLUTION[0]}x{RESOLUTION[1]}", *args],
+            [str(cli), "view", "--port", "0", "--res", f"{resolution[0]}x{resolution[1]}", *args],
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
             text=True,

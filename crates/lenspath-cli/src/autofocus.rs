@@ -7,24 +7,20 @@ use std::sync::atomic::AtomicBool;
 use clap::Args;
 use lenspath::accel::BvhSettings;
 use lenspath::autofocus::plot::{focus_curve_svg, Series};
-use lenspath::autofocus::{
-    AutofocusResult, AutofocusSettings, FocusMeasure, Focuser, GroundTruth, Strategy, STRATEGIES,
-};
-use lenspath::camera::{CameraPose, LensFocus, RealisticCamera, RealisticCameraSettings};
-use lenspath::integrator::PathSettings;
+use lenspath::autofocus::{AutofocusResult, AutofocusSettings, Focuser, GroundTruth, Strategy, STRATEGIES};
+use lenspath::camera::{LensFocus, RealisticCamera, RealisticCameraSettings};
+use lenspath::defaults;
+use lenspath::film::NormalizedRect;
 use lenspath::io::image::{check_output_path, write_image};
 use lenspath::io::{check_writable, write_text};
 use lenspath::lens::LensPrescription;
-use lenspath::render::{render, NormalizedRect, RenderSettings, DEFAULT_IMAGE_SIZE};
-use lenspath::scene::CompiledScene;
+use lenspath::render::{render, RenderSettings};
+use lenspath::setup::{autofocus_setup, realistic_settings, resolve_autofocus, AutofocusOverrides};
 use lenspath::{Error, Result};
 use serde_json::json;
 
-use crate::render::{parse_patch, parse_resolution, LensFlags, Resolution, SceneArgs};
+use crate::flags::{parse_patch, parse_resolution, LensFlags, Resolution, SceneArgs};
 use crate::Outcome;
-
-/// Samples per pixel of the patch renders of `render --autofocus`.
-const RENDER_AUTOFOCUS_SPP: u32 = 16;
 
 /// Options of `lenspath autofocus`.
 #[derive(Args, Debug)]
@@ -38,25 +34,25 @@ pub struct AutofocusArgs {
     #[arg(long, value_name = "X,Y,W,H", value_parser = parse_patch, required_unless_present = "evaluate")]
     patch: Option<NormalizedRect>,
     /// Focus measure: variance, normalized-variance, sml, tenengrad, brenner, laplacian-energy, vollath.
-    #[arg(long, default_value = "tenengrad")]
+    #[arg(long, default_value = defaults::AUTOFOCUS_METRIC)]
     metric: String,
     /// Search: sweep, early-exit, fast, rangefinder (probe rays and the lens model) or depth (range finder, then a short contrast refinement).
-    #[arg(long, default_value = "fast")]
+    #[arg(long, default_value = defaults::AUTOFOCUS_STRATEGY)]
     strategy: String,
     /// early-exit: stop after this many steps without a new best.
-    #[arg(long, default_value_t = DEFAULT_PATIENCE)]
+    #[arg(long, default_value_t = defaults::AUTOFOCUS_PATIENCE)]
     patience: usize,
     /// Samples per pixel of each patch render.
-    #[arg(long, default_value_t = PATCH_SPP)]
+    #[arg(long, default_value_t = defaults::AUTOFOCUS_PATCH_SPP)]
     spp: u32,
     /// Image size, WIDTHxHEIGHT [default: the scene file's, else 640x480].
     #[arg(long, value_parser = parse_resolution)]
     res: Option<Resolution>,
     /// Maximum path depth of the patch renders.
-    #[arg(long, default_value_t = PATCH_MAX_DEPTH)]
+    #[arg(long, default_value_t = defaults::AUTOFOCUS_PATCH_MAX_DEPTH)]
     max_depth: u32,
     /// Seed of the patch renders.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = defaults::AUTOFOCUS_SEED)]
     seed: u32,
     /// Worker threads (default: all cores).
     #[arg(long)]
@@ -71,7 +67,7 @@ pub struct AutofocusArgs {
     #[arg(long, value_name = "FILE")]
     render: Option<PathBuf>,
     /// Samples per pixel of --render.
-    #[arg(long, default_value_t = 64)]
+    #[arg(long, default_value_t = defaults::SPP)]
     render_spp: u32,
     /// Run every strategy against ground truth on the evaluation patches (docs/autofocus.md).
     #[arg(long, conflicts_with_all = ["patch", "file", "plot", "render"])]
@@ -100,91 +96,8 @@ pub struct AutofocusArgs {
     truths: Option<PathBuf>,
 }
 
-/// `--patience`'s default.
-pub const DEFAULT_PATIENCE: usize = 12;
-/// `--spp`'s default: samples per pixel of a patch render.
-pub const PATCH_SPP: u32 = 16;
-/// `--max-depth`'s default: path depth of the patch renders.
-pub const PATCH_MAX_DEPTH: u32 = 8;
-
-/// How the patch renders of a search are made.
-#[derive(Clone, Copy, Debug)]
-pub struct PatchRenders {
-    /// Samples per pixel.
-    pub spp: u32,
-    /// Maximum path depth.
-    pub max_depth: u32,
-    /// Seed.
-    pub seed: u32,
-}
-
-impl Default for PatchRenders {
-    /// `lenspath autofocus`'s defaults.
-    fn default() -> Self {
-        PatchRenders {
-            spp: PATCH_SPP,
-            max_depth: PATCH_MAX_DEPTH,
-            seed: 0,
-        }
-    }
-}
-
-/// The search of `patch` of a `width` × `height` image through `camera`, as
-/// `lenspath autofocus` runs it (one shadow ray per light); `lenspath view`
-/// runs the same, so that a click and the command give the same answer.
-pub fn patch_search(
-    camera: &RealisticCameraSettings,
-    (width, height): (u32, u32),
-    patch: NormalizedRect,
-    measure: FocusMeasure,
-    renders: PatchRenders,
-    threads: Option<usize>,
-) -> AutofocusSettings {
-    AutofocusSettings {
-        camera: camera.clone(),
-        width,
-        height,
-        patch: patch.to_pixels(width, height),
-        measure,
-        spp: renders.spp,
-        path: PathSettings {
-            max_depth: renders.max_depth,
-            light_samples: 1,
-        },
-        seed: renders.seed,
-        threads,
-    }
-}
-
-/// Focuses `lens` on `patch` with the fast strategy before a render, saying what it found on stderr.
-pub fn focus_before_render(
-    scene: &CompiledScene,
-    pose: CameraPose,
-    lens: &RealisticCameraSettings,
-    render_settings: &RenderSettings,
-    patch: NormalizedRect,
-) -> Result<f64> {
-    let renders = PatchRenders {
-        spp: RENDER_AUTOFOCUS_SPP,
-        max_depth: render_settings.path.max_depth.min(PATCH_MAX_DEPTH),
-        seed: render_settings.seed,
-    };
-    let settings = patch_search(
-        lens,
-        (render_settings.width, render_settings.height),
-        patch,
-        FocusMeasure::Tenengrad,
-        renders,
-        render_settings.threads,
-    );
-    let mut focuser = Focuser::new(scene, pose, settings)?;
-    let result = focuser.run(Strategy::Fast)?;
-    eprintln!("{}", summary_line(&result, "tenengrad", lens.scene_unit_m));
-    Ok(result.sensor_z_mm)
-}
-
 /// "autofocus (fast, sml): sensor 52.634 mm behind the stop, in focus at 3.412 m; 21 patch renders, ..."
-fn summary_line(r: &AutofocusResult, metric: &str, scene_unit_m: f64) -> String {
+pub fn summary_line(r: &AutofocusResult, metric: &str, scene_unit_m: f64) -> String {
     let distance = match r.focus_distance {
         Some(d) => format!(
             "in focus at {:.3} m ({d:.4} scene units) from the sensor",
@@ -205,8 +118,6 @@ fn summary_line(r: &AutofocusResult, metric: &str, scene_unit_m: f64) -> String 
 
 /// Runs `lenspath autofocus`.
 pub fn run(args: AutofocusArgs) -> Result<Outcome> {
-    let measure = FocusMeasure::from_name(&args.metric)?;
-    let strategy = Strategy::from_name(&args.strategy, args.patience)?;
     if let Some(path) = &args.render {
         check_output_path(path)?;
     }
@@ -214,27 +125,19 @@ pub fn run(args: AutofocusArgs) -> Result<Outcome> {
         check_writable(path)?;
     }
     if args.evaluate {
-        return evaluate(&args, measure);
+        return evaluate(&args);
     }
     let (_, scene, options) = args.scene.load()?;
-    let (width, height) = args
-        .res
-        .map(|r| (r.width, r.height))
-        .or(options.resolution)
-        .unwrap_or(DEFAULT_IMAGE_SIZE);
     let view = scene
         .view
         .ok_or_else(|| Error::InvalidArgument("the scene has no camera".into()))?;
-    let lens = args.lens.settings(&options, &view, width, height)?;
-    let compiled = scene.compile(&BvhSettings::default())?;
     let patch = args.patch.expect("clap requires --patch without --evaluate");
-    let renders = PatchRenders {
-        spp: args.spp,
-        max_depth: args.max_depth,
-        seed: args.seed,
-    };
-    let settings = patch_search(&lens, (width, height), patch, measure, renders, args.threads);
-    let mut focuser = Focuser::new(&compiled, view.pose, settings)?;
+    let search = resolve_autofocus(&options, &view, patch, &overrides(&args, args.res)?)?;
+    let compiled = scene.compile(&BvhSettings::default())?;
+    let (width, height) = (search.settings.width, search.settings.height);
+    let lens = search.settings.camera.clone();
+    let strategy = search.strategy;
+    let mut focuser = Focuser::new(&compiled, view.pose, search.settings)?;
     let result = focuser.run(strategy)?;
     if args.json {
         let out = json!({
@@ -305,6 +208,22 @@ pub fn run(args: AutofocusArgs) -> Result<Outcome> {
         eprintln!("rendered {}x{} focused there -> {}", width, height, path.display());
     }
     Ok(Outcome::Done)
+}
+
+/// The search the flags ask for, of an image `resolution` pixels (`None`:
+/// the scene file's, else the default).
+fn overrides(args: &AutofocusArgs, resolution: Option<Resolution>) -> Result<AutofocusOverrides> {
+    Ok(AutofocusOverrides {
+        resolution: resolution.map(|r| (r.width, r.height)),
+        spp: Some(args.spp),
+        max_depth: Some(args.max_depth),
+        seed: Some(args.seed),
+        threads: args.threads,
+        metric: Some(args.metric.clone()),
+        strategy: Some(args.strategy.clone()),
+        patience: Some(args.patience),
+        camera: args.lens.description()?,
+    })
 }
 
 fn patch_label(p: &NormalizedRect) -> String {
@@ -432,8 +351,8 @@ fn repo_root() -> PathBuf {
 }
 
 /// Every strategy on every evaluation patch, against ground truth.
-fn evaluate(args: &AutofocusArgs, measure: FocusMeasure) -> Result<Outcome> {
-    let (width, height) = args.res.map_or(DEFAULT_IMAGE_SIZE, |r| (r.width, r.height));
+fn evaluate(args: &AutofocusArgs) -> Result<Outcome> {
+    let (width, height) = args.res.map_or(defaults::IMAGE_SIZE, |r| (r.width, r.height));
     let earlier_truths = args
         .truths
         .as_deref()
@@ -472,7 +391,7 @@ fn evaluate(args: &AutofocusArgs, measure: FocusMeasure) -> Result<Outcome> {
         let (_, scene, options) = scene_args.load()?;
         let view = scene.view.ok_or_else(|| Error::InvalidArgument("no camera".into()))?;
         // dgauss50 wide open (f/2) unless the flags say otherwise, whatever the scene file's lens.
-        let mut lens = args.lens.settings(&options, &view, width, height)?;
+        let mut lens = realistic_settings(&options, &view, &args.lens.description()?, width, height)?;
         if args.lens.lens.is_none() {
             lens.lens = LensPrescription::load(EVALUATION_LENS)?;
         }
@@ -491,12 +410,8 @@ fn evaluate(args: &AutofocusArgs, measure: FocusMeasure) -> Result<Outcome> {
                 width: p[2],
                 height: p[3],
             };
-            let renders = PatchRenders {
-                spp: args.spp,
-                max_depth: args.max_depth,
-                seed: args.seed,
-            };
-            let settings = patch_search(&lens, (width, height), patch, measure, renders, args.threads);
+            let settings =
+                autofocus_setup(lens.clone(), (width, height), patch, &overrides(args, None)?, view.pose)?.settings;
             let mut focuser = Focuser::new(&compiled, view.pose, settings.clone())?;
             let truth = match earlier_truths.as_ref().and_then(|t| t.get(&id, p, args.spp)) {
                 Some(truth) => truth,

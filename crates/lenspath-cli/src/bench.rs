@@ -140,7 +140,7 @@ pub fn run_bvh(args: BvhArgs) -> Result<Outcome> {
     let stats = *bvh.stats();
     let bounds = bvh.bounds();
     let (lo, hi) = (Vec3::from(bounds.min), Vec3::from(bounds.max));
-    let pool = lenspath::render::worker_pool(args.threads)?;
+    let pool = lenspath::parallel::worker_pool(args.threads)?;
     let coherent = coherent_rays(lo, hi, args.rays);
     let incoherent = incoherent_rays(lo, hi, args.rays);
     let (coherent_mrays, coherent_hits) = trace(&bvh, &coherent, &pool);

@@ -11,7 +11,7 @@ use lenspath::lens::plot::layout_svg;
 use lenspath::lens::{AnalysisSettings, LensAnalysis, LensPrescription, LensSystem};
 use lenspath::{Error, Result};
 
-use crate::render::{parse_sensor, SensorSize};
+use crate::flags::{parse_sensor, SensorSize};
 use crate::Outcome;
 
 /// Options of `lenspath lens`.

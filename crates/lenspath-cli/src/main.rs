@@ -6,6 +6,7 @@
 mod autofocus;
 mod bench;
 mod bokeh;
+mod flags;
 mod info;
 mod lens;
 mod progress;

@@ -123,7 +123,7 @@ fn bad_input_gives_one_error_line_and_exit_code_2() {
         ),
         (
             vec!["render", "--camera", "pinhole", "--fov", "200", "--out", ok],
-            "--fov",
+            "field of view must be between 0 and 180",
         ),
         (
             vec!["render", "--fov", "40", "--out", ok],

@@ -14,15 +14,12 @@ use std::time::Duration;
 
 use glam::{DVec3, Vec3};
 use lenspath::accel::BvhSettings;
-use lenspath::autofocus::{AutofocusSettings, FocusMeasure, Focuser, Patch, Strategy};
+use lenspath::autofocus::{FocusMeasure, Focuser, Patch};
 use lenspath::bokeh::{convolve_rgb, depth_blur, CircleOfConfusion, Edges, Kernel, KernelSize, Method};
 use lenspath::builtin::{builtin_scene, BUILTIN_SCENES, DEFAULT_MESH_TRIANGLES};
-use lenspath::camera::{
-    Aperture, ApertureShape, Camera as CameraTrait, CameraPose, LensFocus, PerspectiveCamera, RealisticCamera,
-    RealisticCameraSettings,
-};
-use lenspath::film::{Filter, Image};
-use lenspath::integrator::PathSettings;
+use lenspath::camera::{Aperture, ApertureShape, Camera as CameraTrait, CameraPose, LensFocus};
+use lenspath::film::Image;
+use lenspath::film::{NormalizedRect, PixelRect};
 use lenspath::io::image::{read_image, write_image};
 use lenspath::io::{load_scene, SceneOptions};
 use lenspath::lens::{
@@ -31,9 +28,13 @@ use lenspath::lens::{
 };
 use lenspath::lights::Light;
 use lenspath::materials::Material;
-use lenspath::render::{render as render_scene, NormalizedRect, PixelRect, RenderSettings, DEFAULT_IMAGE_SIZE};
+use lenspath::render::render as render_scene;
 use lenspath::sampling::SamplerKind;
 use lenspath::scene::{CompiledScene, Scene as CoreScene, SceneView};
+use lenspath::setup::{
+    resolve, resolve_autofocus, AutofocusOverrides, CameraDescription, RealisticDescription, RenderOverrides,
+    RenderSetup,
+};
 use lenspath::shapes::{Sphere, TriangleMesh};
 use lenspath::Error;
 use numpy::ndarray::{Array2, Array3};
@@ -440,11 +441,6 @@ impl Scene {
             .view
             .ok_or_else(|| value_error(format!("scene '{}' has no view; call look_at first", self.name)))
     }
-
-    /// The image size: `resolution` if given, else the scene file's, else the default.
-    fn image_size(&self, resolution: Option<(u32, u32)>) -> (u32, u32) {
-        resolution.or(self.options.resolution).unwrap_or(DEFAULT_IMAGE_SIZE)
-    }
 }
 
 /// Loads a scene file (COLLADA, OBJ, PLY, glTF or lenspath TOML) by extension.
@@ -458,6 +454,31 @@ fn load(py: Python<'_>, path: PathBuf) -> PyResult<Scene> {
         origin: SceneOrigin::File(path),
         compiled: OnceLock::new(),
     })
+}
+
+/// The library's defaults ([`lenspath::defaults`]): what a setting left out
+/// of a render or an autofocus becomes when the scene file does not give it.
+#[pyfunction]
+fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    use lenspath::defaults as d;
+    let out = PyDict::new(py);
+    out.set_item("resolution", d::IMAGE_SIZE)?;
+    out.set_item("spp", d::SPP)?;
+    out.set_item("max_depth", d::MAX_DEPTH)?;
+    out.set_item("light_samples", d::LIGHT_SAMPLES)?;
+    out.set_item("seed", d::SEED)?;
+    out.set_item("sampler", d::SAMPLER.name())?;
+    out.set_item("scene_unit_m", d::SCENE_UNIT_M)?;
+    out.set_item("lens", d::LENS)?;
+    out.set_item("sensor_width_mm", d::SENSOR_WIDTH_MM)?;
+    out.set_item("thin_lens_aperture_radius", d::THIN_LENS_APERTURE_RADIUS)?;
+    out.set_item("autofocus_spp", d::AUTOFOCUS_PATCH_SPP)?;
+    out.set_item("autofocus_max_depth", d::AUTOFOCUS_PATCH_MAX_DEPTH)?;
+    out.set_item("autofocus_seed", d::AUTOFOCUS_SEED)?;
+    out.set_item("autofocus_patience", d::AUTOFOCUS_PATIENCE)?;
+    out.set_item("autofocus_metric", d::AUTOFOCUS_METRIC)?;
+    out.set_item("autofocus_strategy", d::AUTOFOCUS_STRATEGY)?;
+    Ok(out)
 }
 
 /// The built-in scenes' names.
@@ -796,50 +817,13 @@ fn builtin_lenses() -> Vec<&'static str> {
 // ---------------------------------------------------------------------------
 // Cameras
 
-/// How to build the camera of a render.
-#[derive(Clone)]
-enum CameraSpec {
-    Pinhole {
-        fov_deg: Option<f32>,
-    },
-    ThinLens {
-        fov_deg: Option<f32>,
-        aperture_radius: f32,
-        focus_distance: Option<f32>,
-        aperture: ApertureShape,
-    },
-    Realistic {
-        lens: Option<Box<Lens>>,
-        focus_distance: Option<f64>,
-        sensor_mm: Option<f64>,
-        sensor_width_mm: Option<f64>,
-        f_number: Option<f64>,
-        aperture: Option<ApertureShape>,
-        scene_unit_m: Option<f64>,
-    },
-}
-
-impl CameraSpec {
-    /// The realistic camera with the scene's own settings, as `lenspath render` uses.
-    fn scene_default() -> CameraSpec {
-        CameraSpec::Realistic {
-            lens: None,
-            focus_distance: None,
-            sensor_mm: None,
-            sensor_width_mm: None,
-            f_number: None,
-            aperture: None,
-            scene_unit_m: None,
-        }
-    }
-}
-
 /// A camera for `render`: `Camera.pinhole(...)`, `Camera.thin_lens(...)` or
-/// `Camera.realistic(...)`; what it leaves unset comes from the scene.
+/// `Camera.realistic(...)`; what it leaves unset comes from the scene (the
+/// library resolves it: [`lenspath::setup::resolve_camera`]).
 #[pyclass(module = "lenspath._core")]
 #[derive(Clone)]
 struct Camera {
-    spec: CameraSpec,
+    description: CameraDescription,
     /// The camera last built from it, and for what (scene view and options,
     /// image size): a realistic camera's exit-pupil tables take a tenth of a
     /// second, which repeated renders (tiles, patches) need not pay again.
@@ -850,25 +834,35 @@ struct Camera {
 type BuiltCamera = (String, Arc<dyn CameraTrait>);
 
 impl Camera {
-    fn new(spec: CameraSpec) -> Camera {
+    fn new(description: CameraDescription) -> Camera {
         Camera {
-            spec,
+            description,
             built: Arc::default(),
         }
     }
 
-    /// The camera for `scene` at `width` × `height`, built once per scene view and size.
-    fn built_for(&self, scene: &Scene, width: u32, height: u32) -> PyResult<Arc<dyn CameraTrait>> {
-        let key = format!("{:?} {:?} {width}x{height}", scene.scene.view, scene.options);
+    /// The camera of `setup` (resolved from this camera's description), built
+    /// once per resolved settings, pose and image size.
+    fn built_for(&self, setup: &RenderSetup) -> PyResult<Arc<dyn CameraTrait>> {
+        let s = &setup.settings;
+        let key = format!("{:?} {:?} {}x{}", setup.camera, setup.pose, s.width, s.height);
         let mut built = self.built.lock().unwrap_or_else(|p| p.into_inner());
         if let Some((k, camera)) = built.as_ref() {
             if *k == key {
                 return Ok(camera.clone());
             }
         }
-        let camera: Arc<dyn CameraTrait> = Arc::from(build_camera(scene, Some(&self.spec), width, height)?);
+        let camera = setup.build_camera().map_err(|e| to_py(e, FileKind::Lens))?;
         *built = Some((key, camera.clone()));
         Ok(camera)
+    }
+
+    /// The realistic camera's description, or the error other cameras get where one is needed.
+    fn realistic_description(&self) -> PyResult<&RealisticDescription> {
+        match &self.description {
+            CameraDescription::Realistic(r) => Ok(r),
+            _ => Err(value_error("this needs a realistic camera (Camera.realistic)")),
+        }
     }
 }
 
@@ -957,45 +951,49 @@ impl Camera {
     /// Pickles as its kind and settings (`Camera._from_state`).
     fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
         let none = || py.None().into_bound(py);
-        let state = match &self.spec {
-            CameraSpec::Pinhole { fov_deg } => ("pinhole", *fov_deg, 0.0f32, None::<f64>, none(), none()),
-            CameraSpec::ThinLens {
-                fov_deg,
+        let aperture = |a: &Option<ApertureShape>| a.as_ref().map_or_else(|| Ok(none()), |a| aperture_to_py(py, a));
+        let state = match &self.description {
+            CameraDescription::Pinhole { fov_y_deg } => ("pinhole", *fov_y_deg, None, None::<f64>, none(), none()),
+            CameraDescription::ThinLens {
+                fov_y_deg,
                 aperture_radius,
                 focus_distance,
-                aperture,
+                aperture: shape,
             } => (
                 "thin_lens",
-                *fov_deg,
+                *fov_y_deg,
                 *aperture_radius,
                 focus_distance.map(f64::from),
-                aperture_to_py(py, aperture)?,
+                aperture(shape)?,
                 none(),
             ),
-            CameraSpec::Realistic {
-                lens,
-                focus_distance,
-                aperture,
-                ..
-            } => (
+            CameraDescription::Realistic(r) => (
                 "realistic",
                 None,
-                0.0,
-                *focus_distance,
-                aperture
-                    .as_ref()
-                    .map_or_else(|| Ok(none()), |a| aperture_to_py(py, a))?,
-                lens.as_deref().cloned().into_pyobject(py)?.into_any(),
+                None,
+                match r.focus {
+                    Some(LensFocus::Distance(d)) => Some(d),
+                    _ => None,
+                },
+                aperture(&r.aperture)?,
+                r.lens
+                    .clone()
+                    .map(Lens::from_prescription)
+                    .transpose()?
+                    .into_pyobject(py)?
+                    .into_any(),
             ),
         };
-        let realistic = match &self.spec {
-            CameraSpec::Realistic {
-                sensor_mm,
-                sensor_width_mm,
-                f_number,
-                scene_unit_m,
-                ..
-            } => (*sensor_mm, *sensor_width_mm, *f_number, *scene_unit_m),
+        let realistic = match &self.description {
+            CameraDescription::Realistic(r) => (
+                match r.focus {
+                    Some(LensFocus::SensorPositionMm(mm)) => Some(mm),
+                    _ => None,
+                },
+                r.sensor_width_mm,
+                r.f_number,
+                r.scene_unit_m,
+            ),
             _ => (None, None, None, None),
         };
         Ok((
@@ -1008,10 +1006,11 @@ impl Camera {
     #[staticmethod]
     #[allow(clippy::type_complexity)]
     fn _from_state(
+        py: Python<'_>,
         state: (
             String,
             Option<f32>,
-            f32,
+            Option<f32>,
             Option<f64>,
             Option<Bound<'_, PyAny>>,
             Option<Bound<'_, PyAny>>,
@@ -1020,7 +1019,7 @@ impl Camera {
     ) -> PyResult<Camera> {
         let (kind, fov_deg, aperture_radius, focus_distance, aperture, lens) = state;
         let (aperture, lens) = (aperture.filter(|a| !a.is_none()), lens.filter(|l| !l.is_none()));
-        let (sensor_mm, sensor_width_mm, f_number, scene_unit_m) = realistic;
+        let (sensor_depth_mm, sensor_width_mm, f_number, scene_unit_m) = realistic;
         match kind.as_str() {
             "pinhole" => Ok(Camera::pinhole(fov_deg)),
             "thin_lens" => Camera::thin_lens(
@@ -1030,9 +1029,11 @@ impl Camera {
                 aperture.as_ref(),
             ),
             _ => Camera::realistic(
+                py,
                 lens.as_ref(),
                 focus_distance,
-                sensor_mm,
+                sensor_depth_mm,
+                None,
                 f_number,
                 sensor_width_mm,
                 aperture.as_ref(),
@@ -1045,142 +1046,92 @@ impl Camera {
     #[staticmethod]
     #[pyo3(signature = (fov_deg = None))]
     fn pinhole(fov_deg: Option<f32>) -> Camera {
-        Camera::new(CameraSpec::Pinhole { fov_deg })
+        Camera::new(CameraDescription::Pinhole { fov_y_deg: fov_deg })
     }
 
-    /// An ideal thin lens of `aperture_radius` (scene units) focused at
-    /// `focus_distance` (default: the scene's subject); `aperture` a shape
-    /// such as "blades:6" or "star:5:0.4".
+    /// An ideal thin lens of `aperture_radius` (scene units; default 0.05)
+    /// focused at `focus_distance` (default: the scene's subject); `aperture`
+    /// a shape such as "blades:6" or "star:5:0.4" (default: the scene file's).
     #[staticmethod]
-    #[pyo3(signature = (aperture_radius, focus_distance = None, fov_deg = None, aperture = None))]
+    #[pyo3(signature = (aperture_radius = None, focus_distance = None, fov_deg = None, aperture = None))]
     fn thin_lens(
-        aperture_radius: f32,
+        aperture_radius: Option<f32>,
         focus_distance: Option<f32>,
         fov_deg: Option<f32>,
         aperture: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Camera> {
-        if !(aperture_radius >= 0.0 && aperture_radius.is_finite()) {
+        if let Some(r) = aperture_radius.filter(|r| !(*r >= 0.0 && r.is_finite())) {
             return Err(value_error(format!(
-                "aperture_radius must be zero or positive, got {aperture_radius}"
+                "aperture_radius must be zero or positive, got {r}"
             )));
         }
-        Ok(Camera::new(CameraSpec::ThinLens {
-            fov_deg,
+        Ok(Camera::new(CameraDescription::ThinLens {
+            fov_y_deg: fov_deg,
             aperture_radius,
             focus_distance,
-            aperture: parse_aperture(aperture)?.unwrap_or(ApertureShape::Circle),
+            aperture: parse_aperture(aperture)?,
         }))
     }
 
     /// A real lens (a `Lens` or a built-in name; default: the scene file's,
     /// else dgauss50), focused at `focus_distance` (scene units from the
-    /// sensor) or with the sensor `sensor_mm` behind the stop, stopped down
-    /// to `f_number`, with a `sensor_width_mm` wide sensor and an `aperture` shape.
+    /// sensor) or with the sensor `sensor_depth_mm` behind the stop (formerly
+    /// `sensor_mm`), stopped down to `f_number`, with a `sensor_width_mm` wide
+    /// sensor and an `aperture` shape.
     #[staticmethod]
-    #[pyo3(signature = (lens = None, *, focus_distance = None, sensor_mm = None, f_number = None,
-                        sensor_width_mm = None, aperture = None, scene_unit_m = None))]
+    #[pyo3(signature = (lens = None, *, focus_distance = None, sensor_depth_mm = None, sensor_mm = None,
+                        f_number = None, sensor_width_mm = None, aperture = None, scene_unit_m = None))]
     #[allow(clippy::too_many_arguments)]
     fn realistic(
+        py: Python<'_>,
         lens: Option<&Bound<'_, PyAny>>,
         focus_distance: Option<f64>,
+        sensor_depth_mm: Option<f64>,
         sensor_mm: Option<f64>,
         f_number: Option<f64>,
         sensor_width_mm: Option<f64>,
         aperture: Option<&Bound<'_, PyAny>>,
         scene_unit_m: Option<f64>,
     ) -> PyResult<Camera> {
+        let sensor_depth_mm = match (sensor_depth_mm, sensor_mm) {
+            (Some(_), Some(_)) => return Err(value_error("give sensor_depth_mm, not also sensor_mm (its old name)")),
+            (None, Some(mm)) => {
+                deprecated(
+                    py,
+                    "Camera.realistic(sensor_mm=...) is deprecated; use sensor_depth_mm=...",
+                )?;
+                Some(mm)
+            }
+            (depth, None) => depth,
+        };
         let lens = lens.map(lens_from_py).transpose()?;
-        if focus_distance.is_some() && sensor_mm.is_some() {
-            return Err(value_error("give focus_distance or sensor_mm, not both"));
-        }
-        Ok(Camera::new(CameraSpec::Realistic {
-            lens: lens.map(Box::new),
-            focus_distance,
-            sensor_mm,
+        let focus = match (focus_distance, sensor_depth_mm) {
+            (Some(_), Some(_)) => return Err(value_error("give focus_distance or sensor_depth_mm, not both")),
+            (Some(d), None) => Some(LensFocus::Distance(d)),
+            (None, Some(mm)) => Some(LensFocus::SensorPositionMm(mm)),
+            (None, None) => None,
+        };
+        Ok(Camera::new(CameraDescription::Realistic(RealisticDescription {
+            lens: lens.map(|l| l.prescription),
+            focus,
             sensor_width_mm,
             f_number,
             aperture: parse_aperture(aperture)?,
             scene_unit_m,
-        }))
+            radiometry: None,
+        })))
     }
 }
 
-/// The camera `spec` (None: the realistic camera with the scene's settings,
-/// as `lenspath render` uses) for `scene` at `width` × `height`.
-fn build_camera(scene: &Scene, spec: Option<&CameraSpec>, width: u32, height: u32) -> PyResult<Box<dyn CameraTrait>> {
-    let view = scene.view()?;
-    let default = CameraSpec::scene_default();
-    let fov = |f: Option<f32>| f.unwrap_or(view.fov_y_deg);
-    Ok(match spec.unwrap_or(&default) {
-        CameraSpec::Pinhole { fov_deg } => {
-            Box::new(PerspectiveCamera::pinhole(view.pose, fov(*fov_deg), width, height))
-        }
-        CameraSpec::ThinLens {
-            fov_deg,
-            aperture_radius,
-            focus_distance,
-            aperture,
-        } => Box::new(
-            PerspectiveCamera::thin_lens(
-                view.pose,
-                fov(*fov_deg),
-                width,
-                height,
-                *aperture_radius,
-                focus_distance.unwrap_or(view.focus_distance),
-            )
-            .with_aperture(Arc::new(
-                Aperture::new(aperture).map_err(|e| to_py(e, FileKind::Scene))?,
-            )),
-        ),
-        realistic @ CameraSpec::Realistic { .. } => {
-            let settings = realistic_settings(scene, &view, realistic, width, height)?;
-            Box::new(RealisticCamera::new(view.pose, width, height, &settings).map_err(|e| to_py(e, FileKind::Lens))?)
-        }
-    })
-}
-
-/// The realistic camera's settings: the scene's (as `lenspath render` uses),
-/// overridden by what `spec` sets. Errors for the other cameras.
-fn realistic_settings(
-    scene: &Scene,
-    view: &SceneView,
-    spec: &CameraSpec,
-    width: u32,
-    height: u32,
-) -> PyResult<RealisticCameraSettings> {
-    let CameraSpec::Realistic {
-        lens,
-        focus_distance,
-        sensor_mm,
-        sensor_width_mm,
-        f_number,
-        aperture,
-        scene_unit_m,
-    } = spec
-    else {
-        return Err(value_error("this needs a realistic camera (Camera.realistic)"));
-    };
-    let mut settings = RealisticCameraSettings::for_scene(&scene.options, view, width, height)
-        .map_err(|e| to_py(e, FileKind::Lens))?;
-    if let Some(lens) = lens {
-        settings.lens = lens.prescription.clone();
-    }
-    if let Some(w) = sensor_width_mm {
-        settings.sensor_mm = lenspath::camera::sensor_for_image(*w, width, height);
-    }
-    if let Some(d) = focus_distance {
-        settings.focus = LensFocus::Distance(*d);
-    }
-    if let Some(mm) = sensor_mm {
-        settings.focus = LensFocus::SensorPositionMm(*mm);
-    }
-    settings.f_number = f_number.or(settings.f_number);
-    settings.scene_unit_m = scene_unit_m.unwrap_or(settings.scene_unit_m);
-    if let Some(a) = aperture {
-        settings.aperture = a.clone();
-    }
-    Ok(settings)
+/// Warns that something is deprecated (a `DeprecationWarning` naming what replaces it).
+fn deprecated(py: Python<'_>, message: &str) -> PyResult<()> {
+    let category = py.get_type::<pyo3::exceptions::PyDeprecationWarning>();
+    PyErr::warn(
+        py,
+        &category,
+        &std::ffi::CString::new(message).expect("no NUL in the message"),
+        2,
+    )
 }
 
 // ---------------------------------------------------------------------------
@@ -1193,37 +1144,38 @@ fn rgb_array<'py>(py: Python<'py>, image: &Image) -> Bound<'py, PyArray3<f32>> {
         .into_pyarray(py)
 }
 
-/// Renders `scene` through `camera` (see the stub for the arguments).
+/// Renders `scene` through `camera` (see the stub for the arguments). An
+/// argument left out is the scene file's, else the library's default.
 #[pyfunction]
-#[pyo3(signature = (scene, camera = None, *, spp = 64, resolution = None, seed = 0, max_depth = 16,
-                    light_samples = 1, threads = None, aovs = None, crop = None, progress = None,
+#[pyo3(signature = (scene, camera = None, *, spp = None, resolution = None, seed = None, max_depth = None,
+                    light_samples = None, threads = None, aovs = None, crop = None, progress = None,
                     sampler = None))]
 #[allow(clippy::too_many_arguments)]
 fn render<'py>(
     py: Python<'py>,
     scene: &Scene,
     camera: Option<&Camera>,
-    spp: u32,
+    spp: Option<u32>,
     resolution: Option<(u32, u32)>,
-    seed: u32,
-    max_depth: u32,
-    light_samples: u32,
+    seed: Option<u32>,
+    max_depth: Option<u32>,
+    light_samples: Option<u32>,
     threads: Option<usize>,
     aovs: Option<Vec<String>>,
     crop: Option<(u32, u32, u32, u32)>,
     progress: Option<Bound<'py, PyAny>>,
     sampler: Option<&str>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    // As `lenspath render`: the argument, else the scene file's, else Sobol.
-    let sampler = match sampler {
-        Some(name) => SamplerKind::from_name(name).ok_or_else(|| {
-            value_error(format!(
-                "unknown sampler '{name}'; expected one of: {}",
-                SamplerKind::NAMES.join(", ")
-            ))
-        })?,
-        None => scene.options.sampler.unwrap_or_default(),
-    };
+    let sampler = sampler
+        .map(|name| {
+            SamplerKind::from_name(name).ok_or_else(|| {
+                value_error(format!(
+                    "unknown sampler '{name}'; expected one of: {}",
+                    SamplerKind::NAMES.join(", ")
+                ))
+            })
+        })
+        .transpose()?;
     let want_depth = match aovs.as_deref() {
         None | Some([]) => false,
         Some(names) => {
@@ -1233,28 +1185,25 @@ fn render<'py>(
             true
         }
     };
-    let (width, height) = scene.image_size(resolution);
-    let settings = RenderSettings {
-        width,
-        height,
+    let overrides = RenderOverrides {
+        resolution,
         spp,
-        path: PathSettings {
-            max_depth,
-            light_samples,
-        },
+        max_depth,
+        light_samples,
         seed,
-        filter: Filter::Box,
-        threads,
-        tile_size: 16,
-        crop: crop.map(|(x0, y0, width, height)| PixelRect { x0, y0, width, height }),
-        depth: want_depth,
         sampler,
+        filter: None,
+        threads,
+        crop: crop.map(|(x0, y0, width, height)| PixelRect { x0, y0, width, height }),
+        depth: Some(want_depth),
+        camera: camera.map(|c| c.description.clone()).unwrap_or_default(),
     };
-    settings.validate().map_err(|e| to_py(e, FileKind::Scene))?;
+    let setup = resolve(&scene.options, &scene.view()?, &overrides).map_err(|e| to_py(e, FileKind::Lens))?;
     let camera = match camera {
-        Some(c) => c.built_for(scene, width, height)?,
-        None => Arc::from(build_camera(scene, None, width, height)?),
+        Some(c) => c.built_for(&setup)?,
+        None => setup.build_camera().map_err(|e| to_py(e, FileKind::Lens))?,
     };
+    let settings = setup.settings;
     let compiled = scene.compiled(py)?;
 
     // Render on a worker thread without the GIL; this thread wakes every
@@ -1374,45 +1323,47 @@ impl AutofocusResult {
 /// Focuses the realistic camera on `patch` (x, y, width, height in fractions
 /// of the image) by rendering it (see the stub).
 #[pyfunction]
-#[pyo3(signature = (scene, patch, camera = None, *, metric = "tenengrad", strategy = "fast", patience = 12,
-                    spp = 16, resolution = None, seed = 0, max_depth = 8, threads = None))]
+#[pyo3(signature = (scene, patch, camera = None, *, metric = None, strategy = None, patience = None,
+                    spp = None, resolution = None, seed = None, max_depth = None, threads = None))]
 #[allow(clippy::too_many_arguments)]
 fn autofocus(
     py: Python<'_>,
     scene: &Scene,
     patch: (f64, f64, f64, f64),
     camera: Option<&Camera>,
-    metric: &str,
-    strategy: &str,
-    patience: usize,
-    spp: u32,
+    metric: Option<String>,
+    strategy: Option<String>,
+    patience: Option<usize>,
+    spp: Option<u32>,
     resolution: Option<(u32, u32)>,
-    seed: u32,
-    max_depth: u32,
+    seed: Option<u32>,
+    max_depth: Option<u32>,
     threads: Option<usize>,
 ) -> PyResult<AutofocusResult> {
     let invalid = |e: Error| to_py(e, FileKind::Scene);
-    let measure = FocusMeasure::from_name(metric).map_err(invalid)?;
-    let search = Strategy::from_name(strategy, patience).map_err(invalid)?;
     let patch = NormalizedRect::new(patch.0, patch.1, patch.2, patch.3).map_err(invalid)?;
-    let (width, height) = scene.image_size(resolution);
     let view = scene.view()?;
-    let spec = camera.map_or_else(CameraSpec::scene_default, |c| c.spec.clone());
-    let lens = realistic_settings(scene, &view, &spec, width, height)?;
-    let settings = AutofocusSettings {
-        camera: lens,
-        width,
-        height,
-        patch: patch.to_pixels(width, height),
-        measure,
+    let description = match camera {
+        Some(c) => c.realistic_description()?.clone(),
+        None => RealisticDescription::default(),
+    };
+    let overrides = AutofocusOverrides {
+        resolution,
         spp,
-        path: PathSettings {
-            max_depth,
-            light_samples: 1,
-        },
+        max_depth,
         seed,
         threads,
+        metric,
+        strategy,
+        patience,
+        camera: description.clone(),
     };
+    let search = resolve_autofocus(&scene.options, &view, patch, &overrides).map_err(|e| match e {
+        Error::InvalidArgument(_) => invalid(e),
+        other => to_py(other, FileKind::Lens),
+    })?;
+    let (settings, search, metric) = (search.settings, search.strategy, overrides.metric);
+    let metric = metric.unwrap_or_else(|| lenspath::defaults::AUTOFOCUS_METRIC.to_string());
     let compiled = scene.compiled(py)?;
     let (result, depth_of_focus_mm) = py
         .detach(|| {
@@ -1431,21 +1382,10 @@ fn autofocus(
         .expect("two values per evaluation")
         .into_pyarray(py)
         .unbind();
-    let CameraSpec::Realistic {
-        lens,
-        sensor_width_mm,
-        f_number,
-        aperture,
-        scene_unit_m,
-        ..
-    } = spec
-    else {
-        unreachable!("realistic_settings accepted only the realistic camera");
-    };
     Ok(AutofocusResult {
         sensor_mm: result.sensor_z_mm,
         focus_distance: result.focus_distance,
-        metric: metric.to_string(),
+        metric,
         strategy: result.strategy.to_string(),
         evaluations,
         patch_renders: result.patch_renders(),
@@ -1453,15 +1393,10 @@ fn autofocus(
         camera_rays: result.camera_rays,
         seconds: result.seconds,
         depth_of_focus_mm,
-        camera: Camera::new(CameraSpec::Realistic {
-            lens,
-            focus_distance: None,
-            sensor_mm: Some(result.sensor_z_mm),
-            sensor_width_mm,
-            f_number,
-            aperture,
-            scene_unit_m,
-        }),
+        camera: Camera::new(CameraDescription::Realistic(RealisticDescription {
+            focus: Some(LensFocus::SensorPositionMm(result.sensor_z_mm)),
+            ..description
+        })),
     })
 }
 
@@ -1651,6 +1586,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<Camera>()?;
     m.add_function(wrap_pyfunction!(load, m)?)?;
     m.add_function(wrap_pyfunction!(builtin_scenes, m)?)?;
+    m.add_function(wrap_pyfunction!(defaults, m)?)?;
     m.add_function(wrap_pyfunction!(builtin_lenses, m)?)?;
     m.add_function(wrap_pyfunction!(render, m)?)?;
     m.add_function(wrap_pyfunction!(read, m)?)?;

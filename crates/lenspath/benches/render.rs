@@ -8,7 +8,7 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use lenspath::accel::BvhSettings;
 use lenspath::builtin::builtin_scene;
 use lenspath::camera::{LensFocus, PerspectiveCamera, RealisticCamera, RealisticCameraSettings};
-use lenspath::integrator::PathSettings;
+use lenspath::integrator::Integrator;
 use lenspath::lens::LensPrescription;
 use lenspath::render::{render, PixelRect, RenderSettings};
 
@@ -24,10 +24,7 @@ fn cornell(c: &mut Criterion) {
             width: 480,
             height: 360,
             spp,
-            path: PathSettings {
-                max_depth: 16,
-                light_samples,
-            },
+            integrator: Integrator::path(16, light_samples),
             ..Default::default()
         };
         let id = BenchmarkId::from_parameter(format!("{spp}spp_{light_samples}ls"));
@@ -39,10 +36,7 @@ fn cornell(c: &mut Criterion) {
         width: 480,
         height: 360,
         spp: 4,
-        path: PathSettings {
-            max_depth: 16,
-            light_samples: 4,
-        },
+        integrator: Integrator::path(16, 4),
         ..Default::default()
     };
     let lens = RealisticCameraSettings::new(

@@ -8,6 +8,7 @@
 
 use glam::Vec2;
 
+use crate::error::{Error, Result};
 use crate::sampling::{erf, erf_inv};
 
 /// A pixel reconstruction filter.
@@ -108,4 +109,59 @@ mod tests {
         let b = Filter::Box.sample_offset(Vec2::new(0.0, 0.999));
         assert!(b.x == -0.5 && b.y < 0.5);
     }
+}
+
+/// A rectangle in fractions of the image (0 to 1): the top-left corner `x`,
+/// `y` and the size; how autofocus patches are given, whatever the resolution.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NormalizedRect {
+    /// Left edge, fraction of the width.
+    pub x: f64,
+    /// Top edge, fraction of the height.
+    pub y: f64,
+    /// Width, fraction of the image's.
+    pub width: f64,
+    /// Height, fraction of the image's.
+    pub height: f64,
+}
+
+impl NormalizedRect {
+    /// The rectangle, checked to be non-empty and inside the image.
+    pub fn new(x: f64, y: f64, width: f64, height: f64) -> Result<Self> {
+        let inside =
+            x >= 0.0 && y >= 0.0 && width > 0.0 && height > 0.0 && x + width <= 1.0 + 1e-9 && y + height <= 1.0 + 1e-9;
+        if !inside {
+            return Err(Error::InvalidArgument(format!(
+                "a patch is X,Y,WIDTH,HEIGHT as fractions of the image, inside it, such as \
+                 0.55,0.7,0.1,0.12; got {x},{y},{width},{height}"
+            )));
+        }
+        Ok(NormalizedRect { x, y, width, height })
+    }
+
+    /// The pixels it covers in a `width` × `height` image (at least 3 × 3).
+    pub fn to_pixels(self, width: u32, height: u32) -> PixelRect {
+        let (w, h) = (f64::from(width), f64::from(height));
+        let x0 = ((self.x * w).round() as u32).min(width.saturating_sub(3));
+        let y0 = ((self.y * h).round() as u32).min(height.saturating_sub(3));
+        PixelRect {
+            x0,
+            y0,
+            width: ((self.width * w).round() as u32).clamp(3, width - x0),
+            height: ((self.height * h).round() as u32).clamp(3, height - y0),
+        }
+    }
+}
+
+/// A rectangle of pixels: columns `x0..x0 + width`, rows `y0..y0 + height`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PixelRect {
+    /// First column.
+    pub x0: u32,
+    /// First row.
+    pub y0: u32,
+    /// Columns.
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
 }

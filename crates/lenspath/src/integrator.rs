@@ -12,7 +12,7 @@ use crate::sampling::{power_heuristic, Sampler};
 use crate::scene::{CompiledScene, SurfaceHit};
 
 /// How far and how carefully paths are traced.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct PathSettings {
     /// Maximum number of scattering events; 0 shows only emitters,
     /// 1 direct lighting (pbrt's `maxdepth`).
@@ -21,24 +21,62 @@ pub struct PathSettings {
     pub light_samples: u32,
 }
 
+/// Which integrator estimates the radiance along camera rays, with its
+/// settings: the seam where another integrator (spectral transport, path
+/// guiding) goes beside the path tracer. An enum, not a trait object, so
+/// each variant's loop inlines into the render's tile loop and the light
+/// field's row loop, which are compiled for two CPU targets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Integrator {
+    /// The unidirectional path tracer with next-event estimation and MIS.
+    Path(PathSettings),
+}
+
+impl Integrator {
+    /// The path tracer with `max_depth` and `light_samples`.
+    pub const fn path(max_depth: u32, light_samples: u32) -> Self {
+        Integrator::Path(PathSettings {
+            max_depth,
+            light_samples,
+        })
+    }
+
+    /// Maximum number of scattering events.
+    pub fn max_depth(&self) -> u32 {
+        match self {
+            Integrator::Path(s) => s.max_depth,
+        }
+    }
+
+    /// Shadow rays per light at each non-specular hit.
+    pub fn light_samples(&self) -> u32 {
+        match self {
+            Integrator::Path(s) => s.light_samples,
+        }
+    }
+
+    /// Radiance arriving along a camera ray. `rays` counts traced rays.
+    pub fn radiance(&self, scene: &CompiledScene, camera_ray: Ray, sampler: &mut Sampler, rays: &mut u64) -> Rgb {
+        self.li(scene, camera_ray, sampler, rays)
+    }
+
+    /// [`Integrator::radiance`], inlined into its caller: the loops over a
+    /// render's tiles and a light field's rows, compiled for two CPU
+    /// targets, each get a copy.
+    #[inline(always)]
+    pub(crate) fn li(&self, scene: &CompiledScene, camera_ray: Ray, sampler: &mut Sampler, rays: &mut u64) -> Rgb {
+        match self {
+            Integrator::Path(settings) => trace_path(scene, camera_ray, sampler, settings, rays),
+        }
+    }
+}
+
 /// Shadow rays stop this fraction short of a sampled light point.
 const SHADOW_EPSILON: f32 = 1e-4;
 
-/// Radiance arriving along a camera ray. `rays` counts traced rays.
-pub fn radiance(
-    scene: &CompiledScene,
-    camera_ray: Ray,
-    sampler: &mut Sampler,
-    settings: &PathSettings,
-    rays: &mut u64,
-) -> Rgb {
-    trace_path(scene, camera_ray, sampler, settings, rays)
-}
-
-/// [`radiance`], inlined into its caller: the loops over a render's tiles
-/// and a light field's rows, compiled for two CPU targets, each get a copy.
+/// The path tracer's loop, inlined into [`Integrator::li`].
 #[inline(always)]
-pub(crate) fn trace_path(
+fn trace_path(
     scene: &CompiledScene,
     camera_ray: Ray,
     sampler: &mut Sampler,
@@ -244,10 +282,10 @@ mod tests {
             scene: &CompiledScene,
             ray: Ray,
             sampler: &mut Sampler,
-            settings: &PathSettings,
+            integrator: &Integrator,
             rays: &mut u64,
         ) -> Rgb {
-            trace_path(scene, ray, sampler, settings, rays)
+            integrator.li(scene, ray, sampler, rays)
         }
         let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/glass-and-gold.toml");
         let scene = load_scene(path.as_ref())
@@ -255,10 +293,7 @@ mod tests {
             .scene
             .compile(&BvhSettings::default())
             .unwrap();
-        let settings = PathSettings {
-            max_depth: 12,
-            light_samples: 2,
-        };
+        let integrator = Integrator::path(12, 2);
         let origin = Vec3::new(0.0, 1.0, 1.5);
         let (mut rays_a, mut rays_b) = (0, 0);
         let mut lit = 0;
@@ -268,9 +303,9 @@ mod tests {
             let ray = Ray::new(origin, uniform_sphere(u.x, u.y));
             let mut sampler_a = Sampler::new(SamplerKind::Sobol, i, 1, 0, 3);
             let mut sampler_b = Sampler::new(SamplerKind::Sobol, i, 1, 0, 3);
-            let a = radiance(&scene, ray, &mut sampler_a, &settings, &mut rays_a);
+            let a = integrator.radiance(&scene, ray, &mut sampler_a, &mut rays_a);
             // SAFETY: the CPU has every feature `trace_path_v3` is compiled for (checked above).
-            let b = unsafe { trace_path_v3(&scene, ray, &mut sampler_b, &settings, &mut rays_b) };
+            let b = unsafe { trace_path_v3(&scene, ray, &mut sampler_b, &integrator, &mut rays_b) };
             assert_eq!(
                 a.to_array().map(f32::to_bits),
                 b.to_array().map(f32::to_bits),

@@ -7,11 +7,14 @@ use std::time::{Duration, Instant};
 use glam::{DVec3, Vec2};
 use rayon::prelude::*;
 
-use crate::camera::{Camera, CameraRay, CameraSample};
+use crate::camera::{pixel_sample, Camera, CameraRay, CameraSample};
+use crate::defaults;
 use crate::error::{Error, Result};
 use crate::film::{Filter, Image};
-use crate::integrator::{trace_path, PathSettings};
+pub use crate::film::{NormalizedRect, PixelRect};
+use crate::integrator::Integrator;
 use crate::math::Rgb;
+use crate::parallel::worker_pool;
 use crate::sampling::{Sampler, SamplerKind, MAX_SAMPLES_PER_PIXEL};
 use crate::scene::CompiledScene;
 
@@ -31,8 +34,8 @@ pub struct RenderSettings {
     pub height: u32,
     /// Samples per pixel.
     pub spp: u32,
-    /// Path depth and light sampling.
-    pub path: PathSettings,
+    /// The integrator and its settings (path depth, light sampling).
+    pub integrator: Integrator,
     /// Seed of the sample sequences: the same seed gives the same image.
     pub seed: u32,
     /// The sample sequence: Sobol (the default) or independent.
@@ -53,80 +56,19 @@ pub struct RenderSettings {
     pub depth: bool,
 }
 
-/// The image size, pixels (width, height), when neither the caller nor the
-/// scene file gives one.
-pub const DEFAULT_IMAGE_SIZE: (u32, u32) = (640, 480);
-
-/// A rectangle in fractions of the image (0 to 1): the top-left corner `x`,
-/// `y` and the size; how autofocus patches are given, whatever the resolution.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct NormalizedRect {
-    /// Left edge, fraction of the width.
-    pub x: f64,
-    /// Top edge, fraction of the height.
-    pub y: f64,
-    /// Width, fraction of the image's.
-    pub width: f64,
-    /// Height, fraction of the image's.
-    pub height: f64,
-}
-
-impl NormalizedRect {
-    /// The rectangle, checked to be non-empty and inside the image.
-    pub fn new(x: f64, y: f64, width: f64, height: f64) -> Result<Self> {
-        let inside =
-            x >= 0.0 && y >= 0.0 && width > 0.0 && height > 0.0 && x + width <= 1.0 + 1e-9 && y + height <= 1.0 + 1e-9;
-        if !inside {
-            return Err(Error::InvalidArgument(format!(
-                "a patch is X,Y,WIDTH,HEIGHT as fractions of the image, inside it, such as \
-                 0.55,0.7,0.1,0.12; got {x},{y},{width},{height}"
-            )));
-        }
-        Ok(NormalizedRect { x, y, width, height })
-    }
-
-    /// The pixels it covers in a `width` × `height` image (at least 3 × 3).
-    pub fn to_pixels(self, width: u32, height: u32) -> PixelRect {
-        let (w, h) = (f64::from(width), f64::from(height));
-        let x0 = ((self.x * w).round() as u32).min(width.saturating_sub(3));
-        let y0 = ((self.y * h).round() as u32).min(height.saturating_sub(3));
-        PixelRect {
-            x0,
-            y0,
-            width: ((self.width * w).round() as u32).clamp(3, width - x0),
-            height: ((self.height * h).round() as u32).clamp(3, height - y0),
-        }
-    }
-}
-
-/// A rectangle of pixels: columns `x0..x0 + width`, rows `y0..y0 + height`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct PixelRect {
-    /// First column.
-    pub x0: u32,
-    /// First row.
-    pub y0: u32,
-    /// Columns.
-    pub width: u32,
-    /// Rows.
-    pub height: u32,
-}
-
 impl Default for RenderSettings {
+    /// The library's defaults ([`crate::defaults`]): box filter, every core, the depth channel.
     fn default() -> Self {
         RenderSettings {
-            width: 640,
-            height: 480,
-            spp: 64,
-            path: PathSettings {
-                max_depth: 16,
-                light_samples: 1,
-            },
-            seed: 0,
-            sampler: SamplerKind::Sobol,
+            width: defaults::IMAGE_SIZE.0,
+            height: defaults::IMAGE_SIZE.1,
+            spp: defaults::SPP,
+            integrator: Integrator::path(defaults::MAX_DEPTH, defaults::LIGHT_SAMPLES),
+            seed: defaults::SEED,
+            sampler: defaults::SAMPLER,
             filter: Filter::Box,
             threads: None,
-            tile_size: 16,
+            tile_size: defaults::TILE_SIZE,
             crop: None,
             depth: true,
         }
@@ -155,10 +97,10 @@ impl RenderSettings {
                 self.spp
             ));
         }
-        if self.path.light_samples > 1024 {
+        if self.integrator.light_samples() > 1024 {
             return fail(format!(
                 "light samples must be at most 1024, got {}",
-                self.path.light_samples
+                self.integrator.light_samples()
             ));
         }
         if self.threads == Some(0) {
@@ -302,39 +244,6 @@ pub fn render_from(
     let tiles = tiles(settings, start)?;
     worker_pool(settings.threads)?
         .install(|| render_in_pool(scene, camera, settings, tiles, checkpoints, progress, cancel))
-}
-
-/// A pool of `threads` worker threads (`None`: one per core).
-pub fn worker_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads.unwrap_or(0))
-        .build()
-        .map_err(|e| Error::InvalidArgument(format!("cannot start worker threads: {e}")))
-}
-
-/// Sample `index` of pixel `(px, py)` of the `kind` sequence under `seed`: its camera sample (the
-/// film position, the pixel centre moved by `filter`'s offset, and the lens
-/// position: the sampler's first two dimensions) and the sampler, which the
-/// path goes on with. Every render and light field draws its samples here,
-/// so the same seed gives the same samples. Pixels past the image's left or
-/// top edge (a light field's margin) get samplers of their own, seeded with
-/// their wrapped coordinates.
-// Inlined into the tile and light-field loops (see `render_tile`): the
-// sampler then stays in registers instead of coming back through memory.
-#[inline(always)]
-pub(crate) fn pixel_sample(
-    kind: SamplerKind,
-    px: i32,
-    py: i32,
-    index: u32,
-    seed: u32,
-    filter: Filter,
-) -> (Sampler, CameraSample) {
-    let mut sampler = Sampler::new(kind, px as u32, py as u32, index, seed);
-    let centre = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
-    let film = centre + filter.sample_offset(sampler.get_2d());
-    let lens = sampler.get_2d();
-    (sampler, CameraSample { film, lens })
 }
 
 /// The region a render covers: its crop, else the whole image.
@@ -516,7 +425,7 @@ fn render_tile(
                 };
                 let mut trace = |ray: Option<CameraRay>, sampler: &mut Sampler, slot: usize| {
                     let l = ray.map_or(Rgb::ZERO, |cr| {
-                        cr.weight * trace_path(scene, cr.ray, sampler, &settings.path, &mut tile_rays)
+                        cr.weight * settings.integrator.li(scene, cr.ray, sampler, &mut tile_rays)
                     });
                     if l.is_finite() {
                         tile.sum[slot] += l.as_dvec3();

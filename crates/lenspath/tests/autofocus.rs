@@ -8,7 +8,7 @@ use lenspath::accel::BvhSettings;
 use lenspath::autofocus::{AutofocusSettings, FocusMeasure, Focuser, Strategy};
 use lenspath::builtin::{add_checkerboard, checker_scene};
 use lenspath::camera::{CameraPose, LensFocus, RealisticCameraSettings};
-use lenspath::integrator::PathSettings;
+use lenspath::integrator::Integrator;
 use lenspath::lens::LensPrescription;
 use lenspath::render::PixelRect;
 use lenspath::scene::CompiledScene;
@@ -46,10 +46,7 @@ fn focuser(scene: &CompiledScene, f_number: Option<f64>, patch: PixelRect, spp: 
         patch,
         measure: FocusMeasure::Tenengrad,
         spp,
-        path: PathSettings {
-            max_depth: 2,
-            light_samples: 1,
-        },
+        integrator: Integrator::path(2, 1),
         seed: 7,
         threads: None,
     };

@@ -12,7 +12,7 @@ use lenspath::bokeh::{depth_blur, CircleOfConfusion};
 use lenspath::builtin::{add_checkerboard, checker_scene};
 use lenspath::camera::{Aperture, ApertureShape, Camera, CameraPose, PerspectiveCamera};
 use lenspath::film::Image;
-use lenspath::integrator::PathSettings;
+use lenspath::integrator::Integrator;
 use lenspath::render::{render, RenderSettings};
 
 const W: u32 = 160;
@@ -31,10 +31,7 @@ fn shoot(camera: &dyn Camera, spp: u32) -> Image {
         width: W,
         height: H,
         spp,
-        path: PathSettings {
-            max_depth: 1,
-            light_samples: 1,
-        },
+        integrator: Integrator::path(1, 1),
         seed: 5,
         ..RenderSettings::default()
     };

@@ -12,7 +12,7 @@ use lenspath::autofocus::{FocusMeasure, Patch};
 use lenspath::builtin::{add_checkerboard, checker_scene};
 use lenspath::camera::{CameraPose, LensFocus, RealisticCamera, RealisticCameraSettings};
 use lenspath::film::Filter;
-use lenspath::integrator::PathSettings;
+use lenspath::integrator::Integrator;
 use lenspath::lens::{LensPrescription, LensSystem};
 use lenspath::render::{render, PixelRect, RenderSettings};
 use lenspath::scene::CompiledScene;
@@ -37,10 +37,7 @@ const EDGE_PATCH: PixelRect = PixelRect {
     height: 32,
 };
 
-const PATH: PathSettings = PathSettings {
-    max_depth: 2,
-    light_samples: 1,
-};
+const PATH: Integrator = Integrator::path(2, 1);
 
 fn plane(distance: f32) -> CompiledScene {
     let mut scene = checker_scene();
@@ -67,7 +64,7 @@ fn render_patch(scene: &CompiledScene, patch: PixelRect, sensor_z_mm: f64, spp: 
         width: SIZE.0,
         height: SIZE.1,
         spp,
-        path: PATH,
+        integrator: PATH,
         seed,
         filter: Filter::Box,
         threads: None,
@@ -98,7 +95,7 @@ fn record(
     let recording = Recording {
         spp,
         seed,
-        path: PATH,
+        integrator: PATH,
         threads: None,
     };
     LightField::record(scene, camera, region, &recording).unwrap()

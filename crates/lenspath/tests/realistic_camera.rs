@@ -11,7 +11,7 @@ use lenspath::camera::{
     RealisticCameraSettings,
 };
 use lenspath::film::{Filter, Image};
-use lenspath::integrator::PathSettings;
+use lenspath::integrator::Integrator;
 use lenspath::lens::{LensPrescription, LensSystem, BUILTIN_LENSES};
 use lenspath::lights::Light;
 use lenspath::materials::Material;
@@ -51,10 +51,7 @@ fn shoot(scene: Scene, shot: &Shot) -> Image {
         width: shot.pixels.0,
         height: shot.pixels.1,
         spp: shot.spp,
-        path: PathSettings {
-            max_depth: 1,
-            light_samples: 1,
-        },
+        integrator: Integrator::path(1, 1),
         seed: 7,
         filter: Filter::Box,
         threads: None,
@@ -694,10 +691,7 @@ fn light_through_a_shaped_aperture_follows_its_open_area() {
             width: 6,
             height: 4,
             spp: 1024,
-            path: PathSettings {
-                max_depth: 1,
-                light_samples: 1,
-            },
+            integrator: Integrator::path(1, 1),
             seed: 3,
             ..RenderSettings::default()
         };

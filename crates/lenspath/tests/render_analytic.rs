@@ -8,7 +8,7 @@ use lenspath::accel::BvhSettings;
 use lenspath::builtin::builtin_scene;
 use lenspath::camera::{CameraPose, PerspectiveCamera};
 use lenspath::film::{Filter, Image};
-use lenspath::integrator::PathSettings;
+use lenspath::integrator::Integrator;
 use lenspath::io::image::{read_exr, write_image};
 use lenspath::lights::Light;
 use lenspath::materials::Material;
@@ -23,10 +23,7 @@ fn settings(width: u32, height: u32, spp: u32, seed: u32) -> RenderSettings {
         width,
         height,
         spp,
-        path: PathSettings {
-            max_depth: 100,
-            light_samples: 1,
-        },
+        integrator: Integrator::path(100, 1),
         seed,
         sampler: SamplerKind::Sobol,
         filter: Filter::Box,
@@ -144,7 +141,7 @@ fn closed_emissive_box_reaches_the_geometric_series() {
         let pose = CameraPose::look_at(Vec3::new(0.1, 0.2, 0.3), Vec3::new(0.5, -0.3, -1.0), Vec3::Y);
         let camera = PerspectiveCamera::pinhole(pose, 70.0, 24, 24);
         let mut s = settings(24, 24, 64, 2);
-        s.path.light_samples = light_samples;
+        s.integrator = Integrator::path(s.integrator.max_depth(), light_samples);
         s.sampler = sampler;
         let image = render_scene(scene.clone(), &camera, &s);
         let green: Vec<f32> = image.rgb.chunks(3).map(|p| p[1]).collect();
@@ -167,8 +164,7 @@ fn cornell_box_converges_across_seeds_and_samplers() {
         let view = scene.view.unwrap();
         let camera = PerspectiveCamera::pinhole(view.pose, view.fov_y_deg, 64, 48);
         let mut s = settings(64, 48, 32, seed);
-        s.path.max_depth = 16;
-        s.path.light_samples = 2;
+        s.integrator = Integrator::path(16, 2);
         s.sampler = sampler;
         render_scene(scene, &camera, &s)
     };
@@ -211,7 +207,7 @@ fn same_seed_is_bit_identical_across_thread_counts() {
         let view = scene.view.unwrap();
         let camera = PerspectiveCamera::thin_lens(view.pose, view.fov_y_deg, 40, 30, 0.1, 3.5);
         let mut s = settings(40, 30, 8, 7);
-        s.path.max_depth = 16;
+        s.integrator = Integrator::path(16, s.integrator.light_samples());
         s.threads = Some(threads);
         s.filter = filter;
         s.sampler = sampler;
@@ -344,7 +340,7 @@ fn delta_lights_match_the_closed_form() {
         let pose = CameraPose::look_at(Vec3::new(0.0, 1.0, 0.0), Vec3::ZERO, Vec3::Z);
         let camera = PerspectiveCamera::pinhole(pose, 60.0, 41, 41);
         let mut s = settings(41, 41, 4, 0);
-        s.path.max_depth = 1;
+        s.integrator = Integrator::path(1, s.integrator.light_samples());
         let image = render_scene(scene, &camera, &s);
         for (x, y) in [(20u32, 20u32), (5, 30), (35, 8)] {
             // Where the pixel centre's ray meets the floor.

@@ -14,6 +14,7 @@ use lenspath::lights::Light;
 use lenspath::materials::Material;
 use lenspath::render::{render, RenderSettings};
 use lenspath::sampling::SamplerKind;
+use lenspath::setup::{realistic_settings, RealisticDescription};
 
 fn repo(path: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..").join(path)
@@ -365,7 +366,7 @@ aperture = "star:5:0.4"
 #[test]
 fn settings_file_reads_back_exactly() {
     use glam::Vec3;
-    use lenspath::camera::{CameraPose, LensFocus, RealisticCameraSettings};
+    use lenspath::camera::{CameraPose, LensFocus};
     use lenspath::io::scene_file::{SceneBase, SceneSettingsFile};
     let dir = tempfile::tempdir().unwrap();
     let mut written = SceneSettingsFile {
@@ -407,7 +408,7 @@ fn settings_file_reads_back_exactly() {
             (Some(4_000_000_000), Some(SamplerKind::Independent))
         );
         assert_eq!(o.scene_unit_m, Some(written.scene_unit_m));
-        let camera = RealisticCameraSettings::for_scene(o, &view, 123, 45).unwrap();
+        let camera = realistic_settings(o, &view, &RealisticDescription::default(), 123, 45).unwrap();
         assert_eq!(camera.focus, LensFocus::SensorPositionMm(written.sensor_depth_mm));
         assert_eq!(camera.f_number, written.f_number);
         assert_eq!(camera.sensor_mm.0, written.sensor_width_mm);

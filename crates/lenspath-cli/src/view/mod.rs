@@ -23,7 +23,7 @@ use lenspath::accel::BvhSettings;
 use lenspath::io::scene_file::SceneBase;
 use lenspath::{Error, Result};
 
-use crate::render::{parse_resolution, Resolution, SceneArgs};
+use crate::flags::{parse_resolution, Resolution, SceneArgs};
 use crate::Outcome;
 
 /// The image size when neither the flag nor the scene file gives one: small

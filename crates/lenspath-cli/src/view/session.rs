@@ -11,14 +11,16 @@ use std::time::Instant;
 use axum::body::Bytes;
 use glam::Vec3;
 use lenspath::camera::{ApertureShape, CameraPose, LensFocus, RealisticCamera, RealisticCameraSettings};
-use lenspath::film::{Filter, Image};
-use lenspath::integrator::PathSettings;
+use lenspath::film::Image;
 use lenspath::io::scene_file::{SceneBase, SceneSettingsFile};
-use lenspath::io::SceneOptions;
 use lenspath::lens::{AnalysisSettings, LensAnalysis, LensPrescription, TableConvention, BUILTIN_LENSES};
+use lenspath::options::SceneOptions;
 use lenspath::render::{NormalizedRect, RenderSettings};
 use lenspath::sampling::SamplerKind;
 use lenspath::scene::{CompiledScene, SceneView};
+use lenspath::setup::{
+    realistic_settings, resolve, resolve_settings, CameraSettings, RealisticDescription, RenderOverrides,
+};
 use lenspath::{Error, Result};
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
@@ -237,8 +239,7 @@ impl Session {
             allowed_lens_paths.push(file.canonicalize().map_err(|e| lenspath::io::io_error(file, e))?);
         }
         let (width, height) = resolution;
-        let file_camera = RealisticCameraSettings::for_scene(&options, &view, width, height)?;
-        let settings = initial_settings(&options, &view, &file_camera);
+        let settings = initial_settings(&options, &view, (width, height))?;
         let config = Config {
             base,
             options,
@@ -317,7 +318,7 @@ impl Session {
         let [x, y, w, h] = request.patch;
         NormalizedRect::new(x, y, w, h)?;
         lenspath::autofocus::FocusMeasure::from_name(&request.metric)?;
-        lenspath::autofocus::Strategy::from_name(&request.strategy, crate::autofocus::DEFAULT_PATIENCE)?;
+        lenspath::autofocus::Strategy::from_name(&request.strategy, lenspath::defaults::AUTOFOCUS_PATIENCE)?;
         let mut state = self.lock();
         if state.autofocus.is_some() {
             return Err(Error::InvalidArgument("an autofocus is already waiting to run".into()));
@@ -523,24 +524,21 @@ impl Config {
         };
         let (lens, lens_reference, lens_dropped) = self.resolve_lens(&settings.lens)?;
         let pose = CameraPose::look_at(eye, target, up);
-        let render = RenderSettings {
-            width,
-            height,
-            spp: 1,
-            path: PathSettings {
-                max_depth: settings.max_depth,
-                light_samples: settings.light_samples,
+        let render = resolve_settings(
+            &self.options,
+            &RenderOverrides {
+                resolution: Some(self.resolution),
+                spp: Some(1),
+                max_depth: Some(settings.max_depth),
+                light_samples: Some(settings.light_samples),
+                seed: Some(settings.seed),
+                sampler: Some(sampler),
+                threads: self.threads,
+                // Left to the EXR download (`render::render_depth`): the first preview comes sooner.
+                depth: Some(false),
+                ..RenderOverrides::default()
             },
-            seed: settings.seed,
-            sampler,
-            filter: Filter::Box,
-            threads: self.threads,
-            tile_size: 16,
-            crop: None,
-            // Left to the EXR download (`render::render_depth`): the first preview comes sooner.
-            depth: false,
-        };
-        render.validate()?;
+        )?;
         // The same optics (a move, or render settings): the camera moves, nothing is built again.
         if let Some(p) = previous.filter(|p| {
             let (a, b) = (&p.settings, &settings);
@@ -555,11 +553,16 @@ impl Config {
                 ..p.clone()
             });
         }
-        let mut lens_settings = RealisticCameraSettings::for_scene(&self.options, &self.view, width, height)?;
-        lens_settings.lens = lens;
+        let description = RealisticDescription {
+            lens: Some(lens),
+            f_number: settings.f_number,
+            aperture: Some(aperture),
+            focus: Some(focus),
+            ..RealisticDescription::default()
+        };
+        let mut lens_settings = realistic_settings(&self.options, &self.view, &description, width, height)?;
+        // The page's f-number is always set: `None` there is wide open, not the file's.
         lens_settings.f_number = settings.f_number;
-        lens_settings.aperture = aperture;
-        lens_settings.focus = focus;
         let camera = RealisticCamera::new(pose, width, height, &lens_settings)?;
         // The focus is kept as the sensor's place: what a saved file and autofocus speak in.
         let sensor_depth_mm = camera.sensor_z_mm();
@@ -595,27 +598,39 @@ impl Config {
     }
 
     fn scene_unit_m(&self) -> f64 {
-        self.options.scene_unit_m.unwrap_or(1.0)
+        self.options.scene_unit_m.unwrap_or(lenspath::defaults::SCENE_UNIT_M)
     }
 }
 
 /// The settings a session starts with: the scene's view and the file's lens settings.
-fn initial_settings(options: &SceneOptions, view: &SceneView, camera: &RealisticCameraSettings) -> ViewSettings {
+fn initial_settings(options: &SceneOptions, view: &SceneView, resolution: (u32, u32)) -> Result<ViewSettings> {
+    let setup = resolve(
+        options,
+        view,
+        &RenderOverrides {
+            resolution: Some(resolution),
+            ..RenderOverrides::default()
+        },
+    )?;
+    let CameraSettings::Realistic(camera) = &setup.camera else {
+        unreachable!("the default camera is the realistic one");
+    };
     let m = view.pose.render_from_camera;
     let eye = Vec3::from(m.translation);
     let target = eye + Vec3::from(m.z_axis) * view.focus_distance;
     let focus = match camera.focus {
         LensFocus::SensorPositionMm(depth_mm) => Focus::Sensor { depth_mm },
         LensFocus::Distance(d) => Focus::Distance {
-            distance_m: d * options.scene_unit_m.unwrap_or(1.0),
+            distance_m: d * camera.scene_unit_m,
         },
     };
-    ViewSettings {
+    let s = &setup.settings;
+    Ok(ViewSettings {
         lens: options
             .lens
             .as_ref()
             .and_then(|l| l.lens.clone())
-            .unwrap_or_else(|| lenspath::camera::DEFAULT_LENS.to_string()),
+            .unwrap_or_else(|| lenspath::defaults::LENS.to_string()),
         f_number: camera.f_number,
         focus,
         aperture: camera.aperture.spelling().unwrap_or_else(|| "circle".into()),
@@ -623,15 +638,13 @@ fn initial_settings(options: &SceneOptions, view: &SceneView, camera: &Realistic
         target: target.to_array(),
         up: Vec3::from(m.y_axis).to_array(),
         max_spp: 1024,
-        max_depth: options.max_depth.unwrap_or(16),
-        light_samples: options.light_samples.unwrap_or(1),
-        seed: options.seed.unwrap_or(0),
-        sampler: options.sampler.unwrap_or_default().name().into(),
-    }
+        max_depth: s.integrator.max_depth(),
+        light_samples: s.integrator.light_samples(),
+        seed: s.seed,
+        sampler: s.sampler.name().into(),
+    })
 }
 
-/// `current` with the fields of the JSON object `change` replaced; unknown
-/// fields and wrong types are errors naming them.
 fn merged(current: &ViewSettings, change: &Value) -> Result<ViewSettings> {
     let Value::Object(fields) = change else {
         return Err(Error::InvalidArgument(

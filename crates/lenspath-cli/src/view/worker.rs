@@ -12,14 +12,14 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use axum::body::Bytes;
-use lenspath::autofocus::{FocusMeasure, Focuser, Strategy};
+use lenspath::autofocus::Focuser;
 use lenspath::io::image::encode_jpeg;
 use lenspath::render::{render, render_from, Accumulation, Checkpoints, NormalizedRect};
+use lenspath::setup::{autofocus_setup, AutofocusOverrides};
 use lenspath::Result;
 use serde_json::json;
 
 use super::session::{AutofocusRequest, Event, Frame, Session, View};
-use crate::autofocus::{patch_search, PatchRenders, DEFAULT_PATIENCE};
 
 /// Steps double the samples up to this, then add this many.
 const LINEAR_STEP_SPP: u32 = 16;
@@ -219,20 +219,22 @@ fn preview(session: &Session, generation: u64, view: &View, changed_at: Instant)
 fn autofocus(session: &Session, request: &AutofocusRequest, view: &View) -> Result<()> {
     let [x, y, w, h] = request.patch;
     let patch = NormalizedRect::new(x, y, w, h)?;
-    let measure = FocusMeasure::from_name(&request.metric)?;
-    let strategy = Strategy::from_name(&request.strategy, DEFAULT_PATIENCE)?;
-    let settings = patch_search(
-        &view.lens_settings,
+    let overrides = AutofocusOverrides {
+        seed: Some(view.settings.seed),
+        threads: session.threads(),
+        metric: Some(request.metric.clone()),
+        strategy: Some(request.strategy.clone()),
+        ..AutofocusOverrides::default()
+    };
+    let search = autofocus_setup(
+        view.lens_settings.clone(),
         session.resolution(),
         patch,
-        measure,
-        PatchRenders {
-            seed: view.settings.seed,
-            ..PatchRenders::default()
-        },
-        session.threads(),
-    );
-    let mut focuser = Focuser::new(&session.scene, view.pose, settings)?;
+        &overrides,
+        view.pose,
+    )?;
+    let strategy = search.strategy;
+    let mut focuser = Focuser::new(&session.scene, view.pose, search.settings)?;
     let (infinity_mm, close_mm) = focuser.sweep_range_mm();
     session.send(json!({
         "type": "autofocus-start",

@@ -21,11 +21,13 @@
 use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
+use crate::camera::pixel_sample;
 use crate::camera::{CameraPose, RealisticCamera, RealisticCameraSettings};
 use crate::error::{Error, Result};
 use crate::film::Filter;
-use crate::integrator::{trace_path, PathSettings};
-use crate::render::{pixel_sample, worker_pool, PixelRect};
+use crate::film::PixelRect;
+use crate::integrator::Integrator;
+use crate::parallel::worker_pool;
 use crate::sampling::SamplerKind;
 use crate::scene::CompiledScene;
 
@@ -110,8 +112,8 @@ pub struct Recording {
     /// Seed of the sample sequences (a render with it and the default Sobol
     /// sampler has the same samples).
     pub seed: u32,
-    /// Path depth and light sampling.
-    pub path: PathSettings,
+    /// The integrator of the recorded paths.
+    pub integrator: Integrator,
     /// Worker threads (`None`: all cores).
     pub threads: Option<usize>,
 }
@@ -283,7 +285,9 @@ fn record_row(
     py: i32,
     recording: &Recording,
 ) -> Vec<Record> {
-    let Recording { spp, seed, path, .. } = *recording;
+    let Recording {
+        spp, seed, integrator, ..
+    } = *recording;
     let mut row = Vec::with_capacity((region.width * spp) as usize);
     let mut rays = 0u64;
     for px in region.x0..region.x0 + region.width as i32 {
@@ -292,7 +296,7 @@ fn record_row(
             let film = camera_sample.film;
             let sample = camera.generate_lens_sample(camera_sample);
             let l = sample.ray.map_or(Vec3::ZERO, |cr| {
-                cr.weight * trace_path(scene, cr.ray, &mut sampler, &path, &mut rays)
+                cr.weight * integrator.li(scene, cr.ray, &mut sampler, &mut rays)
             });
             row.push(Record {
                 film,

@@ -20,9 +20,10 @@ use crate::camera::{
 };
 use crate::error::{Error, Result};
 use crate::film::Filter;
-use crate::integrator::PathSettings;
+use crate::film::PixelRect;
+use crate::integrator::Integrator;
 use crate::lens::{AnalysisSettings, LensAnalysis, LensSystem};
-use crate::render::{render, PixelRect, RenderSettings};
+use crate::render::{render, RenderSettings};
 use crate::sampling::SamplerKind;
 use crate::scene::CompiledScene;
 
@@ -136,7 +137,12 @@ pub enum Strategy {
 /// Every strategy with its command-line name.
 pub const STRATEGIES: [(&str, Strategy); 5] = [
     ("sweep", Strategy::Sweep),
-    ("early-exit", Strategy::EarlyExit { patience: 12 }),
+    (
+        "early-exit",
+        Strategy::EarlyExit {
+            patience: crate::defaults::AUTOFOCUS_PATIENCE,
+        },
+    ),
     ("fast", Strategy::Fast),
     ("rangefinder", Strategy::Rangefinder),
     ("depth", Strategy::Depth),
@@ -182,8 +188,8 @@ pub struct AutofocusSettings {
     pub measure: FocusMeasure,
     /// Samples per pixel of a patch render.
     pub spp: u32,
-    /// Path depth and light samples of the patch renders.
-    pub path: PathSettings,
+    /// The integrator of the patch renders.
+    pub integrator: Integrator,
     /// Seed of the patch renders (every render uses it: common random numbers
     /// make the focus curve smooth in the sensor position).
     pub seed: u32,
@@ -438,7 +444,7 @@ impl<'a> Focuser<'a> {
                 let recording = Recording {
                     spp: (spp + k) / groups,
                     seed: stream_seed(s.seed, k as usize),
-                    path: s.path,
+                    integrator: s.integrator,
                     threads: s.threads,
                 };
                 LightField::record(self.scene, camera.clone(), region, &recording)
@@ -490,7 +496,7 @@ impl<'a> Focuser<'a> {
             width: s.width,
             height: s.height,
             spp,
-            path: s.path,
+            integrator: s.integrator,
             seed,
             sampler: SamplerKind::Sobol,
             filter: Filter::Box,

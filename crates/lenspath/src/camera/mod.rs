@@ -10,16 +10,14 @@ use std::sync::Arc;
 
 use glam::{Affine3A, Mat3A, Vec2, Vec3, Vec3A};
 
+use crate::film::Filter;
 use crate::ray::Ray;
-use crate::sampling::concentric_disk;
+use crate::sampling::{concentric_disk, Sampler, SamplerKind};
 
 mod aperture;
 mod realistic;
 pub use aperture::{Aperture, ApertureMask, ApertureShape};
-pub use realistic::{
-    sensor_for_image, LensFocus, LensSample, Radiometry, RealisticCamera, RealisticCameraSettings, DEFAULT_LENS,
-    DEFAULT_SENSOR_WIDTH_MM,
-};
+pub use realistic::{sensor_for_image, LensFocus, LensSample, Radiometry, RealisticCamera, RealisticCameraSettings};
 
 /// Where on the film and where on the lens a camera ray starts.
 #[derive(Clone, Copy, Debug)]
@@ -174,6 +172,31 @@ impl Camera for PerspectiveCamera {
         let m = &self.pose.render_from_camera;
         (m.transform_point3(Vec3::ZERO), m.transform_vector3(Vec3::Z).normalize())
     }
+}
+
+/// Sample `index` of pixel `(px, py)` of the `kind` sequence under `seed`: its camera sample (the
+/// film position, the pixel centre moved by `filter`'s offset, and the lens
+/// position: the sampler's first two dimensions) and the sampler, which the
+/// path goes on with. Every render and light field draws its samples here,
+/// so the same seed gives the same samples. Pixels past the image's left or
+/// top edge (a light field's margin) get samplers of their own, seeded with
+/// their wrapped coordinates.
+// Inlined into the tile and light-field loops (see `render_tile`): the
+// sampler then stays in registers instead of coming back through memory.
+#[inline(always)]
+pub fn pixel_sample(
+    kind: SamplerKind,
+    px: i32,
+    py: i32,
+    index: u32,
+    seed: u32,
+    filter: Filter,
+) -> (Sampler, CameraSample) {
+    let mut sampler = Sampler::new(kind, px as u32, py as u32, index, seed);
+    let centre = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
+    let film = centre + filter.sample_offset(sampler.get_2d());
+    let lens = sampler.get_2d();
+    (sampler, CameraSample { film, lens })
 }
 
 #[cfg(test)]

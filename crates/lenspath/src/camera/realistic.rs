@@ -26,13 +26,12 @@ use glam::{DMat2, DMat3, DVec2, DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
 use super::{Aperture, ApertureShape, Camera, CameraPose, CameraRay, CameraSample};
+use crate::defaults;
 use crate::error::{Error, Result};
-use crate::io::SceneOptions;
+use crate::film::PixelRect;
 use crate::lens::{Direction, LensPrescription, LensRay, LensSystem};
 use crate::ray::Ray;
-use crate::render::PixelRect;
 use crate::sampling::Rng;
-use crate::scene::SceneView;
 
 /// Radial bands of the sensor, each with its own pupil grid.
 const PUPIL_BANDS: usize = 16;
@@ -68,7 +67,7 @@ pub enum Radiometry {
 }
 
 /// Everything that defines a realistic camera.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct RealisticCameraSettings {
     /// The lens.
     pub lens: LensPrescription,
@@ -95,40 +94,12 @@ impl RealisticCameraSettings {
             sensor_mm,
             focus,
             f_number: None,
-            scene_unit_m: 1.0,
+            scene_unit_m: defaults::SCENE_UNIT_M,
             radiometry: Radiometry::Normalized,
             aperture: ApertureShape::Circle,
         }
     }
-
-    /// What a scene file asks for (its `[camera]` lens, sensor, f-number,
-    /// aperture shape and focus distance or sensor depth, its scene unit), else the defaults:
-    /// `dgauss50`, a 36 mm wide sensor, wide open, focused at the view's
-    /// subject distance. The sensor's height follows the `width` × `height`
-    /// image's aspect. The CLI's flags and the Python camera's arguments
-    /// override fields of this.
-    pub fn for_scene(options: &SceneOptions, view: &SceneView, width: u32, height: u32) -> Result<Self> {
-        let file = options.lens.clone().unwrap_or_default();
-        let lens = LensPrescription::load(file.lens.as_deref().unwrap_or(DEFAULT_LENS))?;
-        let width_mm = file.sensor_mm.map_or(DEFAULT_SENSOR_WIDTH_MM, |(w, _)| w);
-        let focus = match file.sensor_depth_mm {
-            Some(mm) => LensFocus::SensorPositionMm(mm),
-            None => LensFocus::Distance(file.focus_distance.unwrap_or(f64::from(view.focus_distance))),
-        };
-        Ok(RealisticCameraSettings {
-            f_number: file.f_number,
-            scene_unit_m: options.scene_unit_m.unwrap_or(1.0),
-            aperture: file.aperture.unwrap_or(ApertureShape::Circle),
-            ..RealisticCameraSettings::new(lens, sensor_for_image(width_mm, width, height), focus)
-        })
-    }
 }
-
-/// The lens of the realistic camera when nothing names one.
-pub const DEFAULT_LENS: &str = "dgauss50";
-
-/// The sensor width when nothing gives one (a full-frame 35 mm sensor), mm.
-pub const DEFAULT_SENSOR_WIDTH_MM: f64 = 36.0;
 
 /// A sensor `width_mm` wide with the aspect of a `width` × `height` image.
 pub fn sensor_for_image(width_mm: f64, width: u32, height: u32) -> (f64, f64) {

@@ -23,7 +23,8 @@ use glam::DVec3;
 
 use super::{io_error, write_atomically};
 use crate::error::{Error, Result};
-use crate::render::{Accumulation, PixelRect};
+use crate::film::PixelRect;
+use crate::render::Accumulation;
 
 const MAGIC: &[u8; 20] = b"lenspath checkpoint\n";
 const VERSION: u32 = 1;

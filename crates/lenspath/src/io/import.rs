@@ -1,5 +1,5 @@
-//! What every scene loader shares: the loaded result ([`LoadedScene`]), the
-//! render settings a file may carry ([`SceneOptions`]), counted warnings, a
+//! What every scene loader shares: the loaded result ([`LoadedScene`]) with
+//! the render settings a file may carry ([`SceneOptions`]), counted warnings, a
 //! polygon-to-triangle mesh builder that skips degenerate faces, and the
 //! defaults a bare mesh file needs (a camera that frames it, a light).
 
@@ -12,7 +12,7 @@ use crate::camera::CameraPose;
 use crate::lights::Light;
 use crate::materials::Material;
 use crate::math::{Bounds3, Rgb};
-use crate::sampling::SamplerKind;
+pub use crate::options::{LensOptions, SceneOptions};
 use crate::scene::{Scene, SceneView};
 use crate::shapes::{MaterialId, TriangleMesh};
 
@@ -37,44 +37,6 @@ pub struct LoadedScene {
     pub warnings: Warnings,
     /// Format name ("COLLADA", "OBJ", "PLY", "glTF", "lenspath TOML").
     pub format: &'static str,
-}
-
-/// Render settings a scene file may give; every field is optional.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct SceneOptions {
-    /// Image width and height in pixels.
-    pub resolution: Option<(u32, u32)>,
-    /// Samples per pixel.
-    pub spp: Option<u32>,
-    /// Maximum path depth.
-    pub max_depth: Option<u32>,
-    /// Shadow rays per light per hit.
-    pub light_samples: Option<u32>,
-    /// Seed of the sample sequences.
-    pub seed: Option<u32>,
-    /// The sample sequence.
-    pub sampler: Option<SamplerKind>,
-    /// Metres per scene unit (COLLADA `<unit meter>`, glTF: 1).
-    pub scene_unit_m: Option<f64>,
-    /// Lens settings for the realistic camera.
-    pub lens: Option<LensOptions>,
-}
-
-/// A file's lens settings for the realistic camera.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct LensOptions {
-    /// Built-in lens name or lens table path (relative paths are resolved against the scene file).
-    pub lens: Option<String>,
-    /// f-number to stop down to.
-    pub f_number: Option<f64>,
-    /// Sensor width and height in mm.
-    pub sensor_mm: Option<(f64, f64)>,
-    /// Focus distance from the sensor, scene units.
-    pub focus_distance: Option<f64>,
-    /// Focus by the sensor's place instead: mm behind the aperture stop.
-    pub sensor_depth_mm: Option<f64>,
-    /// Shape of the aperture (`None`: the circle).
-    pub aperture: Option<crate::camera::ApertureShape>,
 }
 
 /// Warnings counted by kind, in the order first seen.

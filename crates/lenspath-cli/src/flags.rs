@@ -1,0 +1,280 @@
+//! The flags several subcommands share (the scene, the lens, the aperture)
+//! and the parsers of their values. They only spell options: what a flag left
+//! out means is decided by the library ([`lenspath::setup`]).
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use clap::{Args, ValueEnum};
+use lenspath::builtin::{builtin_scene, DEFAULT_MESH_TRIANGLES};
+use lenspath::camera::{Aperture, ApertureShape, Radiometry};
+use lenspath::film::{NormalizedRect, PixelRect};
+use lenspath::io::load_scene;
+use lenspath::lens::LensPrescription;
+use lenspath::options::SceneOptions;
+use lenspath::sampling::SamplerKind;
+use lenspath::scene::Scene;
+use lenspath::setup::RealisticDescription;
+use lenspath::{Error, Result};
+
+/// Camera models.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum CameraKind {
+    /// Ideal pinhole: everything in focus.
+    Pinhole,
+    /// Ideal thin lens: depth of field from --aperture-radius and --focus-distance.
+    ThinLens,
+    /// A real lens prescription (--lens), traced surface by surface.
+    Realistic,
+}
+
+/// Exposure normalisation of the realistic camera.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum RadiometryKind {
+    /// The image centre reads the scene radiance at any f-number.
+    Normalized,
+    /// Stopping down darkens the image by (N2/N1)^2, as on a real camera.
+    Physical,
+}
+
+/// Sensor size as WIDTHxHEIGHT in mm.
+#[derive(Clone, Copy, Debug)]
+pub struct SensorSize {
+    pub width_mm: f64,
+    pub height_mm: f64,
+}
+
+pub fn parse_sensor(s: &str) -> std::result::Result<SensorSize, String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WIDTHxHEIGHT in mm such as 36x24, got '{s}'"))?;
+    let parse = |v: &str| match v.trim().parse::<f64>() {
+        Ok(x) if x > 0.0 && x.is_finite() => Ok(x),
+        _ => Err(format!("'{v}' is not a positive number of mm")),
+    };
+    Ok(SensorSize {
+        width_mm: parse(w)?,
+        height_mm: parse(h)?,
+    })
+}
+
+/// Pixel filters.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum FilterKind {
+    /// Box of one pixel.
+    Box,
+    /// Gaussian, sigma 0.5 px, radius 1.5 px.
+    Gaussian,
+}
+
+/// Sample sequences.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum SamplerArg {
+    /// Owen-scrambled Sobol points: less noise at the same samples per pixel.
+    Sobol,
+    /// Independent random numbers (PCG32), as pbrt's and Mitsuba's `independent`.
+    Independent,
+}
+
+impl From<SamplerArg> for SamplerKind {
+    fn from(arg: SamplerArg) -> Self {
+        match arg {
+            SamplerArg::Sobol => SamplerKind::Sobol,
+            SamplerArg::Independent => SamplerKind::Independent,
+        }
+    }
+}
+
+/// Image size as WIDTHxHEIGHT.
+#[derive(Clone, Copy, Debug)]
+pub struct Resolution {
+    pub width: u32,
+    pub height: u32,
+}
+
+pub fn parse_resolution(s: &str) -> std::result::Result<Resolution, String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WIDTHxHEIGHT such as 640x480, got '{s}'"))?;
+    let parse = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("'{v}' is not a positive whole number"))
+    };
+    let (width, height) = (parse(w)?, parse(h)?);
+    if width == 0 || height == 0 {
+        return Err(format!("width and height must be positive, got {s}"));
+    }
+    Ok(Resolution { width, height })
+}
+
+/// Parses X,Y,W,H (fractions of the image) for `--patch` and `--autofocus`.
+pub fn parse_patch(s: &str) -> std::result::Result<NormalizedRect, String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let numbers: Vec<f64> = parts.iter().filter_map(|p| p.parse().ok()).collect();
+    match numbers[..] {
+        [x, y, width, height] if parts.len() == 4 => {
+            NormalizedRect::new(x, y, width, height).map_err(|e| e.to_string())
+        }
+        _ => Err(format!(
+            "expected X,Y,WIDTH,HEIGHT as fractions of the image, inside it, such as 0.55,0.7,0.1,0.12; got '{s}'"
+        )),
+    }
+}
+
+pub fn parse_crop(s: &str) -> std::result::Result<PixelRect, String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let numbers: Vec<u32> = parts.iter().filter_map(|p| p.parse().ok()).collect();
+    match numbers[..] {
+        [x0, y0, width, height] if parts.len() == 4 => Ok(PixelRect { x0, y0, width, height }),
+        _ => Err(format!(
+            "expected X,Y,WIDTH,HEIGHT in pixels such as 100,80,64,48, got '{s}'"
+        )),
+    }
+}
+
+/// Parses a duration such as 90s, 5m, 1h or 1.5 (seconds).
+pub fn parse_duration(s: &str) -> std::result::Result<Duration, String> {
+    let t = s.trim();
+    let (number, unit_s) = match t.char_indices().last() {
+        Some((i, 's')) => (&t[..i], 1.0),
+        Some((i, 'm')) => (&t[..i], 60.0),
+        Some((i, 'h')) => (&t[..i], 3600.0),
+        _ => (t, 1.0),
+    };
+    match number.trim().parse::<f64>() {
+        Ok(v) if v >= 0.0 && (v * unit_s).is_finite() => Ok(Duration::from_secs_f64(v * unit_s)),
+        _ => Err(format!("expected a duration such as 60s, 5m or 1h, got '{s}'")),
+    }
+}
+
+/// Which scene: a file or a built-in one (`render` and `autofocus`).
+#[derive(Args, Debug)]
+pub struct SceneArgs {
+    /// Scene file: .dae (COLLADA, CS184), .obj, .ply, .gltf/.glb or .toml (lenspath). Default: the
+    /// built-in scene named by --scene.
+    pub file: Option<PathBuf>,
+    /// Built-in scene: cornell-spheres, cornell-empty or cornell-mesh.
+    #[arg(long, default_value = "cornell-spheres", conflicts_with = "file")]
+    pub scene: String,
+    /// Triangles of the procedural mesh in cornell-mesh.
+    #[arg(long, default_value_t = DEFAULT_MESH_TRIANGLES)]
+    pub mesh_triangles: usize,
+}
+
+impl SceneArgs {
+    /// The scene's name, the scene and the settings its file gives; warnings go to stderr.
+    pub fn load(&self) -> Result<(String, Scene, SceneOptions)> {
+        match &self.file {
+            Some(path) => {
+                let loaded = load_scene(path)?;
+                for (what, n) in loaded.warnings.iter() {
+                    eprintln!(
+                        "warning: {what}{}",
+                        if n > 1 { format!(" (×{n})") } else { String::new() }
+                    );
+                }
+                Ok((path.display().to_string(), loaded.scene, loaded.options))
+            }
+            None => Ok((
+                self.scene.clone(),
+                builtin_scene(&self.scene, self.mesh_triangles)?,
+                SceneOptions::default(),
+            )),
+        }
+    }
+}
+
+/// The realistic camera's lens flags (`render` and `autofocus`).
+#[derive(Args, Debug)]
+pub struct LensFlags {
+    /// Realistic camera: built-in lens (dgauss50, wide22, tele250, fisheye10) or a lens table file
+    /// [default: the scene file's, else dgauss50].
+    #[arg(long)]
+    pub lens: Option<String>,
+    /// Realistic camera: sensor WIDTHxHEIGHT in mm; its width is kept and its height follows the
+    /// image aspect [default: the scene file's, else 36x24].
+    #[arg(long, value_parser = parse_sensor)]
+    pub sensor: Option<SensorSize>,
+    /// Realistic camera: stop down to this f-number (default: wide open).
+    #[arg(long, value_name = "N")]
+    pub fstop: Option<f64>,
+    /// Realistic camera: metres per scene unit, since lenses are in mm [default: the scene file's, else 1].
+    #[arg(long, value_name = "M")]
+    pub scene_unit: Option<f64>,
+    /// Realistic camera: exposure normalisation [default: normalized].
+    #[arg(long, value_enum)]
+    pub radiometry: Option<RadiometryKind>,
+}
+
+impl LensFlags {
+    /// The realistic camera the flags describe; what they leave out is the
+    /// scene file's, else the library's default ([`lenspath::setup::realistic_settings`]).
+    pub fn description(&self) -> Result<RealisticDescription> {
+        Ok(RealisticDescription {
+            lens: self.lens.as_deref().map(LensPrescription::load).transpose()?,
+            sensor_width_mm: self.sensor.map(|s| s.width_mm),
+            f_number: self.fstop,
+            scene_unit_m: self.scene_unit,
+            radiometry: self.radiometry.map(|r| match r {
+                RadiometryKind::Normalized => Radiometry::Normalized,
+                RadiometryKind::Physical => Radiometry::Physical,
+            }),
+            ..RealisticDescription::default()
+        })
+    }
+}
+
+/// The aperture's shape, for the realistic and thin-lens cameras.
+#[derive(Args, Debug, Default)]
+pub struct ApertureFlags {
+    /// Aperture: an iris of N blades (a regular polygon, a corner at the top).
+    #[arg(long, value_name = "N", conflicts_with_all = ["star", "aperture_mask"])]
+    pub blades: Option<u32>,
+    /// Aperture: turn the blades or the star by this many degrees counter-clockwise.
+    #[arg(long, value_name = "DEG", default_value_t = 0.0)]
+    pub blade_rotation: f64,
+    /// Aperture: bend the blades' edges out, from 0 (straight) to 1 (round).
+    #[arg(long, value_name = "C", default_value_t = 0.0)]
+    pub blade_curvature: f64,
+    /// Aperture: a star of N points.
+    #[arg(long, value_name = "N", conflicts_with = "aperture_mask")]
+    pub star: Option<u32>,
+    /// Aperture: radius of the star's notches over its points'.
+    #[arg(long, value_name = "R", default_value_t = 0.5)]
+    pub star_inner_ratio: f64,
+    /// Aperture: a grayscale transmission mask (PNG, JPEG or EXR; white is open) laid over the
+    /// stop's bounding square, top row up.
+    #[arg(long, value_name = "FILE")]
+    pub aperture_mask: Option<PathBuf>,
+}
+
+impl ApertureFlags {
+    /// The shape the flags ask for; `None` when they ask for none (the
+    /// scene file's, else the circle).
+    pub fn shape(&self) -> Result<Option<ApertureShape>> {
+        let with_flag = |e: Error, flag: &str| match e {
+            Error::InvalidArgument(m) => Error::InvalidArgument(format!("{flag}: {m}")),
+            other => other,
+        };
+        if let Some(path) = &self.aperture_mask {
+            return ApertureShape::load_mask(path).map(Some);
+        }
+        let shape = match (self.blades, self.star) {
+            (Some(count), _) => ApertureShape::Blades {
+                count,
+                rotation_deg: self.blade_rotation,
+                curvature: self.blade_curvature,
+            },
+            (None, Some(points)) => ApertureShape::Star {
+                points,
+                inner_ratio: self.star_inner_ratio,
+                rotation_deg: self.blade_rotation,
+            },
+            (None, None) => return Ok(None),
+        };
+        // Checks the values (blade count, curvature, ratio) now, before any rendering.
+        Aperture::new(&shape).map_err(|e| with_flag(e, if self.star.is_some() { "--star" } else { "--blades" }))?;
+        Ok(Some(shape))
+    }
+}

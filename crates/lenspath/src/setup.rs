@@ -1,0 +1,456 @@
+//! Setting up a render: what the caller asks ([`RenderOverrides`], every
+//! field optional) over what the scene file says ([`SceneOptions`]) over the
+//! library's defaults ([`crate::defaults`]), resolved into the
+//! [`RenderSettings`] and the [`CameraSettings`] of one render. The CLI, the
+//! Python binding, the viewer and `lenspath.distributed` map their own
+//! spelling of options onto [`RenderOverrides`] and call [`resolve`]; none of
+//! them applies a default or builds a camera itself, so the same request
+//! gives the same image from every front end.
+//!
+//! Autofocus is set up the same way ([`AutofocusOverrides`],
+//! [`resolve_autofocus`]): its patch renders have defaults of their own,
+//! since the scene file's integrator settings are for the final image.
+
+use std::sync::Arc;
+
+use crate::autofocus::{AutofocusSettings, FocusMeasure, Strategy};
+use crate::camera::{
+    sensor_for_image, Aperture, ApertureShape, Camera, CameraPose, LensFocus, PerspectiveCamera, Radiometry,
+    RealisticCamera, RealisticCameraSettings,
+};
+use crate::defaults;
+use crate::error::{Error, Result};
+use crate::film::{Filter, NormalizedRect, PixelRect};
+use crate::integrator::Integrator;
+use crate::lens::LensPrescription;
+use crate::options::SceneOptions;
+use crate::render::RenderSettings;
+use crate::sampling::SamplerKind;
+use crate::scene::SceneView;
+
+// ---------------------------------------------------------------------------
+// What a caller asks for
+
+/// What a caller asks of a render; `None` means "the scene file's, else the
+/// library's default".
+#[derive(Clone, Debug, Default)]
+pub struct RenderOverrides {
+    /// Image size in pixels, (width, height).
+    pub resolution: Option<(u32, u32)>,
+    /// Samples per pixel.
+    pub spp: Option<u32>,
+    /// Maximum path depth.
+    pub max_depth: Option<u32>,
+    /// Shadow rays per light at each non-specular hit.
+    pub light_samples: Option<u32>,
+    /// Seed of the sample sequences.
+    pub seed: Option<u32>,
+    /// The sample sequence.
+    pub sampler: Option<SamplerKind>,
+    /// Pixel reconstruction filter (default: box).
+    pub filter: Option<Filter>,
+    /// Worker threads (`None`: every core).
+    pub threads: Option<usize>,
+    /// Render only this rectangle of the image.
+    pub crop: Option<PixelRect>,
+    /// Compute the depth channel (default: yes).
+    pub depth: Option<bool>,
+    /// The camera (default: the realistic camera with the scene's lens settings).
+    pub camera: CameraDescription,
+}
+
+/// A camera as a caller describes it; what it leaves out comes from the
+/// scene (its view and its file's `[camera]` settings) or the defaults.
+#[derive(Clone, Debug, PartialEq)]
+pub enum CameraDescription {
+    /// An ideal pinhole: everything in focus.
+    Pinhole {
+        /// Vertical field of view, degrees (default: the scene view's).
+        fov_y_deg: Option<f32>,
+    },
+    /// An ideal thin lens.
+    ThinLens {
+        /// Vertical field of view, degrees (default: the scene view's).
+        fov_y_deg: Option<f32>,
+        /// Aperture radius, scene units (default [`defaults::THIN_LENS_APERTURE_RADIUS`]).
+        aperture_radius: Option<f32>,
+        /// Focus distance from the lens, scene units (default: the view's subject distance).
+        focus_distance: Option<f32>,
+        /// The aperture's shape (default: the scene file's, else the circle).
+        aperture: Option<ApertureShape>,
+    },
+    /// A real lens prescription, traced surface by surface.
+    Realistic(RealisticDescription),
+}
+
+impl Default for CameraDescription {
+    /// The realistic camera with the scene's settings.
+    fn default() -> Self {
+        CameraDescription::Realistic(RealisticDescription::default())
+    }
+}
+
+/// The realistic camera as a caller describes it: each field overrides the
+/// scene file's `[camera]` setting, which overrides the default.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RealisticDescription {
+    /// The lens (default: the scene file's, else [`defaults::LENS`]).
+    pub lens: Option<LensPrescription>,
+    /// Sensor width, mm; its height follows the image's aspect (default: the
+    /// scene file's, else [`defaults::SENSOR_WIDTH_MM`]).
+    pub sensor_width_mm: Option<f64>,
+    /// Focus (default: the scene file's focus distance or sensor depth, else
+    /// the view's subject distance).
+    pub focus: Option<LensFocus>,
+    /// f-number to stop down to (default: the scene file's, else wide open).
+    pub f_number: Option<f64>,
+    /// Metres per scene unit (default: the scene file's, else 1).
+    pub scene_unit_m: Option<f64>,
+    /// Exposure normalisation (default: normalised).
+    pub radiometry: Option<Radiometry>,
+    /// The aperture's shape (default: the scene file's, else the circle).
+    pub aperture: Option<ApertureShape>,
+}
+
+// ---------------------------------------------------------------------------
+// What a render is
+
+/// A camera with every setting decided, ready to build.
+#[derive(Clone, Debug, PartialEq)]
+pub enum CameraSettings {
+    /// An ideal pinhole.
+    Pinhole {
+        /// Vertical field of view, degrees.
+        fov_y_deg: f32,
+    },
+    /// An ideal thin lens.
+    ThinLens {
+        /// Vertical field of view, degrees.
+        fov_y_deg: f32,
+        /// Aperture radius, scene units.
+        aperture_radius: f32,
+        /// Focus distance, scene units.
+        focus_distance: f32,
+        /// The aperture's shape.
+        aperture: ApertureShape,
+    },
+    /// A real lens.
+    Realistic(RealisticCameraSettings),
+}
+
+impl CameraSettings {
+    /// The camera at `pose` for a `width` × `height` image.
+    pub fn build(&self, pose: CameraPose, width: u32, height: u32) -> Result<Arc<dyn Camera>> {
+        Ok(match self {
+            CameraSettings::Pinhole { fov_y_deg } => {
+                Arc::new(PerspectiveCamera::pinhole(pose, *fov_y_deg, width, height))
+            }
+            CameraSettings::ThinLens {
+                fov_y_deg,
+                aperture_radius,
+                focus_distance,
+                aperture,
+            } => Arc::new(
+                PerspectiveCamera::thin_lens(pose, *fov_y_deg, width, height, *aperture_radius, *focus_distance)
+                    .with_aperture(Arc::new(Aperture::new(aperture)?)),
+            ),
+            CameraSettings::Realistic(settings) => Arc::new(RealisticCamera::new(pose, width, height, settings)?),
+        })
+    }
+
+    /// The aperture's shape (the circle for the pinhole, which has none).
+    pub fn aperture(&self) -> &ApertureShape {
+        match self {
+            CameraSettings::Pinhole { .. } => &ApertureShape::Circle,
+            CameraSettings::ThinLens { aperture, .. } => aperture,
+            CameraSettings::Realistic(s) => &s.aperture,
+        }
+    }
+}
+
+/// One render, resolved: its settings, its camera and where the camera is.
+#[derive(Clone, Debug)]
+pub struct RenderSetup {
+    /// Image size, samples, integrator, sampler, ...
+    pub settings: RenderSettings,
+    /// The camera's settings.
+    pub camera: CameraSettings,
+    /// Where the camera is (the scene's view).
+    pub pose: CameraPose,
+}
+
+impl RenderSetup {
+    /// Builds the camera.
+    pub fn build_camera(&self) -> Result<Arc<dyn Camera>> {
+        self.camera.build(self.pose, self.settings.width, self.settings.height)
+    }
+}
+
+// ---------------------------------------------------------------------------
+// Resolution: caller > scene file > default
+
+/// The render `overrides` asks for, of a scene whose file says `options` and
+/// whose view is `view`: every field is the caller's, else the file's, else
+/// the default; the settings are validated.
+pub fn resolve(options: &SceneOptions, view: &SceneView, overrides: &RenderOverrides) -> Result<RenderSetup> {
+    let settings = resolve_settings(options, overrides)?;
+    let camera = resolve_camera(options, view, &overrides.camera, settings.width, settings.height)?;
+    Ok(RenderSetup {
+        settings,
+        camera,
+        pose: view.pose,
+    })
+}
+
+/// The render settings alone (no camera), validated.
+pub fn resolve_settings(options: &SceneOptions, overrides: &RenderOverrides) -> Result<RenderSettings> {
+    let (width, height) = overrides
+        .resolution
+        .or(options.resolution)
+        .unwrap_or(defaults::IMAGE_SIZE);
+    let settings = RenderSettings {
+        width,
+        height,
+        spp: overrides.spp.or(options.spp).unwrap_or(defaults::SPP),
+        integrator: Integrator::path(
+            overrides.max_depth.or(options.max_depth).unwrap_or(defaults::MAX_DEPTH),
+            overrides
+                .light_samples
+                .or(options.light_samples)
+                .unwrap_or(defaults::LIGHT_SAMPLES),
+        ),
+        seed: overrides.seed.or(options.seed).unwrap_or(defaults::SEED),
+        sampler: overrides.sampler.or(options.sampler).unwrap_or(defaults::SAMPLER),
+        filter: overrides.filter.unwrap_or(Filter::Box),
+        threads: overrides.threads,
+        tile_size: defaults::TILE_SIZE,
+        crop: overrides.crop,
+        depth: overrides.depth.unwrap_or(true),
+    };
+    settings.validate()?;
+    Ok(settings)
+}
+
+/// The camera `description` asks for, for a `width` × `height` image of a
+/// scene whose file says `options` and whose view is `view`.
+pub fn resolve_camera(
+    options: &SceneOptions,
+    view: &SceneView,
+    description: &CameraDescription,
+    width: u32,
+    height: u32,
+) -> Result<CameraSettings> {
+    let fov = |asked: Option<f32>| {
+        let fov = asked.unwrap_or(view.fov_y_deg);
+        if fov > 0.0 && fov < 180.0 {
+            Ok(fov)
+        } else {
+            Err(Error::InvalidArgument(format!(
+                "the field of view must be between 0 and 180 degrees, got {fov}"
+            )))
+        }
+    };
+    Ok(match description {
+        CameraDescription::Pinhole { fov_y_deg } => CameraSettings::Pinhole {
+            fov_y_deg: fov(*fov_y_deg)?,
+        },
+        CameraDescription::ThinLens {
+            fov_y_deg,
+            aperture_radius,
+            focus_distance,
+            aperture,
+        } => {
+            let aperture_radius = aperture_radius.unwrap_or(defaults::THIN_LENS_APERTURE_RADIUS);
+            if !(aperture_radius >= 0.0 && aperture_radius.is_finite()) {
+                return Err(Error::InvalidArgument(format!(
+                    "the aperture radius must be zero or positive, got {aperture_radius}"
+                )));
+            }
+            let focus_distance = focus_distance.unwrap_or(view.focus_distance);
+            if !(focus_distance > 0.0 && focus_distance.is_finite()) {
+                return Err(Error::InvalidArgument(format!(
+                    "the focus distance must be positive, got {focus_distance}"
+                )));
+            }
+            let aperture = aperture.clone().unwrap_or_else(|| file_aperture(options));
+            // Checks the shape's values (blade count, curvature, ratio) before any rendering.
+            Aperture::new(&aperture)?;
+            CameraSettings::ThinLens {
+                fov_y_deg: fov(*fov_y_deg)?,
+                aperture_radius,
+                focus_distance,
+                aperture,
+            }
+        }
+        CameraDescription::Realistic(realistic) => {
+            CameraSettings::Realistic(realistic_settings(options, view, realistic, width, height)?)
+        }
+    })
+}
+
+/// The realistic camera `description` asks for, for a `width` × `height`
+/// image: the caller's settings over the scene file's `[camera]` (lens,
+/// sensor, f-number, aperture, focus distance or sensor depth, scene unit)
+/// over the defaults. The sensor's height follows the image's aspect.
+pub fn realistic_settings(
+    options: &SceneOptions,
+    view: &SceneView,
+    description: &RealisticDescription,
+    width: u32,
+    height: u32,
+) -> Result<RealisticCameraSettings> {
+    let file = options.lens.clone().unwrap_or_default();
+    let lens = match &description.lens {
+        Some(lens) => lens.clone(),
+        None => LensPrescription::load(file.lens.as_deref().unwrap_or(defaults::LENS))?,
+    };
+    let sensor_width_mm = description
+        .sensor_width_mm
+        .or(file.sensor_mm.map(|(w, _)| w))
+        .unwrap_or(defaults::SENSOR_WIDTH_MM);
+    if !(sensor_width_mm > 0.0 && sensor_width_mm.is_finite()) {
+        return Err(Error::InvalidArgument(format!(
+            "the sensor width must be a positive number of mm, got {sensor_width_mm}"
+        )));
+    }
+    let focus = description.focus.unwrap_or(match file.sensor_depth_mm {
+        Some(mm) => LensFocus::SensorPositionMm(mm),
+        None => LensFocus::Distance(file.focus_distance.unwrap_or(f64::from(view.focus_distance))),
+    });
+    let scene_unit_m = description
+        .scene_unit_m
+        .or(options.scene_unit_m)
+        .unwrap_or(defaults::SCENE_UNIT_M);
+    if !(scene_unit_m > 0.0 && scene_unit_m.is_finite()) {
+        return Err(Error::InvalidArgument(format!(
+            "the scene unit must be a positive number of metres, got {scene_unit_m}"
+        )));
+    }
+    Ok(RealisticCameraSettings {
+        f_number: description.f_number.or(file.f_number),
+        scene_unit_m,
+        radiometry: description.radiometry.unwrap_or(Radiometry::Normalized),
+        aperture: description.aperture.clone().unwrap_or_else(|| file_aperture(options)),
+        ..RealisticCameraSettings::new(lens, sensor_for_image(sensor_width_mm, width, height), focus)
+    })
+}
+
+/// The aperture shape the scene file gives, else the circle.
+fn file_aperture(options: &SceneOptions) -> ApertureShape {
+    options
+        .lens
+        .as_ref()
+        .and_then(|l| l.aperture.clone())
+        .unwrap_or(ApertureShape::Circle)
+}
+
+// ---------------------------------------------------------------------------
+// Autofocus
+
+/// What a caller asks of an autofocus search; `None` means the default.
+#[derive(Clone, Debug, Default)]
+pub struct AutofocusOverrides {
+    /// Image size the patch is a part of (default: the scene file's, else [`defaults::IMAGE_SIZE`]).
+    pub resolution: Option<(u32, u32)>,
+    /// Samples per pixel of each patch render (default [`defaults::AUTOFOCUS_PATCH_SPP`]).
+    pub spp: Option<u32>,
+    /// Maximum path depth of the patch renders (default [`defaults::AUTOFOCUS_PATCH_MAX_DEPTH`]).
+    pub max_depth: Option<u32>,
+    /// Seed of the patch renders (default [`defaults::AUTOFOCUS_SEED`]).
+    pub seed: Option<u32>,
+    /// Worker threads (`None`: every core).
+    pub threads: Option<usize>,
+    /// Focus measure name (default [`defaults::AUTOFOCUS_METRIC`]).
+    pub metric: Option<String>,
+    /// Strategy name (default [`defaults::AUTOFOCUS_STRATEGY`]).
+    pub strategy: Option<String>,
+    /// The early-exit strategy's patience (default [`defaults::AUTOFOCUS_PATIENCE`]).
+    pub patience: Option<usize>,
+    /// The realistic camera; its focus is what the search sets, and is ignored.
+    pub camera: RealisticDescription,
+}
+
+/// An autofocus search, resolved: what to search with and how.
+#[derive(Clone, Debug)]
+pub struct AutofocusSetup {
+    /// The search's settings (camera, patch, measure, patch renders).
+    pub settings: AutofocusSettings,
+    /// The strategy.
+    pub strategy: Strategy,
+    /// Where the camera is.
+    pub pose: CameraPose,
+}
+
+/// The search of `patch` that `overrides` asks for, of a scene whose file
+/// says `options` and whose view is `view`; patch renders trace one shadow
+/// ray per light.
+pub fn resolve_autofocus(
+    options: &SceneOptions,
+    view: &SceneView,
+    patch: NormalizedRect,
+    overrides: &AutofocusOverrides,
+) -> Result<AutofocusSetup> {
+    let size = overrides
+        .resolution
+        .or(options.resolution)
+        .unwrap_or(defaults::IMAGE_SIZE);
+    let camera = realistic_settings(options, view, &overrides.camera, size.0, size.1)?;
+    autofocus_setup(camera, size, patch, overrides, view.pose)
+}
+
+/// The search of `patch` of a `width` × `height` image through `camera` (a
+/// camera already resolved, as the viewer's) at `pose`; `overrides.camera`
+/// and `overrides.resolution` are not read.
+pub fn autofocus_setup(
+    camera: RealisticCameraSettings,
+    (width, height): (u32, u32),
+    patch: NormalizedRect,
+    overrides: &AutofocusOverrides,
+    pose: CameraPose,
+) -> Result<AutofocusSetup> {
+    let measure = FocusMeasure::from_name(overrides.metric.as_deref().unwrap_or(defaults::AUTOFOCUS_METRIC))?;
+    let strategy = Strategy::from_name(
+        overrides.strategy.as_deref().unwrap_or(defaults::AUTOFOCUS_STRATEGY),
+        overrides.patience.unwrap_or(defaults::AUTOFOCUS_PATIENCE),
+    )?;
+    let spp = overrides.spp.unwrap_or(defaults::AUTOFOCUS_PATCH_SPP);
+    if spp == 0 {
+        return Err(Error::InvalidArgument(
+            "patch renders need at least one sample per pixel".into(),
+        ));
+    }
+    let settings = AutofocusSettings {
+        camera,
+        width,
+        height,
+        patch: patch.to_pixels(width, height),
+        measure,
+        spp,
+        integrator: Integrator::path(overrides.max_depth.unwrap_or(defaults::AUTOFOCUS_PATCH_MAX_DEPTH), 1),
+        seed: overrides.seed.unwrap_or(defaults::AUTOFOCUS_SEED),
+        threads: overrides.threads,
+    };
+    Ok(AutofocusSetup {
+        settings,
+        strategy,
+        pose,
+    })
+}
+
+/// The autofocus of `lenspath render --autofocus` (and of the viewer's
+/// click): the default strategy and measure on `patch` through the render's
+/// camera, its patch renders with the render's seed and threads and its depth
+/// capped at [`defaults::AUTOFOCUS_PATCH_MAX_DEPTH`].
+pub fn autofocus_before_render(setup: &RenderSetup, patch: NormalizedRect) -> Result<AutofocusSetup> {
+    let CameraSettings::Realistic(camera) = &setup.camera else {
+        return Err(Error::InvalidArgument("autofocus needs the realistic camera".into()));
+    };
+    let s = &setup.settings;
+    let overrides = AutofocusOverrides {
+        max_depth: Some(s.integrator.max_depth().min(defaults::AUTOFOCUS_PATCH_MAX_DEPTH)),
+        seed: Some(s.seed),
+        threads: s.threads,
+        ..AutofocusOverrides::default()
+    };
+    autofocus_setup(camera.clone(), (s.width, s.height), patch, &overrides, setup.pose)
+}
