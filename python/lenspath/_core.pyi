@@ -25,6 +25,7 @@ __all__ = [
     "load",
     "builtin_scenes",
     "builtin_lenses",
+    "defaults",
     "render",
     "read",
     "write",
@@ -261,8 +262,9 @@ class Camera:
     ) -> Camera:
         """A real lens (default: the scene file's, else dgauss50) focused at ``focus_distance``
         (scene units from the sensor) or with the sensor ``sensor_depth_mm`` behind the stop
-        (not both; ``sensor_mm`` is its deprecated old name), stopped down to ``f_number``, a ``sensor_width_mm`` wide sensor (default 36;
-        its height follows the image), an ``aperture`` shape, ``scene_unit_m`` metres per unit."""
+        (not both; ``sensor_mm`` is its deprecated old name), stopped down to ``f_number``, a
+        ``sensor_width_mm`` wide sensor (default 36; its height follows the image), an
+        ``aperture`` shape, ``scene_unit_m`` metres per unit."""
 
 @overload
 def render(

@@ -52,7 +52,7 @@ def test_the_focused_camera_renders_the_patch_sharper_than_either_side_of_it() -
     shift = 8 * result.depth_of_focus_mm
     focused = sharpness(result.camera)
     for z in (result.sensor_mm - shift, result.sensor_mm + shift):
-        assert focused > 1.3 * sharpness(lenspath.Camera.realistic("dgauss50", sensor_mm=z)), z
+        assert focused > 1.3 * sharpness(lenspath.Camera.realistic("dgauss50", sensor_depth_mm=z)), z
 
 
 def test_the_sweep_visits_every_pixel_pitch_and_keeps_its_best() -> None:

@@ -91,7 +91,12 @@ def test_a_scene_file_is_loaded_once_per_worker(client: distributed.Client) -> N
 def test_map_renders_a_focus_sweep(client: distributed.Client) -> None:
     lens = Lens.builtin("dgauss50").stopped_down(4.0)
     jobs = [
-        {"scene": "cornell-spheres", "camera": Camera.realistic(lens, sensor_mm=z), "spp": 2, "resolution": (40, 30)}
+        {
+            "scene": "cornell-spheres",
+            "camera": Camera.realistic(lens, sensor_depth_mm=z),
+            "spp": 2,
+            "resolution": (40, 30),
+        }
         for z in (51.5, 52.5, 54.0)
     ]
     images = lpd.map_renders(jobs, client, progress=False)

@@ -25,6 +25,8 @@ from lenspath import distributed as lpd  # noqa: E402
 
 RESOLUTION = (48, 36)
 SPP = 2
+#: cornell-mesh's procedural mesh, smaller than its default million triangles.
+MESH_TRIANGLES = 20_000
 
 SCENE_FILES = sorted((REPO / "scenes").glob("*.toml"))
 #: Every scene file, then every built-in scene.
@@ -64,9 +66,19 @@ def python_args(o: dict[str, Any]) -> tuple[Camera | None, dict[str, Any]]:
     return camera, {"spp": SPP, "resolution": RESOLUTION, **kwargs}
 
 
+def where(scene: str) -> list[str]:
+    """The CLI's arguments naming `scene`."""
+    if scene.endswith(".toml"):
+        return [scene]
+    return ["--scene", scene, "--mesh-triangles", str(MESH_TRIANGLES)]
+
+
+def python_scene(scene: str) -> lenspath.Scene | str:
+    return scene if scene.endswith(".toml") else lenspath.Scene.builtin(scene, MESH_TRIANGLES)
+
+
 def cli_render(cli: Path, scene: str, flags: list[str], out: Path) -> np.ndarray:
-    where = [scene] if scene.endswith(".toml") else ["--scene", scene]
-    subprocess.run([str(cli), "render", *where, *flags, "--out", str(out)], check=True, capture_output=True)
+    subprocess.run([str(cli), "render", *where(scene), *flags, "--out", str(out)], check=True, capture_output=True)
     return lenspath.read(out)
 
 
@@ -89,10 +101,11 @@ def chromium() -> Iterator[Any]:
         browser.close()
 
 
-def viewer_saved_file(cli: Path, chromium: Any, scene: str, o: dict[str, Any], tmp_path: Path) -> Path:
-    """The scene file `lenspath view` saves after the page sets `o` and renders SPP samples."""
-    where = [scene] if scene.endswith(".toml") else ["--scene", scene]
-    viewer = Viewer(cli, *where, resolution=RESOLUTION)
+def viewer_saved_file(
+    cli: Path, chromium: Any, scene: str, o: dict[str, Any], tmp_path: Path
+) -> tuple[Path, np.ndarray]:
+    """The scene file `lenspath view` saves after the page sets `o` and renders SPP samples, and its image."""
+    viewer = Viewer(cli, *where(scene), resolution=RESOLUTION)
     try:
         page = chromium.new_page()
         page.goto(viewer.url)
@@ -102,8 +115,9 @@ def viewer_saved_file(cli: Path, chromium: Any, scene: str, o: dict[str, Any], t
         wait_for_spp(page, SPP, after_generation=viewer.state()["generation"] - 1)
         saved = tmp_path / "viewer.toml"
         saved.write_text(viewer.get("api/scene.toml").decode())
+        (tmp_path / "viewer.exr").write_bytes(viewer.get("api/image.exr"))
         page.close()
-        return saved
+        return saved, lenspath.read(tmp_path / "viewer.exr")
     finally:
         viewer.stop()
 
@@ -120,14 +134,16 @@ def test_every_front_end_gives_the_same_image(
     assert reference.mean() > 0
 
     camera, kwargs = python_args(overrides)
-    local = lenspath.render(scene, camera, **kwargs)
+    local = lenspath.render(python_scene(scene), camera, **kwargs)
     assert np.array_equal(local, reference), "lenspath.render differs from lenspath render"
 
-    tiled = lpd.render(scene, camera, client=client, tile_size=16, progress=False, **kwargs)
+    tiled = lpd.render(python_scene(scene), camera, client=client, tile_size=16, progress=False, **kwargs)
     assert np.array_equal(tiled, reference), "lenspath.distributed.render differs from lenspath render"
 
-    saved = viewer_saved_file(cli, chromium, scene, overrides, tmp_path)
+    saved, shown = viewer_saved_file(cli, chromium, scene, overrides, tmp_path)
     again = cli_render(cli, str(saved), [], tmp_path / "saved.exr")
+    assert scene.endswith(".toml") or f"builtin = {scene!r}".replace("'", '"') in saved.read_text()
+    assert np.array_equal(shown, reference), "the viewer shows another image than lenspath render"
     assert np.array_equal(again, reference), "the viewer's saved scene renders another image"
 
 

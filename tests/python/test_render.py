@@ -125,7 +125,7 @@ def test_a_diffuse_sphere_under_a_uniform_sky_has_its_albedo(sampler: str) -> No
         (lambda: lenspath.Camera.realistic("nikkor"), ValueError, "unknown built-in lens 'nikkor'"),
         (lambda: lenspath.Camera.thin_lens(-1.0), ValueError, "aperture_radius must be zero or positive"),
         (lambda: lenspath.Camera.realistic(aperture="blades:2"), ValueError, "blades"),
-        (lambda: lenspath.Camera.realistic(focus_distance=2.0, sensor_mm=52.0), ValueError, "not both"),
+        (lambda: lenspath.Camera.realistic(focus_distance=2.0, sensor_depth_mm=52.0), ValueError, "not both"),
     ],
 )
 def test_bad_arguments_raise_with_a_clear_message(call, error, message) -> None:
@@ -214,3 +214,15 @@ def test_repeated_renders_do_not_leak() -> None:
         lenspath.render("cornell-spheres", spp=1, resolution=(128, 96))
     # 40 renders of a 147 kB image: a leak of even one image each would add 6 MB.
     assert _resident_mb() - before < 4.0
+
+
+def test_the_old_name_of_the_sensor_depth_still_works_and_says_the_new_one() -> None:
+    with pytest.warns(DeprecationWarning, match="use sensor_depth_mm"):
+        old = lenspath.Camera.realistic("dgauss50", sensor_mm=52.0)
+    new = lenspath.Camera.realistic("dgauss50", sensor_depth_mm=52.0)
+    args = {"spp": 1, "resolution": (32, 24)}
+    assert np.array_equal(
+        lenspath.render("cornell-spheres", old, **args), lenspath.render("cornell-spheres", new, **args)
+    )
+    with pytest.raises(ValueError, match="not also sensor_mm"):
+        lenspath.Camera.realistic(sensor_mm=52.0, sensor_depth_mm=52.0)

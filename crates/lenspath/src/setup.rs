@@ -413,12 +413,8 @@ pub fn autofocus_setup(
         overrides.strategy.as_deref().unwrap_or(defaults::AUTOFOCUS_STRATEGY),
         overrides.patience.unwrap_or(defaults::AUTOFOCUS_PATIENCE),
     )?;
+    // Checked by `Focuser::new`, with the rest of the search's settings.
     let spp = overrides.spp.unwrap_or(defaults::AUTOFOCUS_PATCH_SPP);
-    if spp == 0 {
-        return Err(Error::InvalidArgument(
-            "patch renders need at least one sample per pixel".into(),
-        ));
-    }
     let settings = AutofocusSettings {
         camera,
         width,

@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
 use lenspath::accel::BvhSettings;
+use lenspath::builtin::DEFAULT_MESH_TRIANGLES;
 use lenspath::camera::{ApertureShape, PerspectiveCamera};
 use lenspath::film::Image;
 use lenspath::io::{load_scene, LoadedScene};
@@ -370,7 +371,10 @@ fn settings_file_reads_back_exactly() {
     use lenspath::io::scene_file::{SceneBase, SceneSettingsFile};
     let dir = tempfile::tempdir().unwrap();
     let mut written = SceneSettingsFile {
-        base: SceneBase::Builtin("cornell-spheres".into()),
+        base: SceneBase::Builtin {
+            name: "cornell-spheres".into(),
+            mesh_triangles: DEFAULT_MESH_TRIANGLES,
+        },
         scene_unit_m: 0.1 + 0.2,
         eye: Vec3::new(0.1, 1.0 / 3.0, 3.7e-7),
         look_at: Vec3::new(-0.25, 0.7, 1e6 / 7.0),
@@ -393,7 +397,11 @@ fn settings_file_reads_back_exactly() {
         "[[shapes]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nemission = 1\n",
     )
     .unwrap();
-    for base in [SceneBase::Builtin("cornell-spheres".into()), SceneBase::File(base_file)] {
+    let builtin = SceneBase::Builtin {
+        name: "cornell-spheres".into(),
+        mesh_triangles: DEFAULT_MESH_TRIANGLES,
+    };
+    for base in [builtin, SceneBase::File(base_file)] {
         written.base = base;
         let path = dir.path().join("saved.toml");
         std::fs::write(&path, written.to_toml().unwrap()).unwrap();

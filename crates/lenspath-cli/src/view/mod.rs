@@ -59,7 +59,10 @@ pub fn run(args: ViewArgs) -> Result<Outcome> {
     let (scene_name, scene, options) = args.scene.load()?;
     let base = match &args.scene.file {
         Some(path) => SceneBase::File(path.canonicalize().map_err(|e| lenspath::io::io_error(path, e))?),
-        None => SceneBase::Builtin(scene_name.clone()),
+        None => SceneBase::Builtin {
+            name: scene_name.clone(),
+            mesh_triangles: args.scene.mesh_triangles,
+        },
     };
     let view = scene
         .view

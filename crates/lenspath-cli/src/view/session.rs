@@ -198,6 +198,10 @@ pub struct Session {
 
 /// What settings are checked against and views built from.
 struct Config {
+    /// The page's first eye, target and up: while they are unchanged, the
+    /// camera is the scene's own pose (which eye, target and up derived from
+    /// it would round).
+    initial_look: [[f32; 3]; 3],
     base: SceneBase,
     options: SceneOptions,
     view: SceneView,
@@ -241,6 +245,7 @@ impl Session {
         let (width, height) = resolution;
         let settings = initial_settings(&options, &view, (width, height))?;
         let config = Config {
+            initial_look: [settings.eye, settings.target, settings.up],
             base,
             options,
             view,
@@ -345,12 +350,22 @@ impl Session {
     pub fn settings_file(&self, frame: &Frame) -> Result<String> {
         let view = &frame.view;
         let s = &view.settings;
+        // The scene's own eye, target and up while the camera has not moved: they give its pose exactly.
+        let (eye, look_at, up) = if view.pose == self.config.view.pose {
+            view.pose.look_at_arguments()
+        } else {
+            (
+                Vec3::from_array(s.eye),
+                Vec3::from_array(s.target),
+                Vec3::from_array(s.up),
+            )
+        };
         let file = SceneSettingsFile {
             base: self.config.base.clone(),
             scene_unit_m: self.config.scene_unit_m(),
-            eye: Vec3::from_array(s.eye),
-            look_at: Vec3::from_array(s.target),
-            up: Vec3::from_array(s.up),
+            eye,
+            look_at,
+            up,
             lens: view.lens_reference.clone(),
             f_number: s.f_number,
             sensor_width_mm: view.lens_settings.sensor_mm.0,
@@ -523,7 +538,11 @@ impl Config {
             }
         };
         let (lens, lens_reference, lens_dropped) = self.resolve_lens(&settings.lens)?;
-        let pose = CameraPose::look_at(eye, target, up);
+        let pose = if [settings.eye, settings.target, settings.up] == self.initial_look {
+            self.view.pose
+        } else {
+            CameraPose::look_at(eye, target, up)
+        };
         let render = resolve_settings(
             &self.options,
             &RenderOverrides {

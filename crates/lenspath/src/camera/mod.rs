@@ -58,6 +58,10 @@ pub trait Camera: Send + Sync {
 pub struct CameraPose {
     /// Camera space → scene space.
     pub render_from_camera: Affine3A,
+    /// The eye, target and up it was made from: written back to a scene
+    /// file they give this pose again bit for bit, which a target derived
+    /// from the matrix would not (a rounding of the view direction).
+    look_at: [Vec3; 3],
 }
 
 impl CameraPose {
@@ -71,7 +75,14 @@ impl CameraPose {
                 Mat3A::from_cols(Vec3A::from(right), Vec3A::from(true_up), Vec3A::from(forward)).into(),
                 eye,
             ),
+            look_at: [eye, target, up],
         }
+    }
+
+    /// The eye, target and up [`CameraPose::look_at`] made it from.
+    pub fn look_at_arguments(&self) -> (Vec3, Vec3, Vec3) {
+        let [eye, target, up] = self.look_at;
+        (eye, target, up)
     }
 }
 

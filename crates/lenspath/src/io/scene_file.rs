@@ -51,6 +51,9 @@ struct SceneFile {
     base: Option<PathBuf>,
     /// A built-in scene to start from instead (`cornell-spheres`, ...).
     builtin: Option<String>,
+    /// Triangles of the built-in `cornell-mesh`'s procedural mesh.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    mesh_triangles: Option<usize>,
     scene_unit_m: Option<f64>,
     camera: Option<CameraSpec>,
     film: Option<FilmSpec>,
@@ -236,7 +239,8 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
     let (mut scene, mut options, mut warnings, mut cameras) = match (&file.base, &file.builtin) {
         (Some(_), Some(_)) => return Err(fail("give base or builtin, not both".into())),
         (None, Some(name)) => {
-            let scene = builtin_scene(name, DEFAULT_MESH_TRIANGLES).map_err(|e| fail(format!("builtin: {e}")))?;
+            let triangles = file.mesh_triangles.unwrap_or(DEFAULT_MESH_TRIANGLES);
+            let scene = builtin_scene(name, triangles).map_err(|e| fail(format!("builtin: {e}")))?;
             (scene, SceneOptions::default(), Warnings::default(), 1)
         }
         (Some(base), None) => {
@@ -249,6 +253,11 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
         }
         (None, None) => (Scene::default(), SceneOptions::default(), Warnings::default(), 0),
     };
+    if file.mesh_triangles.is_some() && file.builtin.is_none() {
+        return Err(fail(
+            "mesh_triangles goes with builtin (the procedural mesh of cornell-mesh)".into(),
+        ));
+    }
     if let Some(unit) = file.scene_unit_m {
         if !(unit > 0.0 && unit.is_finite()) {
             return Err(fail(format!("scene_unit_m must be positive, got {unit}")));
@@ -469,8 +478,13 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
 /// The scene a [`SceneSettingsFile`] starts from.
 #[derive(Clone, Debug, PartialEq)]
 pub enum SceneBase {
-    /// A built-in scene by name (`builtin = "..."`).
-    Builtin(String),
+    /// A built-in scene (`builtin = "..."`, `mesh_triangles = ...`).
+    Builtin {
+        /// Its name.
+        name: String,
+        /// Triangles of its procedural mesh (`cornell-mesh`).
+        mesh_triangles: usize,
+    },
     /// A scene file of any format lenspath reads (`base = "..."`).
     File(PathBuf),
 }
@@ -522,13 +536,18 @@ impl SceneSettingsFile {
             .aperture
             .spelling()
             .ok_or_else(|| Error::InvalidArgument("a mask aperture cannot be written into a scene file".into()))?;
-        let (builtin, base) = match &self.base {
-            SceneBase::Builtin(name) => (Some(name.clone()), None),
-            SceneBase::File(path) => (None, Some(path.clone())),
+        let (builtin, mesh_triangles, base) = match &self.base {
+            SceneBase::Builtin { name, mesh_triangles } => (
+                Some(name.clone()),
+                (*mesh_triangles != DEFAULT_MESH_TRIANGLES).then_some(*mesh_triangles),
+                None,
+            ),
+            SceneBase::File(path) => (None, None, Some(path.clone())),
         };
         let file = SceneFile {
             base,
             builtin,
+            mesh_triangles,
             scene_unit_m: Some(self.scene_unit_m),
             camera: Some(CameraSpec {
                 eye: self.eye.to_array(),
