@@ -125,12 +125,15 @@ class Scene:
         position: tuple[float, float, float],
         direction: tuple[float, float, float],
         intensity: tuple[float, float, float],
-        cone_angle_deg: float,
+        cutoff_angle_deg: float | None = None,
         exponent: float = 0.0,
+        *,
+        cone_angle_deg: float | None = None,
     ) -> None:
         """Adds a spot light pointing along ``direction``: ``intensity`` (W/sr) on its axis,
-        falling off as cos^``exponent`` of the angle from it, none beyond the half angle
-        ``cone_angle_deg``."""
+        falling off as cos^``exponent`` of the angle from it, none beyond ``cutoff_angle_deg``,
+        the cone's half angle (as pbrt's ``coneangle`` and Mitsuba's ``cutoff_angle``, and the
+        scene file's key); ``cone_angle_deg`` is its deprecated old name."""
     def add_directional_light(
         self, direction: tuple[float, float, float], irradiance: tuple[float, float, float]
     ) -> None:

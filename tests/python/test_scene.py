@@ -144,10 +144,22 @@ def test_a_spot_light_lights_only_its_cone() -> None:
     scene = _lit_floor(height=4.0)
     # Straight down from 1 m with a 2 degree half angle: a disc of radius 3.5 cm, inside the
     # 4 degree view of 28 cm; the view's centre gets the full on-axis intensity.
-    scene.add_spot_light((0, 1, 0), (0, -1, 0), (8.0, 8.0, 8.0), cone_angle_deg=2.0)
+    scene.add_spot_light((0, 1, 0), (0, -1, 0), (8.0, 8.0, 8.0), cutoff_angle_deg=2.0)
     image = lenspath.render(scene, lenspath.Camera.pinhole(), spp=16, resolution=(32, 32), max_depth=1)
     np.testing.assert_allclose(image[15:17, 15:17].mean(), 0.5 / np.pi * 8.0, rtol=0.01)
     assert image[0:4, 0:4].max() == 0.0
+
+
+def test_the_old_name_of_the_spot_cutoff_still_works_and_says_the_new_one() -> None:
+    old, new = _lit_floor(height=4.0), _lit_floor(height=4.0)
+    with pytest.warns(DeprecationWarning, match="use cutoff_angle_deg"):
+        old.add_spot_light((0, 1, 0), (0, -1, 0), (8.0, 8.0, 8.0), cone_angle_deg=2.0)
+    new.add_spot_light((0, 1, 0), (0, -1, 0), (8.0, 8.0, 8.0), cutoff_angle_deg=2.0)
+    args = {"spp": 2, "resolution": (16, 16), "max_depth": 1}
+    camera = lenspath.Camera.pinhole()
+    assert np.array_equal(lenspath.render(old, camera, **args), lenspath.render(new, camera, **args))
+    with pytest.raises(ValueError, match="not also cone_angle_deg"):
+        new.add_spot_light((0, 1, 0), (0, -1, 0), (1, 1, 1), cutoff_angle_deg=2.0, cone_angle_deg=2.0)
 
 
 @pytest.mark.parametrize(
@@ -156,7 +168,7 @@ def test_a_spot_light_lights_only_its_cone() -> None:
         (lambda s: s.add_point_light((0, np.nan, 0), (1, 1, 1)), "position must be finite"),
         (lambda s: s.add_point_light((0, 0, 0), (1, -1, 1)), "intensity must be finite and non-negative"),
         (lambda s: s.add_directional_light((0, 0, 0), (1, 1, 1)), "direction must be a finite, non-zero"),
-        (lambda s: s.add_spot_light((0, 0, 0), (0, -1, 0), (1, 1, 1), 0.0), r"cone_angle_deg must be in \(0, 180\]"),
+        (lambda s: s.add_spot_light((0, 0, 0), (0, -1, 0), (1, 1, 1), 0.0), r"cutoff_angle_deg must be in \(0, 180\]"),
         (lambda s: s.add_sphere((0, 0, 0), 1.0, 0, emission=(1, np.inf, 1)), "emission must be finite"),
     ],
 )

@@ -311,10 +311,11 @@ impl EarlierTruths {
     /// Reads `path`; an error if it is not an evaluation of `metric` at `spp` and `size`.
     fn load(path: &Path, metric: &str, spp: u32, size: (u32, u32)) -> Result<EarlierTruths> {
         let bad = |message: String| Error::Parse {
+            kind: lenspath::FileKind::Other,
             path: path.to_path_buf(),
             message,
         };
-        let text = lenspath::io::read_text(path)?;
+        let text = lenspath::io::read_text(path, lenspath::FileKind::Other)?;
         let file: serde_json::Value = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
         let (their_metric, their_spp, their_size) = (&file["metric"], &file["spp"], &file["resolution"]);
         if their_metric != metric || their_spp != spp || *their_size != json!([size.0, size.1]) {

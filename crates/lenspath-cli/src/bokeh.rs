@@ -242,6 +242,7 @@ fn run_depth_blur(args: &BokehArgs, mut image: lenspath::film::Image, coc: &Circ
             let map = read_exr(path)?;
             if (map.width, map.height) != (image.width, image.height) {
                 return Err(Error::Parse {
+                    kind: lenspath::FileKind::Image,
                     path: path.clone(),
                     message: format!(
                         "the depth map is {}x{}, the image {}x{}",
@@ -302,6 +303,7 @@ fn load_kernel(mask: &str, size: KernelSize) -> Result<Kernel> {
     if path.exists() {
         let (w, h, values) = read_gray(&path)?;
         return Kernel::from_mask(w, h, &values, size).map_err(|e| Error::Parse {
+            kind: lenspath::FileKind::Image,
             path,
             message: e.to_string(),
         });

@@ -17,6 +17,8 @@ pub enum Error {
     Parse {
         /// The file.
         path: PathBuf,
+        /// What kind of file it is (a front end picks its exception by it).
+        kind: FileKind,
         /// What is wrong, and where in the file.
         message: String,
     },
@@ -28,6 +30,21 @@ pub enum Error {
         /// The operating system's reason.
         source: std::io::Error,
     },
+}
+
+/// What a file that failed to parse holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FileKind {
+    /// A scene (COLLADA, OBJ + MTL, PLY, glTF, lenspath TOML).
+    Scene,
+    /// A lens prescription table.
+    Lens,
+    /// An image (PNG, JPEG, EXR), an aperture mask or a bokeh kernel.
+    Image,
+    /// A render checkpoint.
+    Checkpoint,
+    /// Anything else (a JSON report, ...).
+    Other,
 }
 
 /// Result with the library's [`Error`].

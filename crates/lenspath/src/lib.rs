@@ -34,6 +34,7 @@ pub mod autofocus;
 pub mod bokeh;
 pub mod builtin;
 pub mod camera;
+pub mod color;
 pub mod defaults;
 pub mod error;
 pub mod film;
@@ -53,4 +54,4 @@ pub mod scene;
 pub mod setup;
 pub mod shapes;
 
-pub use error::{Error, Result};
+pub use error::{Error, FileKind, Result};

@@ -3,6 +3,7 @@
 
 use glam::{Vec2, Vec3};
 
+use crate::error::{Error, Result};
 use crate::math::Rgb;
 use crate::sampling::{uniform_sphere, uniform_triangle, Distribution1D, UNIFORM_SPHERE_PDF};
 
@@ -180,6 +181,39 @@ pub struct LightSample {
 }
 
 impl Light {
+    /// A spot light at `position` pointing along `direction` (normalised
+    /// here): `intensity` on its axis, falling off as cos^`exponent` of the
+    /// angle from it, none beyond `cutoff_angle_deg`, the cone's half angle
+    /// (pbrt's `coneangle`, Mitsuba's `cutoff_angle`), in (0, 180]. The one
+    /// rule every front end's spot light goes through.
+    pub fn spot(
+        position: Vec3,
+        direction: Vec3,
+        intensity: Rgb,
+        cutoff_angle_deg: f32,
+        exponent: f32,
+    ) -> Result<Light> {
+        let fail = |m: String| Err(Error::InvalidArgument(m));
+        if !(cutoff_angle_deg > 0.0 && cutoff_angle_deg <= 180.0) {
+            return fail(format!("cutoff_angle_deg must be in (0, 180], got {cutoff_angle_deg}"));
+        }
+        if !(exponent >= 0.0 && exponent.is_finite()) {
+            return fail(format!("exponent must be 0 or more, got {exponent}"));
+        }
+        let Some(direction) = direction.try_normalize() else {
+            return fail(format!(
+                "a spot light's direction must be finite and non-zero, got {direction}"
+            ));
+        };
+        Ok(Light::Spot {
+            position,
+            direction,
+            intensity,
+            cos_cutoff: cutoff_angle_deg.to_radians().cos(),
+            exponent,
+        })
+    }
+
     /// Samples the light from point `p`.
     pub fn sample(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
         match *self {

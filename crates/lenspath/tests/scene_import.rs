@@ -6,6 +6,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
+use glam::Vec3;
 use lenspath::accel::BvhSettings;
 use lenspath::builtin::DEFAULT_MESH_TRIANGLES;
 use lenspath::camera::{ApertureShape, PerspectiveCamera};
@@ -13,6 +14,7 @@ use lenspath::film::Image;
 use lenspath::io::{load_scene, LoadedScene};
 use lenspath::lights::Light;
 use lenspath::materials::Material;
+use lenspath::math::Rgb;
 use lenspath::render::{render, RenderSettings};
 use lenspath::sampling::SamplerKind;
 use lenspath::setup::{realistic_settings, RealisticDescription};
@@ -310,7 +312,7 @@ type = "spot"
 position = [0, 0, 5]
 look_at = [0, 0, 0]
 intensity = 3
-cone_angle_deg = 60
+cutoff_angle_deg = 30
 [[shapes]]
 type = "mesh"
 file = "tri.ply"
@@ -337,7 +339,16 @@ aperture = "star:5:0.4"
     assert!((p[1] - glam::Vec3::new(1.0, 2.0, 0.0)).length() < 1e-5, "{p:?}");
     assert!(matches!(s.materials[s.meshes[0].material as usize], Material::Conductor { alpha, .. } if alpha == 0.1));
     assert_eq!(s.spheres[0].emission.map(|e| e.x), Some(2.0));
-    assert!(matches!(s.lights[..], [Light::Spot { .. }]));
+    let spot = Light::spot(Vec3::new(0.0, 0.0, 5.0), Vec3::NEG_Z, Rgb::splat(3.0), 30.0, 0.0).unwrap();
+    assert_eq!(s.lights, [spot]);
+    assert!(loaded.warnings.is_empty(), "{}", loaded.warnings);
+    // The old key, the full angle, still means the same light, and says what replaces it.
+    let old = toml.replace("cutoff_angle_deg = 30", "cone_angle_deg = 60");
+    std::fs::write(&path, old).unwrap();
+    let loaded_old = load_scene(&path).unwrap();
+    assert_eq!(loaded_old.scene.lights, [spot]);
+    let text = loaded_old.warnings.to_string();
+    assert!(text.contains("use cutoff_angle_deg = 30, the half angle"), "{text}");
     assert_eq!(loaded.options.resolution, Some((32, 24)));
     assert_eq!(loaded.options.spp, Some(2));
     assert_eq!(loaded.options.sampler, Some(SamplerKind::Independent));

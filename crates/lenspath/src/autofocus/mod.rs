@@ -7,9 +7,13 @@
 pub mod light_field;
 pub mod measures;
 pub mod plot;
+mod range;
 pub mod search;
+mod signal;
+mod truth;
 
 pub use measures::{FocusMeasure, Patch, FOCUS_MEASURES};
-pub use search::{
-    AutofocusResult, AutofocusSettings, Detail, Evaluation, Focuser, GroundTruth, RangeFocus, Strategy, STRATEGIES,
-};
+pub use range::RangeFocus;
+pub use search::{AutofocusResult, AutofocusSettings, Evaluation, Focuser, Strategy, STRATEGIES};
+pub use signal::Detail;
+pub use truth::{GroundTruth, TRUTH_MAX_SPP_FACTOR, TRUTH_SEED_SPREAD_DOF};

@@ -14,7 +14,7 @@ pub use convolve::{
 pub use depth::{depth_blur, CircleOfConfusion};
 pub use kernel::{Kernel, KernelSize};
 
-use crate::io::image::linear_to_srgb;
+use crate::color::linear_to_srgb;
 
 /// Lifts the highlights of a display-referred image (linear RGB, 3 floats a
 /// pixel) before blurring: clipped at 1, its small lights would otherwise

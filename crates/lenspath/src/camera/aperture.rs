@@ -72,6 +72,7 @@ impl ApertureShape {
     pub fn load_mask(path: &std::path::Path) -> Result<ApertureShape> {
         let (width, height, values) = crate::io::image::read_gray(path)?;
         ApertureShape::mask(width, height, values).map_err(|e| Error::Parse {
+            kind: crate::FileKind::Image,
             path: path.to_path_buf(),
             message: e.to_string(),
         })

@@ -67,6 +67,7 @@ pub fn read_checkpoint(path: &Path) -> Result<(String, Accumulation)> {
         .and_then(|mut f| f.read_to_end(&mut bytes))
         .map_err(|e| io_error(path, e))?;
     parse_checkpoint(&bytes).map_err(|message| Error::Parse {
+        kind: crate::FileKind::Checkpoint,
         path: path.to_path_buf(),
         message,
     })

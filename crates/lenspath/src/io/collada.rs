@@ -60,19 +60,21 @@ const MAX_NODE_VISITS: usize = 1_000_000;
 
 /// Reads a COLLADA file.
 pub fn load_collada(path: &Path) -> Result<LoadedScene> {
-    let text = super::read_text(path)?;
+    let text = super::read_text(path, crate::FileKind::Scene)?;
     parse_collada(&text, path)
 }
 
 /// Parses COLLADA text; `path` names the file in messages.
 pub fn parse_collada(text: &str, path: &Path) -> Result<LoadedScene> {
     let doc = Document::parse(text).map_err(|e| Error::Parse {
+        kind: crate::FileKind::Scene,
         path: path.to_path_buf(),
         message: format!("not well-formed XML: {e}"),
     })?;
     let root = doc.root_element();
     if root.tag_name().name() != "COLLADA" {
         return Err(Error::Parse {
+            kind: crate::FileKind::Scene,
             path: path.to_path_buf(),
             message: format!("root element is <{}>, not <COLLADA>", root.tag_name().name()),
         });
@@ -201,6 +203,7 @@ impl<'a, 'input> Reader<'a, 'input> {
         let pos = self.doc.text_pos_at(node.range().start);
         let id = node.attribute("id").map_or(String::new(), |id| format!(" id=\"{id}\""));
         Error::Parse {
+            kind: crate::FileKind::Scene,
             path: self.path.to_path_buf(),
             message: format!("line {}: <{}{id}>: {message}", pos.row, node.tag_name().name()),
         }

@@ -57,6 +57,7 @@ pub fn parse_gltf(
     read_uri: &dyn Fn(&str) -> std::result::Result<Vec<u8>, String>,
 ) -> Result<LoadedScene> {
     let fail = |m: String| Error::Parse {
+        kind: crate::FileKind::Scene,
         path: path.to_path_buf(),
         message: m,
     };

@@ -6,6 +6,7 @@
 use std::path::Path;
 
 use super::{io_error, write_atomically};
+use crate::color::{srgb_to_linear, to_srgb8};
 use crate::error::{Error, Result};
 use crate::film::Image;
 
@@ -38,24 +39,6 @@ impl ImageFormat {
                 other.map_or("(none)".to_string(), |e| format!("'.{e}'"))
             ))),
         }
-    }
-}
-
-/// The sRGB transfer function (IEC 61966-2-1) from linear to encoded.
-pub fn linear_to_srgb(x: f32) -> f32 {
-    if x <= 0.003_130_8 {
-        12.92 * x.max(0.0)
-    } else {
-        1.055 * x.min(1.0).powf(1.0 / 2.4) - 0.055
-    }
-}
-
-/// The sRGB transfer function (IEC 61966-2-1) from encoded to linear.
-pub fn srgb_to_linear(x: f32) -> f32 {
-    if x <= 0.040_45 {
-        x / 12.92
-    } else {
-        ((x + 0.055) / 1.055).powf(2.4)
     }
 }
 
@@ -123,6 +106,7 @@ fn decode(path: &Path) -> Result<::image::DynamicImage> {
     reader.decode().map_err(|e| match e {
         ::image::ImageError::IoError(io) => io_error(path, io),
         other => Error::Parse {
+            kind: crate::FileKind::Image,
             path: path.to_path_buf(),
             message: format!("not a readable PNG, JPEG or EXR image: {other}"),
         },
@@ -156,16 +140,6 @@ pub fn encode_image(image: &Image, format: ImageFormat, exposure: f32) -> Result
 /// A JPEG of `image` (sRGB, `exposure` stops): the small frames `lenspath view` streams.
 pub fn encode_jpeg(image: &Image, exposure: f32) -> Result<Vec<u8>> {
     encode_8bit(image, exposure, ::image::ImageFormat::Jpeg)
-}
-
-/// 8-bit sRGB bytes of the image after an exposure of `exposure` stops.
-pub fn to_srgb8(image: &Image, exposure: f32) -> Vec<u8> {
-    let scale = exposure.exp2();
-    image
-        .rgb
-        .iter()
-        .map(|&v| (linear_to_srgb(v * scale) * 255.0 + 0.5).clamp(0.0, 255.0) as u8)
-        .collect()
 }
 
 fn encode_8bit(image: &Image, exposure: f32, format: ::image::ImageFormat) -> Result<Vec<u8>> {
@@ -226,6 +200,7 @@ fn encode_exr(image: &Image) -> Result<Vec<u8>> {
 pub fn read_exr(path: &Path) -> Result<Image> {
     use exr::prelude::{read_first_flat_layer_from_file, AttributeValue, Text};
     let fail = |m: String| Error::Parse {
+        kind: crate::FileKind::Image,
         path: path.to_path_buf(),
         message: m,
     };

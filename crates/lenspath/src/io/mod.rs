@@ -6,7 +6,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::error::{Error, Result};
+use crate::error::{Error, FileKind, Result};
 use crate::shapes::TriangleMesh;
 
 pub mod checkpoint;
@@ -56,10 +56,11 @@ pub fn load_mesh(path: &Path) -> Result<TriangleMesh> {
     Ok(mesh)
 }
 
-/// The whole of a text file, with a clear error for a missing or non-UTF-8 file.
-pub fn read_text(path: &Path) -> Result<String> {
+/// The whole of a text file holding a `kind`, with a clear error for a missing or non-UTF-8 file.
+pub fn read_text(path: &Path, kind: FileKind) -> Result<String> {
     let bytes = std::fs::read(path).map_err(|e| io_error(path, e))?;
     String::from_utf8(bytes).map_err(|e| Error::Parse {
+        kind,
         path: path.to_path_buf(),
         message: format!("not UTF-8 text (byte {} is invalid)", e.utf8_error().valid_up_to()),
     })

@@ -31,7 +31,7 @@ use crate::shapes::TriangleMesh;
 
 /// Reads an OBJ file and the MTL files it names (beside it).
 pub fn load_obj(path: &Path) -> Result<LoadedScene> {
-    let text = super::read_text(path)?;
+    let text = super::read_text(path, crate::FileKind::Scene)?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     parse_obj(&text, path, &|mtl| tobj::load_mtl(dir.join(mtl)))
 }
@@ -39,6 +39,7 @@ pub fn load_obj(path: &Path) -> Result<LoadedScene> {
 /// Parses OBJ text; `load_mtl` reads a material library named by `mtllib`.
 pub fn parse_obj(text: &str, path: &Path, load_mtl: &dyn Fn(&Path) -> tobj::MTLLoadResult) -> Result<LoadedScene> {
     check_lines(text).map_err(|(line, message)| Error::Parse {
+        kind: crate::FileKind::Scene,
         path: path.to_path_buf(),
         message: format!("line {line}: {message}"),
     })?;
@@ -50,6 +51,7 @@ pub fn parse_obj(text: &str, path: &Path, load_mtl: &dyn Fn(&Path) -> tobj::MTLL
     };
     let (models, materials) =
         tobj::load_obj_buf(&mut BufReader::new(text.as_bytes()), &options, load_mtl).map_err(|e| Error::Parse {
+            kind: crate::FileKind::Scene,
             path: path.to_path_buf(),
             message: e.to_string(),
         })?;
@@ -114,6 +116,7 @@ pub fn parse_obj(text: &str, path: &Path, load_mtl: &dyn Fn(&Path) -> tobj::MTLL
     }
     if scene.meshes.is_empty() {
         return Err(Error::Parse {
+            kind: crate::FileKind::Scene,
             path: path.to_path_buf(),
             message: "no faces with area: nothing to render".into(),
         });

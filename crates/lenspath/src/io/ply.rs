@@ -136,6 +136,7 @@ fn read_ply<R: BufRead + Seek>(
 ) -> Result<TriangleMesh> {
     // ply-rs-bw's messages span lines; keep ours to one.
     let fail = |m: String| Error::Parse {
+        kind: crate::FileKind::Scene,
         path: path.to_path_buf(),
         message: m.split_whitespace().collect::<Vec<_>>().join(" "),
     };

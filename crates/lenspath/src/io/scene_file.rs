@@ -137,7 +137,11 @@ enum LightSpec {
         position: [f32; 3],
         look_at: [f32; 3],
         intensity: Color,
-        cone_angle_deg: f32,
+        /// The cone's half angle (pbrt's `coneangle`, Mitsuba's `cutoff_angle`).
+        cutoff_angle_deg: Option<f32>,
+        /// Deprecated: the cone's full angle.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        cone_angle_deg: Option<f32>,
         #[serde(default)]
         exponent: f32,
     },
@@ -198,7 +202,7 @@ pub fn load_scene_file(path: &Path) -> Result<LoadedScene> {
 
 /// Loads `path`, which `including` (outermost first) reached through `base` or mesh files.
 fn load_included(path: &Path, including: &[PathBuf]) -> Result<LoadedScene> {
-    let text = super::read_text(path)?;
+    let text = super::read_text(path, crate::FileKind::Scene)?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let canonical = path.canonicalize().map_err(|e| super::io_error(path, e))?;
     let mut chain = including.to_vec();
@@ -231,6 +235,7 @@ fn load_included(path: &Path, including: &[PathBuf]) -> Result<LoadedScene> {
 /// Parses scene-file text; `load` reads the `base` and mesh files it names.
 pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<LoadedScene>) -> Result<LoadedScene> {
     let fail = |m: String| Error::Parse {
+        kind: crate::FileKind::Scene,
         path: path.to_path_buf(),
         message: m,
     };
@@ -302,9 +307,12 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
     };
 
     for (i, spec) in file.lights.iter().enumerate() {
-        scene
-            .lights
-            .push(light(spec).map_err(|e| fail(format!("lights[{i}]: {e}")))?);
+        scene.lights.push(
+            light(spec, &mut |w: String| {
+                warnings.add(format!("{}: lights[{i}]: {w}", path.display()))
+            })
+            .map_err(|e| fail(format!("lights[{i}]: {e}")))?,
+        );
     }
 
     for (i, spec) in file.shapes.iter().enumerate() {
@@ -622,7 +630,8 @@ fn material(spec: &MaterialSpec) -> std::result::Result<Material, String> {
     })
 }
 
-fn light(spec: &LightSpec) -> std::result::Result<Light, String> {
+/// The light `spec` describes; `deprecated` is told of old spellings.
+fn light(spec: &LightSpec, deprecated: &mut dyn FnMut(String)) -> std::result::Result<Light, String> {
     Ok(match *spec {
         LightSpec::Point { position, intensity } => Light::Point {
             position: Vec3::from_array(position),
@@ -632,22 +641,36 @@ fn light(spec: &LightSpec) -> std::result::Result<Light, String> {
             position,
             look_at,
             intensity,
+            cutoff_angle_deg,
             cone_angle_deg,
             exponent,
         } => {
-            let direction = (Vec3::from_array(look_at) - Vec3::from_array(position))
-                .try_normalize()
-                .ok_or("look_at must differ from position")?;
-            if !(cone_angle_deg > 0.0 && cone_angle_deg <= 180.0) {
-                return Err(format!("cone_angle_deg must be in (0, 180], got {cone_angle_deg}"));
+            let direction = Vec3::from_array(look_at) - Vec3::from_array(position);
+            if direction.length_squared() == 0.0 {
+                return Err("look_at must differ from position".into());
             }
-            Light::Spot {
-                position: Vec3::from_array(position),
+            let cutoff_angle_deg = match (cutoff_angle_deg, cone_angle_deg) {
+                (Some(half), None) => half,
+                (None, Some(full)) => {
+                    deprecated(format!(
+                        "cone_angle_deg (the full angle) is deprecated; use cutoff_angle_deg = {}, the half angle",
+                        0.5 * full
+                    ));
+                    0.5 * full
+                }
+                (Some(_), Some(_)) => {
+                    return Err("give cutoff_angle_deg, not also cone_angle_deg (its old name)".into())
+                }
+                (None, None) => return Err("a spot light needs cutoff_angle_deg (the cone's half angle)".into()),
+            };
+            Light::spot(
+                Vec3::from_array(position),
                 direction,
-                intensity: intensity.rgb(),
-                cos_cutoff: (0.5 * cone_angle_deg).to_radians().cos(),
+                intensity.rgb(),
+                cutoff_angle_deg,
                 exponent,
-            }
+            )
+            .map_err(|e| e.to_string())?
         }
         LightSpec::Directional { direction, irradiance } => Light::Directional {
             direction: Vec3::from_array(direction)

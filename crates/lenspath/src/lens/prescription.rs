@@ -78,13 +78,14 @@ impl LensPrescription {
                 names.join(", ")
             )));
         }
-        let text = crate::io::read_text(path)?;
+        let text = crate::io::read_text(path, crate::FileKind::Lens)?;
         LensPrescription::parse(&text, name_or_path, TableConvention::Auto)
     }
 
     /// Parses a table; `source` names it in errors.
     pub fn parse(text: &str, source: &str, convention: TableConvention) -> Result<LensPrescription> {
         let fail = |line: usize, message: String| Error::Parse {
+            kind: crate::FileKind::Lens,
             path: source.into(),
             message: format!("line {line}: {message}"),
         };
@@ -123,6 +124,7 @@ impl LensPrescription {
         }
         if rows.is_empty() {
             return Err(Error::Parse {
+                kind: crate::FileKind::Lens,
                 path: source.into(),
                 message: "no surfaces".into(),
             });
@@ -201,6 +203,7 @@ impl LensPrescription {
         }
         if stop_line.is_none() {
             return Err(Error::Parse {
+                kind: crate::FileKind::Lens,
                 path: source.into(),
                 message: "no aperture stop (a row with radius 0)".into(),
             });

@@ -1,0 +1,137 @@
+//! Autofocus: the options map onto `lenspath::setup::AutofocusOverrides`.
+
+use lenspath::autofocus::Focuser;
+use lenspath::camera::LensFocus;
+use lenspath::film::NormalizedRect;
+use lenspath::setup::{resolve_autofocus, AutofocusOverrides, CameraDescription, RealisticDescription};
+use lenspath::Error;
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray2, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+
+use crate::camera::Camera;
+use crate::error::to_py;
+use crate::scene::Scene;
+
+/// What `autofocus` found and what it cost.
+#[pyclass(module = "lenspath._core", frozen, get_all)]
+pub(crate) struct AutofocusResult {
+    /// The chosen sensor position, mm behind the stop.
+    pub(crate) sensor_mm: f64,
+    /// The distance in focus there (scene units from the sensor); None beyond infinity.
+    pub(crate) focus_distance: Option<f64>,
+    /// The focus measure's name.
+    pub(crate) metric: String,
+    /// The strategy's name.
+    pub(crate) strategy: String,
+    /// Every scored patch image: (sensor_mm, score) rows, in order (patch
+    /// renders and refocused light fields).
+    pub(crate) evaluations: Py<PyArray2<f64>>,
+    /// How many of the evaluations are patch renders.
+    pub(crate) patch_renders: usize,
+    /// Light fields recorded (the patch with a margin, refocused to many sensor positions).
+    pub(crate) light_fields: usize,
+    /// Camera rays traced (patch render and light-field samples and probe rays).
+    pub(crate) camera_rays: u64,
+    /// Wall time, seconds.
+    pub(crate) seconds: f64,
+    /// The depth of focus at the chosen position, mm (the unit of focus errors).
+    pub(crate) depth_of_focus_mm: f64,
+    /// The camera given, focused there.
+    pub(crate) camera: Camera,
+}
+
+#[pymethods]
+impl AutofocusResult {
+    pub(crate) fn __repr__(&self, py: Python<'_>) -> String {
+        let distance = self
+            .focus_distance
+            .map_or_else(|| "None".to_string(), |d| format!("{d:.4}"));
+        format!(
+            "AutofocusResult(strategy='{}', metric='{}', sensor_mm={:.4}, focus_distance={distance}, \
+             evaluations={}, patch_renders={}, camera_rays={})",
+            self.strategy,
+            self.metric,
+            self.sensor_mm,
+            self.evaluations.bind(py).shape()[0],
+            self.patch_renders,
+            self.camera_rays
+        )
+    }
+}
+
+/// Focuses the realistic camera on `patch` (x, y, width, height in fractions
+/// of the image) by rendering it (see the stub).
+#[pyfunction]
+#[pyo3(signature = (scene, patch, camera = None, *, metric = None, strategy = None, patience = None,
+                    spp = None, resolution = None, seed = None, max_depth = None, threads = None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn autofocus(
+    py: Python<'_>,
+    scene: &Scene,
+    patch: (f64, f64, f64, f64),
+    camera: Option<&Camera>,
+    metric: Option<String>,
+    strategy: Option<String>,
+    patience: Option<usize>,
+    spp: Option<u32>,
+    resolution: Option<(u32, u32)>,
+    seed: Option<u32>,
+    max_depth: Option<u32>,
+    threads: Option<usize>,
+) -> PyResult<AutofocusResult> {
+    let patch = NormalizedRect::new(patch.0, patch.1, patch.2, patch.3).map_err(to_py)?;
+    let view = scene.view()?;
+    let description = match camera {
+        Some(c) => c.realistic_description()?.clone(),
+        None => RealisticDescription::default(),
+    };
+    let overrides = AutofocusOverrides {
+        resolution,
+        spp,
+        max_depth,
+        seed,
+        threads,
+        metric,
+        strategy,
+        patience,
+        camera: description.clone(),
+    };
+    let search = resolve_autofocus(&scene.options, &view, patch, &overrides).map_err(to_py)?;
+    let (settings, search, metric) = (search.settings, search.strategy, overrides.metric);
+    let metric = metric.unwrap_or_else(|| lenspath::defaults::AUTOFOCUS_METRIC.to_string());
+    let compiled = scene.compiled(py)?;
+    let (result, depth_of_focus_mm) = py
+        .detach(|| {
+            let mut focuser = Focuser::new(&compiled, view.pose, settings)?;
+            let result = focuser.run(search)?;
+            let dof = focuser.depth_of_focus_mm(result.sensor_z_mm);
+            Ok::<_, Error>((result, dof))
+        })
+        .map_err(to_py)?;
+    let rows: Vec<f64> = result
+        .evaluations
+        .iter()
+        .flat_map(|e| [e.sensor_z_mm, e.score])
+        .collect();
+    let evaluations = Array2::from_shape_vec((result.evaluations.len(), 2), rows)
+        .expect("two values per evaluation")
+        .into_pyarray(py)
+        .unbind();
+    Ok(AutofocusResult {
+        sensor_mm: result.sensor_z_mm,
+        focus_distance: result.focus_distance,
+        metric,
+        strategy: result.strategy.to_string(),
+        evaluations,
+        patch_renders: result.patch_renders(),
+        light_fields: result.light_fields,
+        camera_rays: result.camera_rays,
+        seconds: result.seconds,
+        depth_of_focus_mm,
+        camera: Camera::new(CameraDescription::Realistic(RealisticDescription {
+            focus: Some(LensFocus::SensorPositionMm(result.sensor_z_mm)),
+            ..description
+        })),
+    })
+}

@@ -1,0 +1,54 @@
+//! Library errors as Python exceptions: `ValueError` for bad arguments,
+//! `lenspath.SceneError` for broken scene files, `lenspath.LensError` for
+//! broken lens tables, `OSError` for I/O; one argument, since a library
+//! error says what kind of file it is about.
+
+use lenspath::{Error, FileKind};
+use pyo3::create_exception;
+use pyo3::exceptions::{PyException, PyOSError, PyValueError};
+use pyo3::prelude::*;
+
+create_exception!(
+    lenspath,
+    LenspathError,
+    PyException,
+    "Base class of lenspath's own errors."
+);
+create_exception!(
+    lenspath,
+    SceneError,
+    LenspathError,
+    "A scene file is broken or inconsistent."
+);
+create_exception!(lenspath, LensError, LenspathError, "A lens table is broken.");
+
+/// A library error as the Python exception users expect: the error says
+/// what kind of file a parse failure is about.
+pub(crate) fn to_py(error: Error) -> PyErr {
+    let message = error.to_string();
+    match error {
+        Error::InvalidArgument(_) => PyValueError::new_err(message),
+        Error::InvalidScene(_) => SceneError::new_err(message),
+        Error::Parse { kind, .. } => match kind {
+            FileKind::Scene => SceneError::new_err(message),
+            FileKind::Lens => LensError::new_err(message),
+            FileKind::Image | FileKind::Checkpoint | FileKind::Other => PyValueError::new_err(message),
+        },
+        Error::Io { source, .. } => PyOSError::new_err((source.raw_os_error().unwrap_or(0), message)),
+    }
+}
+
+pub(crate) fn value_error(message: impl Into<String>) -> PyErr {
+    PyValueError::new_err(message.into())
+}
+
+/// Warns that something is deprecated (a `DeprecationWarning` naming what replaces it).
+pub(crate) fn deprecated(py: Python<'_>, message: &str) -> PyResult<()> {
+    let category = py.get_type::<pyo3::exceptions::PyDeprecationWarning>();
+    PyErr::warn(
+        py,
+        &category,
+        &std::ffi::CString::new(message).expect("no NUL in the message"),
+        2,
+    )
+}

@@ -1,0 +1,335 @@
+//! Lenses: prescriptions, their analysis, tracing and drawings.
+
+use std::path::PathBuf;
+
+use glam::DVec3;
+use lenspath::lens::{
+    plot::{layout, layout_svg, Polyline},
+    AnalysisSettings, Direction, LensAnalysis, LensPrescription, LensRay, LensSystem, TableConvention, BUILTIN_LENSES,
+};
+use lenspath::Error;
+use numpy::ndarray::Array2;
+use numpy::{AllowTypeChange, IntoPyArray, PyArray2, PyArrayLike2, PyUntypedArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
+
+use crate::error::{to_py, value_error};
+
+/// The default sensor of the lens drawings, as `lenspath lens` draws them: 36 × 24 mm.
+pub(crate) const FULL_FRAME_MM: (f64, f64) = (36.0, 24.0);
+
+/// A real compound lens: its prescription, placed wide open (or stopped down).
+#[pyclass(module = "lenspath._core")]
+#[derive(Clone)]
+pub(crate) struct Lens {
+    pub(crate) prescription: LensPrescription,
+    pub(crate) system: LensSystem,
+    pub(crate) analysis: LensAnalysis,
+    /// The f-number it was stopped down to (None: wide open).
+    pub(crate) stopped_to: Option<f64>,
+}
+
+impl Lens {
+    pub(crate) fn from_prescription(prescription: LensPrescription) -> PyResult<Lens> {
+        let system = LensSystem::new(&prescription);
+        Lens::placed(prescription, system)
+    }
+
+    /// `prescription` placed as `system` (wide open or stopped down), analysed.
+    pub(crate) fn placed(prescription: LensPrescription, system: LensSystem) -> PyResult<Lens> {
+        let analysis = LensAnalysis::new(&system, &AnalysisSettings::default()).map_err(to_py)?;
+        Ok(Lens {
+            prescription,
+            system,
+            analysis,
+            stopped_to: None,
+        })
+    }
+}
+
+/// The sensor diagonal of the lens drawings: `sensor_diagonal_mm`, else a
+/// 36 × 24 mm sensor's, as `lenspath lens` draws them.
+pub(crate) fn drawing_diagonal_mm(sensor_diagonal_mm: Option<f64>) -> f64 {
+    sensor_diagonal_mm.unwrap_or_else(|| FULL_FRAME_MM.0.hypot(FULL_FRAME_MM.1))
+}
+
+#[pymethods]
+impl Lens {
+    /// A built-in lens by name (see `builtin_lenses()`).
+    #[staticmethod]
+    pub(crate) fn builtin(name: &str) -> PyResult<Lens> {
+        if !BUILTIN_LENSES.iter().any(|(n, _)| *n == name) {
+            return Err(value_error(format!(
+                "unknown built-in lens '{name}'; use one of {}",
+                BUILTIN_LENSES.map(|(n, _)| n).join(", ")
+            )));
+        }
+        Lens::from_prescription(LensPrescription::load(name).map_err(to_py)?)
+    }
+
+    /// A lens table file (pbrt / CS184 format).
+    #[staticmethod]
+    pub(crate) fn load(path: PathBuf) -> PyResult<Lens> {
+        if !path.is_file() {
+            let source = std::io::Error::from(std::io::ErrorKind::NotFound);
+            return Err(to_py(Error::Io { path, source }));
+        }
+        let name = path
+            .to_str()
+            .ok_or_else(|| value_error(format!("{}: not a UTF-8 path", path.display())))?;
+        Lens::from_prescription(LensPrescription::load(name).map_err(to_py)?)
+    }
+
+    /// A lens from a table (N × 4: radius, thickness to the next surface,
+    /// index, aperture diameter, all mm; radius 0 marks the stop).
+    #[staticmethod]
+    #[pyo3(signature = (table, name = "table"))]
+    pub(crate) fn from_table(table: PyArrayLike2<'_, f64, AllowTypeChange>, name: &str) -> PyResult<Lens> {
+        if table.shape()[1] != 4 {
+            return Err(value_error(format!(
+                "a lens table has 4 columns (radius, thickness, index, aperture), got {}",
+                table.shape()[1]
+            )));
+        }
+        let text: String = table
+            .as_array()
+            .rows()
+            .into_iter()
+            .map(|r| format!("{} {} {} {}\n", r[0], r[1], r[2], r[3]))
+            .collect();
+        let prescription = LensPrescription::parse(&text, name, TableConvention::ThicknessToNext).map_err(to_py)?;
+        Lens::from_prescription(prescription)
+    }
+
+    /// This lens stopped down to f-number `f_number`.
+    pub(crate) fn stopped_down(&self, f_number: f64) -> PyResult<Lens> {
+        let system = self.system.with_f_number(f_number).map_err(to_py)?;
+        Ok(Lens {
+            stopped_to: Some(f_number),
+            ..Lens::placed(self.prescription.clone(), system)?
+        })
+    }
+
+    /// Pickles as its name, table and stop (`Lens._from_state`).
+    pub(crate) fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        Ok((
+            py.get_type::<Lens>().getattr("_from_state")?,
+            (self.name().to_string(), self.table(py), self.stopped_to).into_pyobject(py)?,
+        ))
+    }
+
+    /// The lens `__reduce__` describes.
+    #[staticmethod]
+    pub(crate) fn _from_state(
+        name: &str,
+        table: PyArrayLike2<'_, f64, AllowTypeChange>,
+        stopped_to: Option<f64>,
+    ) -> PyResult<Lens> {
+        let lens = Lens::from_table(table, name)?;
+        match stopped_to {
+            Some(f_number) => lens.stopped_down(f_number),
+            None => Ok(lens),
+        }
+    }
+
+    #[getter]
+    pub(crate) fn name(&self) -> &str {
+        self.prescription.name()
+    }
+
+    /// The table: N × 4 (radius, thickness to next, index, aperture diameter), mm.
+    #[getter]
+    pub(crate) fn table<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<f64>> {
+        let surfaces = self.prescription.surfaces();
+        let mut a = Array2::zeros((surfaces.len(), 4));
+        for (i, s) in surfaces.iter().enumerate() {
+            a[[i, 0]] = s.radius_mm;
+            a[[i, 1]] = s.thickness_mm;
+            a[[i, 2]] = s.ior;
+            a[[i, 3]] = s.aperture_diameter_mm;
+        }
+        a.into_pyarray(py)
+    }
+
+    /// Every figure of `lenspath lens --json`, as a dict.
+    pub(crate) fn analysis<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let a = &self.analysis;
+        let d = PyDict::new(py);
+        for (key, value) in [
+            ("effective_focal_length_mm", a.effective_focal_length_mm),
+            ("back_focal_distance_mm", a.back_focal_distance_mm),
+            ("front_focal_distance_mm", a.front_focal_distance_mm),
+            ("front_principal_plane_mm", a.front_principal_plane_mm),
+            ("rear_principal_plane_mm", a.rear_principal_plane_mm),
+            ("entrance_pupil_mm", a.entrance_pupil_mm),
+            ("entrance_pupil_diameter_mm", a.entrance_pupil_diameter_mm),
+            ("exit_pupil_mm", a.exit_pupil_mm),
+            ("exit_pupil_diameter_mm", a.exit_pupil_diameter_mm),
+            ("f_number", a.f_number),
+            ("diagonal_fov_deg", a.diagonal_fov_deg),
+            ("horizontal_fov_deg", a.horizontal_fov_deg),
+            ("infinity_focus_mm", a.infinity_focus_mm),
+            ("close_focus_mm", a.close_focus_mm),
+            ("close_focus_object_distance_mm", a.close_focus_object_distance_mm),
+            ("focal_length_mm", a.focal_length_mm),
+            ("ray_height_mm", a.ray_height_mm),
+            ("front_vertex_mm", a.front_vertex_mm),
+            ("rear_vertex_mm", a.rear_vertex_mm),
+        ] {
+            d.set_item(key, value)?;
+        }
+        Ok(d)
+    }
+
+    /// Real-ray focal length |P′ − F′|, mm.
+    #[getter]
+    pub(crate) fn focal_length_mm(&self) -> f64 {
+        self.analysis.focal_length_mm
+    }
+
+    /// Paraxial effective focal length, mm.
+    #[getter]
+    pub(crate) fn effective_focal_length_mm(&self) -> f64 {
+        self.analysis.effective_focal_length_mm
+    }
+
+    /// Paraxial f-number.
+    #[getter]
+    pub(crate) fn f_number(&self) -> f64 {
+        self.analysis.f_number
+    }
+
+    /// Sensor position (mm behind the stop) focusing infinity.
+    #[getter]
+    pub(crate) fn infinity_focus_mm(&self) -> f64 {
+        self.analysis.infinity_focus_mm
+    }
+
+    /// Sensor position (mm behind the stop) focusing the close-focus object.
+    #[getter]
+    pub(crate) fn close_focus_mm(&self) -> f64 {
+        self.analysis.close_focus_mm
+    }
+
+    /// Distance in focus (mm from the sensor plane) with the sensor at
+    /// `sensor_mm` behind the stop; None when nothing in front of the lens is.
+    #[pyo3(signature = (sensor_mm, ray_height_mm = 0.1))]
+    pub(crate) fn focus_distance(&self, sensor_mm: f64, ray_height_mm: f64) -> Option<f64> {
+        self.system.focus_distance_mm(sensor_mm, ray_height_mm)
+    }
+
+    /// Sensor position (mm behind the stop) focusing `distance_mm` (from the sensor plane).
+    #[pyo3(signature = (distance_mm, ray_height_mm = 0.1))]
+    pub(crate) fn sensor_for_distance(&self, distance_mm: f64, ray_height_mm: f64) -> PyResult<f64> {
+        self.system
+            .sensor_z_for_focus_distance(distance_mm, ray_height_mm)
+            .map_err(to_py)
+    }
+
+    /// Traces rays (N × 3 origins and directions, lens coordinates in mm:
+    /// z along the axis toward the sensor, the stop at 0) through every
+    /// surface, `toward` "scene" or "sensor". Returns (origins, directions,
+    /// passed): where each ray leaves the last surface, its unit direction,
+    /// and whether it got through (False rows are NaN).
+    #[pyo3(signature = (origins, directions, toward = "scene"))]
+    #[allow(clippy::type_complexity)]
+    pub(crate) fn trace<'py>(
+        &self,
+        py: Python<'py>,
+        origins: PyArrayLike2<'_, f64, AllowTypeChange>,
+        directions: PyArrayLike2<'_, f64, AllowTypeChange>,
+        toward: &str,
+    ) -> PyResult<(
+        Bound<'py, PyArray2<f64>>,
+        Bound<'py, PyArray2<f64>>,
+        Bound<'py, numpy::PyArray1<bool>>,
+    )> {
+        let direction = match toward {
+            "scene" => Direction::ToScene,
+            "sensor" => Direction::ToSensor,
+            other => {
+                return Err(value_error(format!(
+                    "toward must be 'scene' or 'sensor', got '{other}'"
+                )))
+            }
+        };
+        if origins.shape() != directions.shape() || origins.shape()[1] != 3 {
+            return Err(value_error(format!(
+                "origins and directions must both be N x 3, got {:?} and {:?}",
+                origins.shape(),
+                directions.shape()
+            )));
+        }
+        let (o, d) = (origins.as_array(), directions.as_array());
+        let n = o.nrows();
+        let mut out_o = Array2::from_elem((n, 3), f64::NAN);
+        let mut out_d = Array2::from_elem((n, 3), f64::NAN);
+        let mut passed = vec![false; n];
+        for i in 0..n {
+            let dir = DVec3::new(d[[i, 0]], d[[i, 1]], d[[i, 2]]);
+            if !dir.is_finite() || dir.length_squared() == 0.0 {
+                return Err(value_error(format!("direction {i} has zero length")));
+            }
+            let ray = LensRay {
+                origin: DVec3::new(o[[i, 0]], o[[i, 1]], o[[i, 2]]),
+                direction: dir.normalize(),
+            };
+            if let Some(out) = self.system.trace(&ray, direction) {
+                for c in 0..3 {
+                    out_o[[i, c]] = out.origin[c];
+                    out_d[[i, c]] = out.direction[c];
+                }
+                passed[i] = true;
+            }
+        }
+        Ok((out_o.into_pyarray(py), out_d.into_pyarray(py), passed.into_pyarray(py)))
+    }
+
+    /// The lens layout (elements, stop, marginal and chief rays) as SVG text;
+    /// the sensor `sensor_diagonal_mm` across (default: 36 × 24 mm).
+    #[pyo3(signature = (sensor_diagonal_mm = None))]
+    pub(crate) fn plot(&self, sensor_diagonal_mm: Option<f64>) -> String {
+        layout_svg(&self.system, &self.analysis, drawing_diagonal_mm(sensor_diagonal_mm))
+    }
+
+    /// What `plot` draws, as arrays of (z, height) rows in mm: `elements`
+    /// (closed outlines), `stop` (two blades), `sensor`, `rays` ((field
+    /// fraction, path) pairs), `z_range_mm`, `half_height_mm`, `title`.
+    #[pyo3(signature = (sensor_diagonal_mm = None))]
+    pub(crate) fn layout<'py>(&self, py: Python<'py>, sensor_diagonal_mm: Option<f64>) -> PyResult<Bound<'py, PyDict>> {
+        let l = layout(&self.system, &self.analysis, drawing_diagonal_mm(sensor_diagonal_mm));
+        let array = |line: &Polyline| {
+            let flat: Vec<f64> = line.iter().flat_map(|&(z, h)| [z, h]).collect();
+            Array2::from_shape_vec((line.len(), 2), flat)
+                .expect("two values per point")
+                .into_pyarray(py)
+        };
+        let d = PyDict::new(py);
+        d.set_item("title", &l.title)?;
+        d.set_item("elements", l.elements.iter().map(array).collect::<Vec<_>>())?;
+        d.set_item("stop", l.stop.iter().map(array).collect::<Vec<_>>())?;
+        d.set_item("sensor", array(&l.sensor))?;
+        d.set_item(
+            "rays",
+            l.rays.iter().map(|(f, path)| (*f, array(path))).collect::<Vec<_>>(),
+        )?;
+        d.set_item("z_range_mm", l.z_range_mm)?;
+        d.set_item("half_height_mm", l.half_height_mm)?;
+        Ok(d)
+    }
+
+    pub(crate) fn __repr__(&self) -> String {
+        format!(
+            "<lenspath.Lens '{}': f = {:.2} mm, f/{:.2}>",
+            self.prescription.name(),
+            self.analysis.focal_length_mm,
+            self.analysis.f_number
+        )
+    }
+}
+
+/// The built-in lenses' names.
+#[pyfunction]
+pub(crate) fn builtin_lenses() -> Vec<&'static str> {
+    BUILTIN_LENSES.map(|(n, _)| n).to_vec()
+}

@@ -1,0 +1,247 @@
+//! The exit pupil as the camera samples it: per radial band of the sensor,
+//! a grid of the rear-plane cells that rays get through (found by tracing),
+//! and the fitted rear-plane → stop map that shaped apertures are sampled
+//! through.
+
+use glam::{DMat2, DMat3, DVec2, DVec3, Vec2};
+
+use crate::lens::{Direction, LensRay, LensSystem};
+
+/// Radial bands of the sensor, each with its own pupil grid.
+pub(super) const PUPIL_BANDS: usize = 16;
+
+/// Cells per side of a band's pupil grid.
+pub(super) const PUPIL_GRID: usize = 48;
+
+/// Film positions traced per band (its two edges and between).
+pub(super) const FILM_POSITIONS_PER_BAND: usize = 3;
+
+/// Points per side when first bounding a band's pupil on the rear plane.
+pub(super) const BOUNDING_GRID: usize = 48;
+
+/// Share of a shaped aperture's samples drawn from the pupil grid (defensive
+/// sampling: covers whatever the affine stop map misses).
+pub(super) const GRID_SHARE: f64 = 0.1;
+
+/// The cells of the rear plane that rays from one sensor band get through,
+/// relative to the pupil's centre, which moves linearly across the band.
+#[derive(Clone, Debug)]
+pub(super) struct PupilGrid {
+    /// Film radius where the band starts, mm.
+    pub(super) r0: f64,
+    /// Pupil centre on the rear plane for a film point at `r0` on +x.
+    pub(super) centre: DVec2,
+    /// How far the centre moves per mm of film radius.
+    pub(super) centre_slope: DVec2,
+    /// Lower corner of the grid, relative to the centre.
+    pub(super) min: DVec2,
+    /// Cell size.
+    pub(super) cell: DVec2,
+    /// Indices (`row · PUPIL_GRID + column`) of the usable cells.
+    pub(super) cells: Vec<u32>,
+    /// Whether each cell is usable, by index.
+    pub(super) usable: Vec<bool>,
+}
+
+impl PupilGrid {
+    pub(super) const EMPTY: PupilGrid = PupilGrid {
+        r0: 0.0,
+        centre: DVec2::ZERO,
+        centre_slope: DVec2::ZERO,
+        min: DVec2::ZERO,
+        cell: DVec2::ONE,
+        cells: Vec::new(),
+        usable: Vec::new(),
+    };
+
+    pub(super) fn area(&self) -> f64 {
+        self.cells.len() as f64 * self.cell.x * self.cell.y
+    }
+
+    /// Whether `q` (rear plane) lies in a usable cell for a film point at radius `r` on +x.
+    pub(super) fn contains(&self, q: DVec2, r: f64) -> bool {
+        let g = (q - self.centre - self.centre_slope * (r - self.r0) - self.min) / self.cell;
+        let n = PUPIL_GRID as f64;
+        (0.0..n).contains(&g.x) && (0.0..n).contains(&g.y) && self.usable[g.y as usize * PUPIL_GRID + g.x as usize]
+    }
+
+    /// A uniform point in the usable cells from `u` in [0, 1)², for a film point at radius `r` on +x.
+    pub(super) fn sample(&self, u: Vec2, r: f64) -> DVec2 {
+        let n = self.cells.len();
+        let scaled = f64::from(u.x) * n as f64;
+        let pick = (scaled as usize).min(n - 1);
+        let cell = self.cells[pick] as usize;
+        let (row, column) = (cell / PUPIL_GRID, cell % PUPIL_GRID);
+        let offset = DVec2::new(scaled - pick as f64, f64::from(u.y));
+        self.centre
+            + self.centre_slope * (r - self.r0)
+            + self.min
+            + (DVec2::new(column as f64, row as f64) + offset) * self.cell
+    }
+}
+
+/// The pupil grid for sensor points at radii `r0 ..= r0 + width` on +x.
+pub(super) fn bound_pupil(system: &LensSystem, sensor_z: f64, r0: f64, width: f64) -> PupilGrid {
+    let films: Vec<f64> = (0..FILM_POSITIONS_PER_BAND)
+        .map(|k| r0 + width * k as f64 / (FILM_POSITIONS_PER_BAND - 1) as f64)
+        .collect();
+    let rear_z = system.rear_z();
+    let passes_from = |r: f64, q: DVec2| {
+        system
+            .trace(
+                &LensRay::between(DVec3::new(r, 0.0, sensor_z), DVec3::new(q.x, q.y, rear_z)),
+                Direction::ToScene,
+            )
+            .is_some()
+    };
+    // 1. Where each film position's pupil lies, on a coarse grid over 1.5×
+    // the rear aperture (pbrt's margin): the centroids of passing points.
+    let reach = 1.5 * system.rear_aperture_radius();
+    let coarse = 2.0 * reach / (BOUNDING_GRID - 1) as f64;
+    let scan = |r: f64, lo: DVec2, step: DVec2| {
+        let mut points = Vec::new();
+        for i in 0..BOUNDING_GRID {
+            for j in 0..BOUNDING_GRID {
+                let q = lo + DVec2::new(j as f64, i as f64) * step;
+                if passes_from(r, q) {
+                    points.push(q);
+                }
+            }
+        }
+        points
+    };
+    // The pupil of one film position: found on the coarse grid, then its
+    // centroid and extent measured on a grid over just the pupil.
+    let passing_at = |r: f64| {
+        let coarse_points = scan(r, DVec2::splat(-reach), DVec2::splat(coarse));
+        let (lo, hi) = coarse_points.iter().fold(
+            (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY)),
+            |(a, b), &q| (a.min(q), b.max(q)),
+        );
+        if coarse_points.is_empty() {
+            return None;
+        }
+        let (lo, hi) = (lo - coarse, hi + coarse);
+        let step = (hi - lo) / (BOUNDING_GRID - 1) as f64;
+        let fine = scan(r, lo, step);
+        let (points, step) = if fine.is_empty() {
+            (coarse_points, DVec2::splat(coarse))
+        } else {
+            (fine, step)
+        };
+        let centroid = points.iter().sum::<DVec2>() / points.len() as f64;
+        Some((centroid, points, step))
+    };
+    let (first, last) = (passing_at(films[0]), passing_at(films[films.len() - 1]));
+    let (centre, centre_slope) = match (&first, &last) {
+        (Some(a), Some(b)) => (a.0, (b.0 - a.0) / width),
+        (Some(a), None) | (None, Some(a)) => (a.0, DVec2::ZERO),
+        (None, None) => return PupilGrid::EMPTY,
+    };
+    // 2. The pupil moves across the band; follow it, so the grid only holds its shape.
+    let passes = |q: DVec2| {
+        films
+            .iter()
+            .any(|&r| passes_from(r, centre + centre_slope * (r - r0) + q))
+    };
+    // 3. Bound it: both ends' pupils about their centroids, widened by two
+    // of their scan steps (the middle position's pupil lies between them).
+    let (mut lo, mut hi) = (DVec2::splat(f64::INFINITY), DVec2::splat(f64::NEG_INFINITY));
+    for (c, points, step) in first.iter().chain(last.iter()) {
+        for &q in points {
+            lo = lo.min(q - *c - 2.0 * *step);
+            hi = hi.max(q - *c + 2.0 * *step);
+        }
+    }
+    // 4. Keep the cells any of whose corners or centre passes.
+    let cell = (hi - lo) / PUPIL_GRID as f64;
+    let corner_passes: Vec<bool> = (0..=PUPIL_GRID)
+        .flat_map(|i| (0..=PUPIL_GRID).map(move |j| (i, j)))
+        .map(|(i, j)| passes(lo + DVec2::new(j as f64, i as f64) * cell))
+        .collect();
+    let corner = |i: usize, j: usize| corner_passes[i * (PUPIL_GRID + 1) + j];
+    let cells: Vec<u32> = (0..PUPIL_GRID * PUPIL_GRID)
+        .filter(|&k| {
+            let (i, j) = (k / PUPIL_GRID, k % PUPIL_GRID);
+            corner(i, j)
+                || corner(i + 1, j)
+                || corner(i, j + 1)
+                || corner(i + 1, j + 1)
+                || passes(lo + DVec2::new(j as f64 + 0.5, i as f64 + 0.5) * cell)
+        })
+        .map(|k| k as u32)
+        .collect();
+    PupilGrid {
+        r0,
+        centre,
+        centre_slope,
+        min: lo,
+        cell,
+        usable: (0..PUPIL_GRID * PUPIL_GRID)
+            .map(|k| cells.binary_search(&(k as u32)).is_ok())
+            .collect(),
+        cells,
+    }
+}
+
+/// The affine map s = A q + b from rear-plane points q to the points s where
+/// rays from a film point on +x cross the stop, least-squares fitted, at the
+/// two ends of a sensor band (interpolated between them).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct StopMap {
+    pub(super) r0: f64,
+    pub(super) width: f64,
+    pub(super) ends: [(DMat2, DVec2); 2],
+}
+
+impl StopMap {
+    /// A and b for a film point at radius `r` on +x.
+    pub(super) fn at(&self, r: f64) -> (DMat2, DVec2) {
+        let t = ((r - self.r0) / self.width).clamp(0.0, 1.0);
+        let ([a0, a1], [b0, b1]) = ([self.ends[0].0, self.ends[1].0], [self.ends[0].1, self.ends[1].1]);
+        (a0 * (1.0 - t) + a1 * t, b0.lerp(b1, t))
+    }
+}
+
+/// Fits the [`StopMap`] of a band from rays through its grid's usable cells.
+pub(super) fn fit_stop_map(
+    system: &LensSystem,
+    sensor_z: f64,
+    grid: &PupilGrid,
+    r0: f64,
+    width: f64,
+) -> Option<StopMap> {
+    let fit_at = |r: f64| {
+        // Normal equations of the two least-squares problems s.x, s.y ~ (q.x, q.y, 1).
+        let (mut m, mut rhs_x, mut rhs_y, mut n) = (DMat3::ZERO, DVec3::ZERO, DVec3::ZERO, 0);
+        for &k in &grid.cells {
+            let (row, column) = ((k as usize / PUPIL_GRID) as f64, (k as usize % PUPIL_GRID) as f64);
+            let q = grid.centre
+                + grid.centre_slope * (r - grid.r0)
+                + grid.min
+                + (DVec2::new(column, row) + 0.5) * grid.cell;
+            let ray = LensRay::between(DVec3::new(r, 0.0, sensor_z), DVec3::new(q.x, q.y, system.rear_z()));
+            if let Some((_, s)) = system.trace_to_scene_via_stop(&ray) {
+                let v = DVec3::new(q.x, q.y, 1.0);
+                m += DMat3::from_cols(v * v.x, v * v.y, v);
+                rhs_x += v * s.x;
+                rhs_y += v * s.y;
+                n += 1;
+            }
+        }
+        if n < 3 || m.determinant().abs() < 1e-300 {
+            return None;
+        }
+        let inverse = m.inverse();
+        let (cx, cy) = (inverse * rhs_x, inverse * rhs_y);
+        let a = DMat2::from_cols(DVec2::new(cx.x, cy.x), DVec2::new(cx.y, cy.y));
+        (a.determinant().abs() > 1e-12).then_some((a, DVec2::new(cx.z, cy.z)))
+    };
+    let (start, end) = (fit_at(r0), fit_at(r0 + width));
+    let ends = match (start, end) {
+        (Some(a), Some(b)) => [a, b],
+        (Some(a), None) | (None, Some(a)) => [a, a],
+        (None, None) => return None,
+    };
+    Some(StopMap { r0, width, ends })
+}
