@@ -1,21 +1,21 @@
-//! `lenspath autofocus`: focus the realistic camera on an image patch, and
-//! `--evaluate`: every strategy against ground truth on a fixed set of patches.
+//! `lenspath autofocus`: focus the realistic camera on an image patch. (The
+//! evaluation of every strategy against ground truth is a bench tool:
+//! bench/autofocus-evaluation.)
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::atomic::AtomicBool;
 
 use clap::Args;
 use lenspath::accel::BvhSettings;
 use lenspath::autofocus::plot::{focus_curve_svg, Series};
-use lenspath::autofocus::{AutofocusResult, AutofocusSettings, Focuser, GroundTruth, Strategy, STRATEGIES};
+use lenspath::autofocus::{AutofocusResult, Focuser, Strategy};
 use lenspath::camera::{LensFocus, RealisticCamera, RealisticCameraSettings};
 use lenspath::defaults;
 use lenspath::film::NormalizedRect;
 use lenspath::io::image::{check_output_path, write_image};
 use lenspath::io::{check_writable, write_text};
-use lenspath::lens::LensPrescription;
 use lenspath::render::{render, RenderSettings};
-use lenspath::setup::{autofocus_setup, realistic_settings, resolve_autofocus, AutofocusOverrides};
+use lenspath::setup::{resolve_autofocus, AutofocusOverrides};
 use lenspath::{Error, Result};
 use serde_json::json;
 
@@ -31,8 +31,8 @@ pub struct AutofocusArgs {
     #[command(flatten)]
     lens: LensFlags,
     /// The patch to focus on, X,Y,W,H in fractions of the image (0 to 1), such as 0.55,0.7,0.1,0.12.
-    #[arg(long, value_name = "X,Y,W,H", value_parser = parse_patch, required_unless_present = "evaluate")]
-    patch: Option<NormalizedRect>,
+    #[arg(long, value_name = "X,Y,W,H", value_parser = parse_patch)]
+    patch: NormalizedRect,
     /// Focus measure: variance, normalized-variance, sml, tenengrad, brenner, laplacian-energy, vollath.
     #[arg(long, default_value = defaults::AUTOFOCUS_METRIC)]
     metric: String,
@@ -69,31 +69,6 @@ pub struct AutofocusArgs {
     /// Samples per pixel of --render.
     #[arg(long, default_value_t = defaults::SPP)]
     render_spp: u32,
-    /// Run every strategy against ground truth on the evaluation patches (docs/autofocus.md).
-    #[arg(long, conflicts_with_all = ["patch", "file", "plot", "render"])]
-    evaluate: bool,
-    /// --evaluate: run each strategy with this many seeds (--seed and the ones
-    /// after it) on each patch, so one lucky or unlucky noise draw does not
-    /// decide a patch; the sweep and early-exit, whose cost dominates the
-    /// run, with the first only.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..), requires = "evaluate")]
-    seeds: u32,
-    /// --evaluate: write every result as JSON here.
-    #[arg(long, value_name = "FILE", requires = "evaluate")]
-    evaluate_json: Option<PathBuf>,
-    /// --evaluate: write each patch's focus-curve SVG into this folder.
-    #[arg(long, value_name = "DIR", requires = "evaluate")]
-    plots_dir: Option<PathBuf>,
-    /// --evaluate: only these patches (comma-separated, such as CBdragon#2,glass-and-gold#3) or scenes (CBbunny).
-    #[arg(long, value_name = "IDS", value_delimiter = ',', requires = "evaluate")]
-    only: Vec<String>,
-    /// --evaluate: reuse the ground truths of an earlier --evaluate-json for
-    /// the patches it has with the same place, metric, samples and image size
-    /// (the truth is deterministic and costs most of the run); others are
-    /// computed, as are those whose two seeds disagreed when more samples are
-    /// now allowed.
-    #[arg(long, value_name = "FILE", requires = "evaluate")]
-    truths: Option<PathBuf>,
 }
 
 /// "autofocus (fast, sml): sensor 52.634 mm behind the stop, in focus at 3.412 m; 21 patch renders, ..."
@@ -121,18 +96,15 @@ pub fn run(args: AutofocusArgs) -> Result<Outcome> {
     if let Some(path) = &args.render {
         check_output_path(path)?;
     }
-    for path in [&args.plot, &args.evaluate_json].into_iter().flatten() {
+    if let Some(path) = &args.plot {
         check_writable(path)?;
-    }
-    if args.evaluate {
-        return evaluate(&args);
     }
     let (_, scene, options) = args.scene.load()?;
     let view = scene
         .view
         .ok_or_else(|| Error::InvalidArgument("the scene has no camera".into()))?;
-    let patch = args.patch.expect("clap requires --patch without --evaluate");
-    let search = resolve_autofocus(&options, &view, patch, &overrides(&args, args.res)?)?;
+    let patch = args.patch;
+    let search = resolve_autofocus(&options, &view, patch, &overrides(&args)?)?;
     let compiled = scene.compile(&BvhSettings::default())?;
     let (width, height) = (search.settings.width, search.settings.height);
     let lens = search.settings.camera.clone();
@@ -210,11 +182,10 @@ pub fn run(args: AutofocusArgs) -> Result<Outcome> {
     Ok(Outcome::Done)
 }
 
-/// The search the flags ask for, of an image `resolution` pixels (`None`:
-/// the scene file's, else the default).
-fn overrides(args: &AutofocusArgs, resolution: Option<Resolution>) -> Result<AutofocusOverrides> {
+/// The search the flags ask for.
+fn overrides(args: &AutofocusArgs) -> Result<AutofocusOverrides> {
     Ok(AutofocusOverrides {
-        resolution: resolution.map(|r| (r.width, r.height)),
+        resolution: args.res.map(|r| (r.width, r.height)),
         spp: Some(args.spp),
         max_depth: Some(args.max_depth),
         seed: Some(args.seed),
@@ -228,349 +199,4 @@ fn overrides(args: &AutofocusArgs, resolution: Option<Resolution>) -> Result<Aut
 
 fn patch_label(p: &NormalizedRect) -> String {
     format!("patch {:.2},{:.2},{:.2},{:.2}", p.x, p.y, p.width, p.height)
-}
-
-/// A scene of the evaluation set: where it comes from and the patches on it.
-struct EvaluationScene {
-    name: &'static str,
-    /// `builtin:NAME`, or a path relative to the repository (`../shared/...` or `scenes/...`).
-    source: &'static str,
-    patches: &'static [[f64; 4]],
-}
-
-/// The lens of the evaluation (issue 5's targets are for it, wide open at f/2).
-const EVALUATION_LENS: &str = "dgauss50";
-
-/// The evaluation set: patches on edges and texture at different depths,
-/// in five scenes (docs/autofocus.md shows them).
-const EVALUATION_SET: [EvaluationScene; 5] = [
-    EvaluationScene {
-        name: "cornell-spheres",
-        source: "builtin:cornell-spheres",
-        patches: &[
-            [0.52, 0.70, 0.10, 0.12],
-            [0.20, 0.68, 0.10, 0.12],
-            [0.74, 0.74, 0.10, 0.12],
-            [0.15, 0.30, 0.10, 0.12],
-            [0.35, 0.00, 0.12, 0.08],
-        ],
-    },
-    EvaluationScene {
-        name: "CBspheres_lambertian",
-        source: "../shared/scenes/cs184/sky/CBspheres_lambertian.dae",
-        patches: &[
-            [0.26, 0.60, 0.08, 0.10],
-            [0.68, 0.62, 0.08, 0.10],
-            [0.33, 0.16, 0.08, 0.08],
-            [0.21, 0.35, 0.08, 0.12],
-            [0.45, 0.60, 0.10, 0.10],
-        ],
-    },
-    EvaluationScene {
-        name: "CBbunny",
-        source: "../shared/scenes/cs184/sky/CBbunny.dae",
-        patches: &[
-            [0.45, 0.50, 0.08, 0.10],
-            [0.40, 0.62, 0.08, 0.10],
-            [0.56, 0.62, 0.08, 0.10],
-            [0.33, 0.16, 0.08, 0.08],
-            [0.71, 0.35, 0.08, 0.12],
-        ],
-    },
-    EvaluationScene {
-        name: "CBdragon",
-        source: "scenes/cbdragon.toml",
-        patches: &[
-            [0.52, 0.46, 0.10, 0.10],
-            [0.20, 0.58, 0.10, 0.10],
-            [0.38, 0.58, 0.10, 0.12],
-            [0.33, 0.16, 0.08, 0.08],
-            [0.71, 0.35, 0.08, 0.12],
-        ],
-    },
-    EvaluationScene {
-        name: "glass-and-gold",
-        source: "scenes/glass-and-gold.toml",
-        patches: &[
-            [0.52, 0.50, 0.08, 0.10],
-            [0.82, 0.55, 0.08, 0.10],
-            [0.08, 0.55, 0.08, 0.10],
-            [0.88, 0.62, 0.10, 0.10],
-            [0.18, 0.82, 0.12, 0.10],
-        ],
-    },
-];
-
-/// Ground truths of an earlier evaluation (its `--evaluate-json`), for the
-/// same metric, samples and image size.
-struct EarlierTruths {
-    patches: Vec<serde_json::Value>,
-}
-
-impl EarlierTruths {
-    /// Reads `path`; an error if it is not an evaluation of `metric` at `spp` and `size`.
-    fn load(path: &Path, metric: &str, spp: u32, size: (u32, u32)) -> Result<EarlierTruths> {
-        let bad = |message: String| Error::Parse {
-            kind: lenspath::FileKind::Other,
-            path: path.to_path_buf(),
-            message,
-        };
-        let text = lenspath::io::read_text(path, lenspath::FileKind::Other)?;
-        let file: serde_json::Value = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
-        let (their_metric, their_spp, their_size) = (&file["metric"], &file["spp"], &file["resolution"]);
-        if their_metric != metric || their_spp != spp || *their_size != json!([size.0, size.1]) {
-            return Err(bad(format!(
-                "its truths are for metric {their_metric}, {their_spp} spp, resolution {their_size}; \
-                 this run is {metric}, {spp} spp, {}x{}",
-                size.0, size.1
-            )));
-        }
-        let patches = file["patches"]
-            .as_array()
-            .ok_or_else(|| bad("no \"patches\" array".into()))?
-            .clone();
-        Ok(EarlierTruths { patches })
-    }
-
-    /// The truth recorded for patch `id` at `rect`, if any and settled
-    /// ([`GroundTruth::is_settled`] for strategies at `spp`): one whose seeds
-    /// disagreed is computed again when more samples are now allowed.
-    fn get(&self, id: &str, rect: &[f64; 4], spp: u32) -> Option<GroundTruth> {
-        let patch = self
-            .patches
-            .iter()
-            .find(|p| p["patch"] == id && p["rect"] == json!(rect))?;
-        serde_json::from_value::<GroundTruth>(patch["truth"].clone())
-            .ok()
-            .filter(|truth| truth.is_settled(spp))
-    }
-}
-
-/// The repository root (the CLI crate's manifest is two levels down).
-fn repo_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-}
-
-/// Every strategy on every evaluation patch, against ground truth.
-fn evaluate(args: &AutofocusArgs) -> Result<Outcome> {
-    let (width, height) = args.res.map_or(defaults::IMAGE_SIZE, |r| (r.width, r.height));
-    let earlier_truths = args
-        .truths
-        .as_deref()
-        .map(|path| EarlierTruths::load(path, &args.metric, args.spp, (width, height)))
-        .transpose()?;
-    let mut rows = Vec::new();
-    let mut patches_run = 0;
-    let wanted = |id: &str, scene: &str| args.only.is_empty() || args.only.iter().any(|o| o == id || o == scene);
-    for scene_spec in EVALUATION_SET
-        .iter()
-        .filter(|s| (1..=s.patches.len()).any(|k| wanted(&format!("{}#{k}", s.name), s.name)))
-    {
-        let scene_args = match scene_spec.source.strip_prefix("builtin:") {
-            Some(name) => SceneArgs {
-                file: None,
-                scene: name.to_string(),
-                mesh_triangles: 0,
-            },
-            None => {
-                let path = repo_root().join(scene_spec.source);
-                if !path.exists() || (scene_spec.source.contains("cb") && !repo_root().join("../shared").exists()) {
-                    eprintln!(
-                        "skipping {}: {} not found (../shared absent?)",
-                        scene_spec.name,
-                        path.display()
-                    );
-                    continue;
-                }
-                SceneArgs {
-                    file: Some(path),
-                    scene: String::new(),
-                    mesh_triangles: 0,
-                }
-            }
-        };
-        let (_, scene, options) = scene_args.load()?;
-        let view = scene.view.ok_or_else(|| Error::InvalidArgument("no camera".into()))?;
-        // dgauss50 wide open (f/2) unless the flags say otherwise, whatever the scene file's lens.
-        let mut lens = realistic_settings(&options, &view, &args.lens.description()?, width, height)?;
-        if args.lens.lens.is_none() {
-            lens.lens = LensPrescription::load(EVALUATION_LENS)?;
-        }
-        if args.lens.fstop.is_none() {
-            lens.f_number = None;
-        }
-        let compiled = scene.compile(&BvhSettings::default())?;
-        for (k, p) in scene_spec.patches.iter().enumerate() {
-            let id = format!("{}#{}", scene_spec.name, k + 1);
-            if !wanted(&id, scene_spec.name) {
-                continue;
-            }
-            let patch = NormalizedRect {
-                x: p[0],
-                y: p[1],
-                width: p[2],
-                height: p[3],
-            };
-            let settings =
-                autofocus_setup(lens.clone(), (width, height), patch, &overrides(args, None)?, view.pose)?.settings;
-            let mut focuser = Focuser::new(&compiled, view.pose, settings.clone())?;
-            let truth = match earlier_truths.as_ref().and_then(|t| t.get(&id, p, args.spp)) {
-                Some(truth) => truth,
-                None => focuser.ground_truth()?,
-            };
-            let dof = focuser.depth_of_focus_mm(truth.sensor_z_mm);
-            // (seed, result) of every run: all strategies with the first seed, then the cheap ones with the rest.
-            let mut results: Vec<(u32, AutofocusResult)> = Vec::new();
-            for run in 0..args.seeds {
-                let seed = args.seed.wrapping_add(run);
-                if run > 0 {
-                    focuser = Focuser::new(
-                        &compiled,
-                        view.pose,
-                        AutofocusSettings {
-                            seed,
-                            ..settings.clone()
-                        },
-                    )?;
-                }
-                for (_, strategy) in STRATEGIES {
-                    let strategy = match strategy {
-                        Strategy::Sweep | Strategy::EarlyExit { .. } if run > 0 => continue,
-                        Strategy::EarlyExit { .. } => Strategy::EarlyExit {
-                            patience: args.patience,
-                        },
-                        s => s,
-                    };
-                    results.push((seed, focuser.run(strategy)?));
-                }
-            }
-            eprintln!("{}", row_text(&id, &truth, dof, &results));
-            if let Some(dir) = &args.plots_dir {
-                std::fs::create_dir_all(dir).map_err(|e| Error::Io {
-                    path: dir.clone(),
-                    source: e,
-                })?;
-                // The first seed's runs: one series per strategy.
-                let series: Vec<Series> = results
-                    .iter()
-                    .filter(|(seed, _)| *seed == args.seed)
-                    .map(|(_, r)| Series {
-                        label: r.strategy,
-                        points: &r.evaluations,
-                        chosen_mm: Some(r.sensor_z_mm),
-                        line: r.strategy == "sweep",
-                    })
-                    .collect();
-                let title = format!("{id} ({}, {} spp)", args.metric, args.spp);
-                let svg = focus_curve_svg(&title, &series, Some(truth.sensor_z_mm));
-                write_text(&dir.join(format!("{}-{}.svg", scene_spec.name, k + 1)), &svg)?;
-            }
-            rows.push(json!({
-                "patch": id,
-                "rect": p,
-                "truth": truth,
-                "depth_of_focus_mm": dof,
-                "results": results.iter().map(|(seed, r)| json!({
-                    "strategy": r.strategy,
-                    "seed": seed,
-                    "sensor_position_mm": r.sensor_z_mm,
-                    "error_dof": (r.sensor_z_mm - truth.sensor_z_mm) / dof,
-                    "evaluations": r.evaluations.len(),
-                    "patch_renders": r.patch_renders(),
-                    "light_fields": r.light_fields,
-                    "camera_rays": r.camera_rays,
-                    "seconds": r.seconds,
-                })).collect::<Vec<_>>(),
-            }));
-            patches_run += 1;
-        }
-    }
-    let summary = summarize(&rows);
-    println!("{summary}");
-    if let Some(path) = &args.evaluate_json {
-        let out = json!({
-            "metric": args.metric,
-            "spp": args.spp,
-            "resolution": [width, height],
-            "patches": rows,
-        });
-        write_text(path, &serde_json::to_string_pretty(&out).expect("JSON serializes"))?;
-    }
-    if patches_run == 0 {
-        return Err(Error::InvalidArgument(
-            "no evaluation patch could be loaded (or none matched --only)".into(),
-        ));
-    }
-    Ok(Outcome::Done)
-}
-
-/// One patch's line of the evaluation's progress: its truth and each run's error.
-fn row_text(id: &str, truth: &GroundTruth, dof: f64, results: &[(u32, AutofocusResult)]) -> String {
-    let offset = |z: Option<f64>| z.map_or("none".into(), |z| format!("{:+.2} DoF", (z - truth.sensor_z_mm) / dof));
-    let mut line = format!(
-        "{id:<24} truth {:.4} mm (seed spread {:.2} DoF, {} spp; depth conjugate {}, lens best focus {})",
-        truth.sensor_z_mm,
-        truth.seed_spread_dof,
-        truth.spp,
-        offset(truth.depth_conjugate_z_mm),
-        offset(truth.lens_best_focus_z_mm),
-    );
-    for (seed, r) in results {
-        line += &format!(
-            " | {} (seed {seed}) {:+.2} DoF {} renders",
-            r.strategy,
-            (r.sensor_z_mm - truth.sensor_z_mm) / dof,
-            r.patch_renders()
-        );
-        if r.light_fields > 0 {
-            line += &format!(" + {} light field", r.light_fields);
-        }
-    }
-    line
-}
-
-/// A Markdown table: per strategy, runs within 1 DoF, median and max |error|, cost relative to the sweep.
-fn summarize(rows: &[serde_json::Value]) -> String {
-    let mut out = String::from(
-        "| strategy | runs within 1 DoF | median abs error (DoF) | max abs error (DoF) | patch renders (mean) | camera rays vs sweep | seconds (mean) |\n|---|---|---|---|---|---|---|\n",
-    );
-    // The sweep's mean camera rays per run (strategies may have more runs per patch than it).
-    let sweep_runs: Vec<f64> = rows
-        .iter()
-        .flat_map(|r| r["results"].as_array().into_iter().flatten())
-        .filter(|r| r["strategy"] == "sweep")
-        .map(|r| r["camera_rays"].as_f64().unwrap_or(0.0))
-        .collect();
-    let sweep_rays = sweep_runs.iter().sum::<f64>() / sweep_runs.len().max(1) as f64;
-    for (name, _) in STRATEGIES {
-        let results: Vec<&serde_json::Value> = rows
-            .iter()
-            .flat_map(|r| r["results"].as_array().into_iter().flatten())
-            .filter(|r| r["strategy"] == name)
-            .collect();
-        if results.is_empty() {
-            continue;
-        }
-        let n = results.len() as f64;
-        let mut errors: Vec<f64> = results
-            .iter()
-            .map(|r| r["error_dof"].as_f64().unwrap_or(f64::INFINITY).abs())
-            .collect();
-        errors.sort_by(f64::total_cmp);
-        let within = errors.iter().filter(|&&e| e <= 1.0).count();
-        let rays: f64 = results.iter().map(|r| r["camera_rays"].as_f64().unwrap_or(0.0)).sum();
-        let evals: f64 = results.iter().map(|r| r["patch_renders"].as_f64().unwrap_or(0.0)).sum();
-        let secs: f64 = results.iter().map(|r| r["seconds"].as_f64().unwrap_or(0.0)).sum();
-        out += &format!(
-            "| {name} | {within}/{} ({:.0}%) | {:.2} | {:.2} | {:.1} | {:.1}% | {:.2} |\n",
-            results.len(),
-            100.0 * within as f64 / n,
-            errors[errors.len() / 2],
-            errors.last().copied().unwrap_or(0.0),
-            evals / n,
-            100.0 * rays / n / sweep_rays,
-            secs / n
-        );
-    }
-    out
 }
