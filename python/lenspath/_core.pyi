@@ -86,16 +86,18 @@ class Scene:
         """The (width, height) the scene file asks for, or None."""
     def add_material(
         self,
-        kind: Literal["diffuse", "mirror", "glass", "metal"],
+        kind: Literal["diffuse", "mirror", "dielectric", "conductor", "glass", "metal"],
         *,
         reflectance: tuple[float, float, float] = (0.8, 0.8, 0.8),
         eta: tuple[float, float, float] | None = None,
         k: tuple[float, float, float] | None = None,
-        roughness: float = 0.0,
+        alpha: float | None = None,
+        roughness: float | None = None,
     ) -> int:
-        """Adds a material and returns its index: ``diffuse`` and ``mirror`` use
-        ``reflectance``; ``glass`` uses ``eta[0]`` (default 1.5); ``metal`` needs
-        ``eta`` and ``k`` per channel and a GGX ``roughness`` (alpha)."""
+        """Adds a material and returns its index, with the scene files' names: ``diffuse`` and
+        ``mirror`` use ``reflectance``; ``dielectric`` uses ``eta[0]`` (default 1.5);
+        ``conductor`` needs ``eta`` and ``k`` per channel and a GGX ``alpha`` (default 0).
+        ``glass``, ``metal`` and ``roughness`` are the deprecated old names."""
     def add_mesh(
         self,
         vertices: npt.ArrayLike,
@@ -202,11 +204,15 @@ class Lens:
     @property
     def close_focus_mm(self) -> float:
         """Sensor position focusing the close-focus object (5 focal lengths away)."""
-    def focus_distance(self, sensor_mm: float, ray_height_mm: float = 0.1) -> float | None:
-        """Distance in focus (mm from the sensor plane) with the sensor ``sensor_mm``
+    def focus_distance_mm(self, sensor_depth_mm: float, ray_height_mm: float = 0.1) -> float | None:
+        """Distance in focus (mm from the sensor plane) with the sensor ``sensor_depth_mm``
         behind the stop; None when nothing in front of the lens is in focus."""
+    def sensor_depth_mm_for(self, distance_mm: float, ray_height_mm: float = 0.1) -> float:
+        """Sensor depth (mm behind the stop) focusing ``distance_mm`` from the sensor plane."""
+    def focus_distance(self, sensor_mm: float, ray_height_mm: float = 0.1) -> float | None:
+        """Deprecated: ``focus_distance_mm``."""
     def sensor_for_distance(self, distance_mm: float, ray_height_mm: float = 0.1) -> float:
-        """Sensor position (mm behind the stop) focusing ``distance_mm`` from the sensor plane."""
+        """Deprecated: ``sensor_depth_mm_for``."""
     def trace(
         self,
         origins: npt.ArrayLike,
@@ -337,8 +343,11 @@ class AutofocusResult:
     """What ``autofocus`` found and what it cost."""
 
     @property
-    def sensor_mm(self) -> float:
+    def sensor_depth_mm(self) -> float:
         """The chosen sensor position, mm behind the stop."""
+    @property
+    def sensor_mm(self) -> float:
+        """Deprecated: ``sensor_depth_mm``."""
     @property
     def focus_distance(self) -> float | None:
         """The distance in focus there (scene units from the sensor); None beyond infinity."""
@@ -368,7 +377,7 @@ class AutofocusResult:
         """The sensor shift that grows the blur circle to one pixel there: the unit of focus errors."""
     @property
     def camera(self) -> Camera:
-        """The camera given, with its sensor at ``sensor_mm``."""
+        """The camera given, with its sensor at ``sensor_depth_mm``."""
 
 def autofocus(
     scene: Scene,

@@ -65,7 +65,7 @@ def focus_curve(result: AutofocusResult, ax: Axes | None = None, label: str | No
     order = np.argsort(points[:, 0], kind="stable")
     name = label or f"{result.strategy} ({result.metric})"
     ax.plot(points[order, 0], points[order, 1], "o-", markersize=3, linewidth=0.8, label=name)
-    ax.axvline(result.sensor_mm, color="black", linewidth=1, label=f"chosen: {result.sensor_mm:.4f} mm")
+    ax.axvline(result.sensor_depth_mm, color="black", linewidth=1, label=f"chosen: {result.sensor_depth_mm:.4f} mm")
     ax.set_xlabel("sensor position (mm behind the stop)")
     ax.set_ylabel(f"{result.metric} score")
     ax.legend()

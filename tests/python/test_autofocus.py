@@ -28,7 +28,7 @@ def test_same_settings_give_the_clis_answer(cli, strategy: str) -> None:
     camera = lenspath.Camera.realistic("dgauss50", f_number=2.8)
     ours = lenspath.autofocus("cornell-spheres", NEAR_SPHERE, camera, strategy=strategy, spp=4, resolution=(160, 120))
     assert ours.strategy == theirs["strategy"] == strategy
-    assert ours.sensor_mm == theirs["sensor_position_mm"]
+    assert ours.sensor_depth_mm == theirs["sensor_position_mm"]
     assert ours.focus_distance == theirs["focus_distance"]
     assert ours.camera_rays == theirs["camera_rays"]
     assert ours.evaluations.shape == (theirs["evaluations"], 2)
@@ -41,7 +41,7 @@ def test_the_focused_camera_renders_the_patch_sharper_than_either_side_of_it() -
     camera = lenspath.Camera.realistic("dgauss50")
     result = lenspath.autofocus("cornell-spheres", NEAR_SPHERE, camera, strategy="depth", resolution=(320, 240))
     assert result.focus_distance is not None
-    assert "sensor_mm" in repr(result)
+    assert "sensor_depth_mm" in repr(result)
     rows, cols = slice(168, 197), slice(166, 198)  # the patch in pixels at 320 x 240
 
     def sharpness(camera: lenspath.Camera) -> float:
@@ -51,7 +51,7 @@ def test_the_focused_camera_renders_the_patch_sharper_than_either_side_of_it() -
     # 8 DoF either side the sphere's edge is visibly soft (the score about 0.6 of the focused one).
     shift = 8 * result.depth_of_focus_mm
     focused = sharpness(result.camera)
-    for z in (result.sensor_mm - shift, result.sensor_mm + shift):
+    for z in (result.sensor_depth_mm - shift, result.sensor_depth_mm + shift):
         assert focused > 1.3 * sharpness(lenspath.Camera.realistic("dgauss50", sensor_depth_mm=z)), z
 
 
@@ -59,7 +59,7 @@ def test_the_sweep_visits_every_pixel_pitch_and_keeps_its_best() -> None:
     result = lenspath.autofocus("cornell-spheres", NEAR_SPHERE, strategy="sweep", spp=2, resolution=(80, 60))
     z, score = result.evaluations[:, 0], result.evaluations[:, 1]
     assert np.all(np.diff(z) > 0)
-    assert result.sensor_mm == z[np.argmax(score)]
+    assert result.sensor_depth_mm == z[np.argmax(score)]
 
 
 @pytest.mark.parametrize(
@@ -116,3 +116,11 @@ def test_focus_curve_draws_the_search(axes) -> None:
     lenspath.plot.focus_curve(result, ax=axes)
     line = axes.lines[0]
     assert len(line.get_xdata()) == len(result.evaluations)
+
+
+def test_the_old_name_of_the_chosen_sensor_depth_still_works_and_says_the_new_one() -> None:
+    result = lenspath.autofocus(
+        "cornell-spheres", (0.52, 0.70, 0.10, 0.12), resolution=(64, 48), strategy="rangefinder"
+    )
+    with pytest.warns(DeprecationWarning, match="use sensor_depth_mm"):
+        assert result.sensor_mm == result.sensor_depth_mm

@@ -29,11 +29,11 @@ def test_focusing_round_trips(name: str) -> None:
     lens = lenspath.Lens.builtin(name)
     f = lens.focal_length_mm
     for distance_mm in [8 * f, 40 * f, 1000 * f]:
-        sensor = lens.sensor_for_distance(distance_mm)
+        sensor = lens.sensor_depth_mm_for(distance_mm)
         assert lens.infinity_focus_mm < sensor
-        assert lens.focus_distance(sensor) == pytest.approx(distance_mm, rel=1e-6)
+        assert lens.focus_distance_mm(sensor) == pytest.approx(distance_mm, rel=1e-6)
     # In front of the infinity focus nothing is in focus.
-    assert lens.focus_distance(lens.infinity_focus_mm - 0.5) is None
+    assert lens.focus_distance_mm(lens.infinity_focus_mm - 0.5) is None
 
 
 @pytest.mark.parametrize("name", LENSES)
@@ -109,3 +109,13 @@ def test_shared_lens_tables_load(shared) -> None:
     for path in tables:
         lens = lenspath.Lens.load(path)
         assert lens.focal_length_mm > 0, path
+
+
+def test_the_old_names_of_the_focus_conversions_still_work_and_say_the_new_ones() -> None:
+    lens = lenspath.Lens.builtin("dgauss50")
+    with pytest.warns(DeprecationWarning, match="use sensor_depth_mm_for"):
+        old_sensor = lens.sensor_for_distance(2000.0)
+    assert old_sensor == lens.sensor_depth_mm_for(2000.0)
+    with pytest.warns(DeprecationWarning, match="use focus_distance_mm"):
+        old_distance = lens.focus_distance(old_sensor)
+    assert old_distance == lens.focus_distance_mm(old_sensor)

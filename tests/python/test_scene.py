@@ -64,10 +64,28 @@ def test_cs184_scenes_load_and_render(shared, name: str) -> None:
     assert image.mean() > 0.01
 
 
+def test_the_old_material_names_still_work_and_say_the_new_ones() -> None:
+    def sphere_of(kind: str, **material: object) -> np.ndarray:
+        scene = _lit_floor(height=4.0)
+        m = scene.add_material(kind, eta=(0.2, 0.9, 1.1), k=(3.9, 2.4, 2.2), **material)
+        scene.add_sphere((0, 0.1, 0), 0.1, m)
+        scene.add_environment((1.0, 1.0, 1.0))
+        image = lenspath.render(scene, lenspath.Camera.pinhole(), spp=2, resolution=(16, 16))
+        assert image.mean() > 0.05
+        return image
+
+    with pytest.warns(DeprecationWarning, match="use 'conductor'"), pytest.warns(DeprecationWarning, match="use alpha"):
+        old = sphere_of("metal", roughness=0.2)
+    assert np.array_equal(old, sphere_of("conductor", alpha=0.2))
+    with pytest.warns(DeprecationWarning, match="use 'dielectric'"):
+        old_glass = sphere_of("glass")
+    assert np.array_equal(old_glass, sphere_of("dielectric"))
+
+
 def test_meshes_from_numpy_any_dtype() -> None:
     scene = lenspath.Scene()
     white = scene.add_material("diffuse", reflectance=(0.7, 0.7, 0.7))
-    assert scene.add_material("metal", eta=(0.2, 0.9, 1.1), k=(3.9, 2.4, 2.2), roughness=0.1) == 1
+    assert scene.add_material("conductor", eta=(0.2, 0.9, 1.1), k=(3.9, 2.4, 2.2), alpha=0.1) == 1
     vertices = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], dtype=np.float64)
     scene.add_mesh(vertices, np.array([[0, 1, 2]], dtype=np.int64), white)
     scene.add_sphere((0, 0, -2), 0.5, white, emission=(2, 2, 2))
@@ -91,7 +109,7 @@ def test_meshes_from_numpy_any_dtype() -> None:
         (lambda s: s.add_mesh([[0, 0], [1, 0]], [[0, 1, 2]], 0), ValueError, "N x 3"),
         (lambda s: s.add_sphere((0, 0, 0), 1.0, 5), lenspath.SceneError, "material"),
         (lambda s: s.add_material("velvet"), ValueError, "unknown material kind 'velvet'"),
-        (lambda s: s.add_material("metal"), ValueError, "a metal needs eta"),
+        (lambda s: s.add_material("conductor"), ValueError, "a conductor needs eta"),
         (lambda s: s.look_at((0, 0, 0), (0, 0, 0)), ValueError, "eye and target must differ"),
     ],
 )

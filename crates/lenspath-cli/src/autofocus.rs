@@ -45,7 +45,7 @@ pub struct AutofocusArgs {
     /// Samples per pixel of each patch render.
     #[arg(long, default_value_t = defaults::AUTOFOCUS_PATCH_SPP)]
     spp: u32,
-    /// Image size, WIDTHxHEIGHT [default: the scene file's, else 640x480].
+    /// Image size, WIDTHxHEIGHT.
     #[arg(long, value_parser = parse_resolution)]
     res: Option<Resolution>,
     /// Maximum path depth of the patch renders.

@@ -188,21 +188,20 @@ impl SceneArgs {
 /// The realistic camera's lens flags (`render` and `autofocus`).
 #[derive(Args, Debug)]
 pub struct LensFlags {
-    /// Realistic camera: built-in lens (dgauss50, wide22, tele250, fisheye10) or a lens table file
-    /// [default: the scene file's, else dgauss50].
+    /// Realistic camera: built-in lens (dgauss50, wide22, tele250, fisheye10) or a lens table file.
     #[arg(long)]
     pub lens: Option<String>,
     /// Realistic camera: sensor WIDTHxHEIGHT in mm; its width is kept and its height follows the
-    /// image aspect [default: the scene file's, else 36x24].
+    /// image aspect.
     #[arg(long, value_parser = parse_sensor)]
     pub sensor: Option<SensorSize>,
     /// Realistic camera: stop down to this f-number (default: wide open).
     #[arg(long, value_name = "N")]
     pub fstop: Option<f64>,
-    /// Realistic camera: metres per scene unit, since lenses are in mm [default: the scene file's, else 1].
+    /// Realistic camera: metres per scene unit, since lenses are in mm.
     #[arg(long, value_name = "M")]
     pub scene_unit: Option<f64>,
-    /// Realistic camera: exposure normalisation [default: normalized].
+    /// Realistic camera: exposure normalisation.
     #[arg(long, value_enum)]
     pub radiometry: Option<RadiometryKind>,
 }

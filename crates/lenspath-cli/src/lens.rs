@@ -40,6 +40,9 @@ pub struct LensArgs {
     close_object_mm: Option<f64>,
     /// Also print the sensor position (mm behind the stop) that focuses this distance (m, from the sensor).
     #[arg(long, value_name = "M")]
+    focus_distance_m: Option<f64>,
+    /// Deprecated: --focus-distance-m (the same metres).
+    #[arg(long, value_name = "M", hide = true, conflicts_with = "focus_distance_m")]
     focus_distance: Option<f64>,
     /// Also print the focus distance (m, from the sensor) of a sensor this many mm behind the stop.
     #[arg(long, value_name = "MM")]
@@ -50,7 +53,11 @@ pub struct LensArgs {
 const PASSING_SAMPLES: usize = 20_000;
 
 /// Runs `lenspath lens`.
-pub fn run(args: LensArgs) -> Result<Outcome> {
+pub fn run(mut args: LensArgs) -> Result<Outcome> {
+    if let Some(m) = args.focus_distance.take() {
+        eprintln!("warning: --focus-distance is deprecated here; use --focus-distance-m (the same metres)");
+        args.focus_distance_m = Some(m);
+    }
     if !(args.ray_height_mm > 0.0 && args.ray_height_mm.is_finite()) {
         return Err(Error::InvalidArgument(format!(
             "--ray-height-mm must be positive, got {}",
@@ -79,7 +86,7 @@ pub fn run(args: LensArgs) -> Result<Outcome> {
     )?;
     let h = args.ray_height_mm;
     let sensor_for_distance = args
-        .focus_distance
+        .focus_distance_m
         .map(|m| system.sensor_z_for_focus_distance(m * 1e3, h))
         .transpose()?;
     let distance_for_sensor = match args.sensor_depth {
@@ -123,7 +130,7 @@ pub fn run(args: LensArgs) -> Result<Outcome> {
         object.insert("sensor_height_mm".into(), sensor_mm.1.into());
         object.insert("passing_fraction_centre".into(), centre.into());
         object.insert("passing_fraction_corner".into(), corner.into());
-        if let (Some(m), Some(z)) = (args.focus_distance, sensor_for_distance) {
+        if let (Some(m), Some(z)) = (args.focus_distance_m, sensor_for_distance) {
             object.insert("focus_distance_m".into(), m.into());
             object.insert("sensor_depth_for_focus_distance_mm".into(), z.into());
         }
@@ -181,7 +188,7 @@ pub fn run(args: LensArgs) -> Result<Outcome> {
         100.0 * centre,
         100.0 * corner
     );
-    if let (Some(m), Some(z)) = (args.focus_distance, sensor_for_distance) {
+    if let (Some(m), Some(z)) = (args.focus_distance_m, sensor_for_distance) {
         println!("focus at {m} m             sensor at {z:.4} mm");
     }
     if let (Some(z), Some(d)) = (args.sensor_depth, distance_for_sensor) {

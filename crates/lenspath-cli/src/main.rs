@@ -15,7 +15,7 @@ mod view;
 
 use std::process::ExitCode;
 
-use clap::{Args, Parser, Subcommand};
+use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand};
 
 /// A physically based path tracer whose camera is a real lens.
 #[derive(Parser)]
@@ -61,8 +61,63 @@ const EXIT_USAGE: u8 = 2;
 /// Exit code after Ctrl-C (128 + SIGINT).
 const EXIT_INTERRUPTED: u8 = 130;
 
+/// The command line, its help saying each default the library applies when
+/// neither a flag nor the scene file gives the setting (the numbers are
+/// `lenspath::defaults`', not copies).
+fn command() -> clap::Command {
+    use lenspath::defaults as d;
+    let (w, h) = d::IMAGE_SIZE;
+    let scene_file_else = [
+        ("spp", d::SPP.to_string()),
+        ("light_samples", d::LIGHT_SAMPLES.to_string()),
+        ("max_depth", d::MAX_DEPTH.to_string()),
+        ("res", format!("{w}x{h}")),
+        ("seed", d::SEED.to_string()),
+        ("sampler", d::SAMPLER.name().to_string()),
+        ("lens", d::LENS.to_string()),
+        (
+            "sensor",
+            format!(
+                "{}x{}",
+                d::SENSOR_WIDTH_MM,
+                d::SENSOR_WIDTH_MM * f64::from(h) / f64::from(w)
+            ),
+        ),
+        ("scene_unit", d::SCENE_UNIT_M.to_string()),
+    ];
+    let library = [
+        ("aperture_radius", d::THIN_LENS_APERTURE_RADIUS.to_string()),
+        ("radiometry", "normalized".to_string()),
+    ];
+    let with_defaults = |mut c: clap::Command| {
+        for (id, value) in &scene_file_else {
+            if c.get_arguments().any(|a| a.get_id() == id) {
+                c = c.mut_arg(id, |a| {
+                    let help = a.get_help().map(ToString::to_string).unwrap_or_default();
+                    a.help(format!("{help} [default: the scene file's, else {value}]"))
+                });
+            }
+        }
+        for (id, value) in &library {
+            if c.get_arguments().any(|a| a.get_id() == id) {
+                c = c.mut_arg(id, |a| {
+                    let help = a.get_help().map(ToString::to_string).unwrap_or_default();
+                    a.help(format!("{help} [default: {value}]"))
+                });
+            }
+        }
+        c
+    };
+    Cli::command()
+        .mut_subcommand("render", with_defaults)
+        .mut_subcommand("autofocus", with_defaults)
+}
+
 fn main() -> ExitCode {
-    let cli = match Cli::try_parse() {
+    let parsed = command()
+        .try_get_matches()
+        .and_then(|mut matches| Cli::from_arg_matches_mut(&mut matches));
+    let cli = match parsed {
         Ok(cli) => cli,
         Err(e) => {
             use clap::error::ErrorKind;

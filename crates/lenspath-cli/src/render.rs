@@ -36,25 +36,25 @@ use crate::Outcome;
 pub struct RenderArgs {
     #[command(flatten)]
     scene: SceneArgs,
-    /// Samples per pixel [default: the scene file's, else 64].
+    /// Samples per pixel.
     #[arg(long)]
     spp: Option<u32>,
-    /// Shadow rays per light at every non-specular hit [default: the scene file's, else 1].
+    /// Shadow rays per light at every non-specular hit.
     #[arg(long)]
     light_samples: Option<u32>,
-    /// Maximum path depth, 1 = direct lighting only [default: the scene file's, else 16].
+    /// Maximum path depth, 1 = direct lighting only.
     #[arg(long)]
     max_depth: Option<u32>,
-    /// Image size, WIDTHxHEIGHT [default: the scene file's, else 640x480].
+    /// Image size, WIDTHxHEIGHT.
     #[arg(long, value_parser = parse_resolution)]
     res: Option<Resolution>,
     /// Worker threads (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
-    /// Seed of the sample sequences; the same seed gives the same image [default: the scene file's, else 0].
+    /// Seed of the sample sequences; the same seed gives the same image.
     #[arg(long)]
     seed: Option<u32>,
-    /// Sample sequence [default: the scene file's, else sobol].
+    /// Sample sequence.
     #[arg(long, value_enum)]
     sampler: Option<SamplerArg>,
     /// Output image: .png (sRGB) or .exr (linear RGB + Z).
@@ -80,7 +80,7 @@ pub struct RenderArgs {
     /// Pinhole and thin lens: vertical field of view in degrees (default: the scene's).
     #[arg(long)]
     fov: Option<f32>,
-    /// Thin-lens aperture radius, scene units [default: 0.05].
+    /// Thin-lens aperture radius, scene units.
     #[arg(long)]
     aperture_radius: Option<f32>,
     /// Focus distance from the sensor, scene units (default: the scene's subject distance).

@@ -17,6 +17,15 @@ fn stderr(o: &Output) -> String {
 }
 
 #[test]
+fn the_old_lens_focus_distance_flag_still_works_and_says_the_new_one() {
+    let old = lenspath(&["lens", "dgauss50", "--json", "--focus-distance", "2"]);
+    let new = lenspath(&["lens", "dgauss50", "--json", "--focus-distance-m", "2"]);
+    assert!(old.status.success() && new.status.success(), "{}", stderr(&old));
+    assert_eq!(old.stdout, new.stdout);
+    assert!(stderr(&old).contains("use --focus-distance-m"), "{}", stderr(&old));
+}
+
+#[test]
 fn renders_png_and_exr_with_a_summary_line() {
     let dir = tempfile::tempdir().unwrap();
     for name in ["small.png", "small.exr"] {
@@ -314,7 +323,7 @@ fn lens_reports_json_and_plots_the_layout() {
         "--json",
         "--plot",
         svg.to_str().unwrap(),
-        "--focus-distance",
+        "--focus-distance-m",
         "2",
         "--sensor-depth",
         "52",

@@ -10,14 +10,14 @@ use numpy::{IntoPyArray, PyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
 use crate::camera::Camera;
-use crate::error::to_py;
+use crate::error::{deprecated, to_py};
 use crate::scene::Scene;
 
 /// What `autofocus` found and what it cost.
 #[pyclass(module = "lenspath._core", frozen, get_all)]
 pub(crate) struct AutofocusResult {
     /// The chosen sensor position, mm behind the stop.
-    pub(crate) sensor_mm: f64,
+    pub(crate) sensor_depth_mm: f64,
     /// The distance in focus there (scene units from the sensor); None beyond infinity.
     pub(crate) focus_distance: Option<f64>,
     /// The focus measure's name.
@@ -43,16 +43,23 @@ pub(crate) struct AutofocusResult {
 
 #[pymethods]
 impl AutofocusResult {
+    /// Deprecated: `sensor_depth_mm`.
+    #[getter]
+    pub(crate) fn sensor_mm(&self, py: Python<'_>) -> PyResult<f64> {
+        deprecated(py, "AutofocusResult.sensor_mm is deprecated; use sensor_depth_mm")?;
+        Ok(self.sensor_depth_mm)
+    }
+
     pub(crate) fn __repr__(&self, py: Python<'_>) -> String {
         let distance = self
             .focus_distance
             .map_or_else(|| "None".to_string(), |d| format!("{d:.4}"));
         format!(
-            "AutofocusResult(strategy='{}', metric='{}', sensor_mm={:.4}, focus_distance={distance}, \
+            "AutofocusResult(strategy='{}', metric='{}', sensor_depth_mm={:.4}, focus_distance={distance}, \
              evaluations={}, patch_renders={}, camera_rays={})",
             self.strategy,
             self.metric,
-            self.sensor_mm,
+            self.sensor_depth_mm,
             self.evaluations.bind(py).shape()[0],
             self.patch_renders,
             self.camera_rays
@@ -119,7 +126,7 @@ pub(crate) fn autofocus(
         .into_pyarray(py)
         .unbind();
     Ok(AutofocusResult {
-        sensor_mm: result.sensor_z_mm,
+        sensor_depth_mm: result.sensor_z_mm,
         focus_distance: result.focus_distance,
         metric,
         strategy: result.strategy.to_string(),

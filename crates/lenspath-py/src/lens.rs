@@ -13,7 +13,7 @@ use numpy::{AllowTypeChange, IntoPyArray, PyArray2, PyArrayLike2, PyUntypedArray
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use crate::error::{to_py, value_error};
+use crate::error::{deprecated, to_py, value_error};
 
 /// The default sensor of the lens drawings, as `lenspath lens` draws them: 36 × 24 mm.
 pub(crate) const FULL_FRAME_MM: (f64, f64) = (36.0, 24.0);
@@ -211,19 +211,39 @@ impl Lens {
         self.analysis.close_focus_mm
     }
 
-    /// Distance in focus (mm from the sensor plane) with the sensor at
-    /// `sensor_mm` behind the stop; None when nothing in front of the lens is.
-    #[pyo3(signature = (sensor_mm, ray_height_mm = 0.1))]
-    pub(crate) fn focus_distance(&self, sensor_mm: f64, ray_height_mm: f64) -> Option<f64> {
-        self.system.focus_distance_mm(sensor_mm, ray_height_mm)
+    /// Distance in focus (mm from the sensor plane) with the sensor
+    /// `sensor_depth_mm` behind the stop; None when nothing in front of the lens is.
+    #[pyo3(signature = (sensor_depth_mm, ray_height_mm = 0.1))]
+    pub(crate) fn focus_distance_mm(&self, sensor_depth_mm: f64, ray_height_mm: f64) -> Option<f64> {
+        self.system.focus_distance_mm(sensor_depth_mm, ray_height_mm)
     }
 
-    /// Sensor position (mm behind the stop) focusing `distance_mm` (from the sensor plane).
+    /// Sensor depth (mm behind the stop) focusing `distance_mm` (from the sensor plane).
     #[pyo3(signature = (distance_mm, ray_height_mm = 0.1))]
-    pub(crate) fn sensor_for_distance(&self, distance_mm: f64, ray_height_mm: f64) -> PyResult<f64> {
+    pub(crate) fn sensor_depth_mm_for(&self, distance_mm: f64, ray_height_mm: f64) -> PyResult<f64> {
         self.system
             .sensor_z_for_focus_distance(distance_mm, ray_height_mm)
             .map_err(to_py)
+    }
+
+    /// Deprecated: `focus_distance_mm`.
+    #[pyo3(signature = (sensor_mm, ray_height_mm = 0.1))]
+    pub(crate) fn focus_distance(&self, py: Python<'_>, sensor_mm: f64, ray_height_mm: f64) -> PyResult<Option<f64>> {
+        deprecated(
+            py,
+            "Lens.focus_distance is deprecated; use focus_distance_mm (the same mm)",
+        )?;
+        Ok(self.focus_distance_mm(sensor_mm, ray_height_mm))
+    }
+
+    /// Deprecated: `sensor_depth_mm_for`.
+    #[pyo3(signature = (distance_mm, ray_height_mm = 0.1))]
+    pub(crate) fn sensor_for_distance(&self, py: Python<'_>, distance_mm: f64, ray_height_mm: f64) -> PyResult<f64> {
+        deprecated(
+            py,
+            "Lens.sensor_for_distance is deprecated; use sensor_depth_mm_for (the same mm)",
+        )?;
+        self.sensor_depth_mm_for(distance_mm, ray_height_mm)
     }
 
     /// Traces rays (N × 3 origins and directions, lens coordinates in mm:

@@ -142,18 +142,41 @@ impl Scene {
     }
 
     /// Adds a material: `kind` is "diffuse" (reflectance), "mirror"
-    /// (reflectance), "glass" (eta) or "metal" (eta, k, roughness); returns its index.
-    #[pyo3(signature = (kind, *, reflectance = (0.8, 0.8, 0.8), eta = None, k = None, roughness = 0.0),
-           text_signature = "($self, kind, *, reflectance=(0.8, 0.8, 0.8), eta=None, k=None, roughness=0.0)")]
+    /// (reflectance), "dielectric" (eta) or "conductor" (eta, k, alpha: the
+    /// GGX roughness), as in scene files; returns its index. "glass", "metal"
+    /// and `roughness` are the deprecated old names.
+    #[pyo3(signature = (kind, *, reflectance = (0.8, 0.8, 0.8), eta = None, k = None, alpha = None, roughness = None),
+           text_signature = "($self, kind, *, reflectance=(0.8, 0.8, 0.8), eta=None, k=None, alpha=None, roughness=None)")]
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn add_material(
         &mut self,
+        py: Python<'_>,
         kind: &str,
         reflectance: (f32, f32, f32),
         eta: Option<(f32, f32, f32)>,
         k: Option<(f32, f32, f32)>,
-        roughness: f32,
+        alpha: Option<f32>,
+        roughness: Option<f32>,
     ) -> PyResult<u32> {
-        self.changed();
+        let alpha = match (alpha, roughness) {
+            (Some(_), Some(_)) => return Err(value_error("give alpha, not also roughness (its old name)")),
+            (None, Some(r)) => {
+                deprecated(
+                    py,
+                    "add_material(roughness=...) is deprecated; use alpha=... (the same GGX alpha)",
+                )?;
+                r
+            }
+            (alpha, None) => alpha.unwrap_or(0.0),
+        };
+        let kind = match kind {
+            "glass" | "metal" => {
+                let new = if kind == "glass" { "dielectric" } else { "conductor" };
+                deprecated(py, &format!("material kind '{kind}' is deprecated; use '{new}'"))?;
+                new
+            }
+            other => other,
+        };
         let rgb = |c: (f32, f32, f32)| Vec3::new(c.0, c.1, c.2);
         let material = match kind {
             "diffuse" => Material::Diffuse {
@@ -162,18 +185,19 @@ impl Scene {
             "mirror" => Material::Mirror {
                 reflectance: rgb(reflectance),
             },
-            "glass" => Material::clear_dielectric(eta.map_or(1.5, |e| e.0)),
-            "metal" => Material::Conductor {
-                eta: rgb(eta.ok_or_else(|| value_error("a metal needs eta=(r, g, b)"))?),
-                k: rgb(k.ok_or_else(|| value_error("a metal needs k=(r, g, b)"))?),
-                alpha: roughness,
+            "dielectric" => Material::clear_dielectric(eta.map_or(1.5, |e| e.0)),
+            "conductor" => Material::Conductor {
+                eta: rgb(eta.ok_or_else(|| value_error("a conductor needs eta=(r, g, b)"))?),
+                k: rgb(k.ok_or_else(|| value_error("a conductor needs k=(r, g, b)"))?),
+                alpha,
             },
             other => {
                 return Err(value_error(format!(
-                    "unknown material kind '{other}'; use diffuse, mirror, glass or metal"
+                    "unknown material kind '{other}'; use diffuse, mirror, dielectric or conductor"
                 )))
             }
         };
+        self.changed();
         self.scene.materials.push(material);
         Ok(self.scene.materials.len() as u32 - 1)
     }
