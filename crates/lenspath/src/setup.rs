@@ -208,6 +208,8 @@ pub fn resolve_settings(options: &SceneOptions, overrides: &RenderOverrides) -> 
         .resolution
         .or(options.resolution)
         .unwrap_or(defaults::IMAGE_SIZE);
+    // What no caller and no scene file sets: the library's own (box filter, 16-pixel tiles, the depth channel).
+    let library = RenderSettings::default();
     let settings = RenderSettings {
         width,
         height,
@@ -221,11 +223,11 @@ pub fn resolve_settings(options: &SceneOptions, overrides: &RenderOverrides) -> 
         ),
         seed: overrides.seed.or(options.seed).unwrap_or(defaults::SEED),
         sampler: overrides.sampler.or(options.sampler).unwrap_or(defaults::SAMPLER),
-        filter: overrides.filter.unwrap_or(Filter::Box),
+        filter: overrides.filter.unwrap_or(library.filter),
         threads: overrides.threads,
-        tile_size: defaults::TILE_SIZE,
         crop: overrides.crop,
-        depth: overrides.depth.unwrap_or(true),
+        depth: overrides.depth.unwrap_or(library.depth),
+        ..library
     };
     settings.validate()?;
     Ok(settings)
@@ -326,12 +328,14 @@ pub fn realistic_settings(
             "the scene unit must be a positive number of metres, got {scene_unit_m}"
         )));
     }
+    // Radiometry has no scene-file key: the caller's, else `RealisticCameraSettings::new`'s.
+    let library = RealisticCameraSettings::new(lens, sensor_for_image(sensor_width_mm, width, height), focus);
     Ok(RealisticCameraSettings {
         f_number: description.f_number.or(file.f_number),
         scene_unit_m,
-        radiometry: description.radiometry.unwrap_or(Radiometry::Normalized),
+        radiometry: description.radiometry.unwrap_or(library.radiometry),
         aperture: description.aperture.clone().unwrap_or_else(|| file_aperture(options)),
-        ..RealisticCameraSettings::new(lens, sensor_for_image(sensor_width_mm, width, height), focus)
+        ..library
     })
 }
 
@@ -449,4 +453,100 @@ pub fn autofocus_before_render(setup: &RenderSetup, patch: NormalizedRect) -> Re
         ..AutofocusOverrides::default()
     };
     autofocus_setup(camera.clone(), (s.width, s.height), patch, &overrides, setup.pose)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::builtin::builtin_scene;
+    use crate::options::LensOptions;
+
+    /// Every field: the caller's when given, else the scene file's, else the default.
+    #[test]
+    fn the_caller_wins_over_the_scene_file_which_wins_over_the_defaults() {
+        let view = builtin_scene("cornell-spheres", 0).unwrap().view.unwrap();
+        let file = SceneOptions {
+            resolution: Some((40, 30)),
+            spp: Some(5),
+            max_depth: Some(7),
+            seed: Some(11),
+            scene_unit_m: Some(0.5),
+            lens: Some(LensOptions {
+                lens: Some("wide22".into()),
+                f_number: Some(4.0),
+                sensor_depth_mm: Some(30.0),
+                ..LensOptions::default()
+            }),
+            ..SceneOptions::default()
+        };
+        let asked = RenderOverrides {
+            spp: Some(9),
+            sampler: Some(SamplerKind::Independent),
+            camera: CameraDescription::Realistic(RealisticDescription {
+                f_number: Some(8.0),
+                ..RealisticDescription::default()
+            }),
+            ..RenderOverrides::default()
+        };
+        let setup = resolve(&file, &view, &asked).unwrap();
+        let s = &setup.settings;
+        assert_eq!((s.width, s.height, s.spp, s.seed), (40, 30, 9, 11));
+        assert_eq!(s.integrator, Integrator::path(7, defaults::LIGHT_SAMPLES));
+        assert_eq!(s.sampler, SamplerKind::Independent);
+        let CameraSettings::Realistic(camera) = &setup.camera else {
+            panic!("the default camera is the realistic one");
+        };
+        assert_eq!(camera.lens.name(), "wide22");
+        assert_eq!(camera.f_number, Some(8.0));
+        assert_eq!(camera.focus, LensFocus::SensorPositionMm(30.0));
+        assert_eq!(camera.scene_unit_m, 0.5);
+        assert_eq!(
+            camera.sensor_mm,
+            (defaults::SENSOR_WIDTH_MM, defaults::SENSOR_WIDTH_MM * 30.0 / 40.0)
+        );
+
+        // Nothing asked, nothing in the file: the defaults.
+        let bare = resolve(&SceneOptions::default(), &view, &RenderOverrides::default()).unwrap();
+        let s = &bare.settings;
+        assert_eq!((s.width, s.height), defaults::IMAGE_SIZE);
+        assert_eq!(
+            (s.spp, s.seed, s.sampler),
+            (defaults::SPP, defaults::SEED, defaults::SAMPLER)
+        );
+        assert_eq!(
+            s.integrator,
+            Integrator::path(defaults::MAX_DEPTH, defaults::LIGHT_SAMPLES)
+        );
+        let CameraSettings::Realistic(camera) = &bare.camera else {
+            panic!("the default camera is the realistic one");
+        };
+        assert_eq!(camera.lens.name(), defaults::LENS);
+        assert_eq!(camera.focus, LensFocus::Distance(f64::from(view.focus_distance)));
+    }
+
+    #[test]
+    fn bad_requests_are_refused_with_what_is_wrong() {
+        let view = builtin_scene("cornell-spheres", 0).unwrap().view.unwrap();
+        let file = SceneOptions::default();
+        let with = |camera: CameraDescription| RenderOverrides {
+            camera,
+            ..RenderOverrides::default()
+        };
+        let pinhole = with(CameraDescription::Pinhole { fov_y_deg: Some(190.0) });
+        let err = resolve(&file, &view, &pinhole).unwrap_err().to_string();
+        assert!(err.contains("field of view must be between 0 and 180"), "{err}");
+        let thin = with(CameraDescription::ThinLens {
+            fov_y_deg: None,
+            aperture_radius: Some(-1.0),
+            focus_distance: None,
+            aperture: None,
+        });
+        let err = resolve(&file, &view, &thin).unwrap_err().to_string();
+        assert!(err.contains("aperture radius must be zero or positive"), "{err}");
+        let zero_spp = RenderOverrides {
+            spp: Some(0),
+            ..RenderOverrides::default()
+        };
+        assert!(resolve(&file, &view, &zero_spp).is_err());
+    }
 }
