@@ -226,3 +226,11 @@ def test_the_old_name_of_the_sensor_depth_still_works_and_says_the_new_one() -> 
     )
     with pytest.raises(ValueError, match="not also sensor_mm"):
         lenspath.Camera.realistic(sensor_mm=52.0, sensor_depth_mm=52.0)
+
+
+@pytest.mark.parametrize("fov_deg", [float("nan"), 0.0, 180.0, -10.0])
+@pytest.mark.parametrize("make", [lenspath.Camera.pinhole, lambda fov: lenspath.Camera.thin_lens(0.05, fov_deg=fov)])
+def test_python_cameras_get_the_library_checks(make, fov_deg: float) -> None:
+    """The check the CLI's --fov had is the library's now (lenspath::setup), so Python gets it too."""
+    with pytest.raises(ValueError, match="field of view must be between 0 and 180 degrees"):
+        lenspath.render("cornell-spheres", make(fov_deg), spp=1, resolution=(8, 6))
