@@ -9,6 +9,9 @@ const context = canvas.getContext("2d");
 
 /** The last state the server sent: settings, choices, the camera's figures. */
 let state = null;
+/** Frames received, and the number of the last one drawn, in arrival order. */
+let framesReceived = 0;
+let framesDrawn = 0;
 
 // ---- Talking to the server ----
 
@@ -62,7 +65,12 @@ function connect() {
     if (event.data instanceof Blob) {
       // A frame follows its "frame" message; the canvas says which it shows.
       const shown = { ...lastFrame };
+      const sequence = ++framesReceived;
       const bitmap = await createImageBitmap(event.data);
+      // Decoding is asynchronous: a frame decoded after a newer one was drawn
+      // is not drawn over it (two quick steps could otherwise leave the older).
+      if (sequence < framesDrawn) return;
+      framesDrawn = sequence;
       // A half-size preview is scaled up to the image's size.
       context.drawImage(bitmap, 0, 0, canvas.width, canvas.height);
       canvas.dataset.generation = shown.generation;
