@@ -2,14 +2,14 @@
 
 use std::sync::{Arc, Mutex};
 
-use lenspath::camera::{ApertureShape, Camera as CameraTrait, LensFocus};
-use lenspath::setup::{CameraDescription, RealisticDescription, RenderSetup};
+use lenspath::camera::{ApertureShape, Camera as CameraTrait, CameraPose, LensFocus};
+use lenspath::setup::{CameraDescription, CameraSettings, RealisticDescription, RenderSetup};
 use numpy::ndarray::Array2;
 use numpy::{AllowTypeChange, IntoPyArray, PyArrayLike2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 
-use crate::error::{deprecated, to_py, value_error};
+use crate::error::{renamed, to_py, value_error};
 use crate::lens::Lens;
 
 /// A camera for `render`: `Camera.pinhole(...)`, `Camera.thin_lens(...)` or
@@ -19,14 +19,14 @@ use crate::lens::Lens;
 #[derive(Clone)]
 pub(crate) struct Camera {
     pub(crate) description: CameraDescription,
-    /// The camera last built from it, and for what (scene view and options,
+    /// The camera last built from it, and for what (resolved settings, pose,
     /// image size): a realistic camera's exit-pupil tables take a tenth of a
     /// second, which repeated renders (tiles, patches) need not pay again.
     pub(crate) built: Arc<Mutex<Option<BuiltCamera>>>,
 }
 
-/// A camera as built for a render, and the key of what it was built for.
-pub(crate) type BuiltCamera = (String, Arc<dyn CameraTrait>);
+/// A camera as built for a render, and what it was built for.
+pub(crate) type BuiltCamera = (CameraSettings, CameraPose, (u32, u32), Arc<dyn CameraTrait>);
 
 impl Camera {
     pub(crate) fn new(description: CameraDescription) -> Camera {
@@ -39,16 +39,16 @@ impl Camera {
     /// The camera of `setup` (resolved from this camera's description), built
     /// once per resolved settings, pose and image size.
     pub(crate) fn built_for(&self, setup: &RenderSetup) -> PyResult<Arc<dyn CameraTrait>> {
-        let s = &setup.settings;
-        let key = format!("{:?} {:?} {}x{}", setup.camera, setup.pose, s.width, s.height);
+        // Compared by value: a mask's `Debug` form gives only its size.
+        let size = (setup.settings.width, setup.settings.height);
         let mut built = self.built.lock().unwrap_or_else(|p| p.into_inner());
-        if let Some((k, camera)) = built.as_ref() {
-            if *k == key {
+        if let Some((settings, pose, built_size, camera)) = built.as_ref() {
+            if (settings, pose, built_size) == (&setup.camera, &setup.pose, &size) {
                 return Ok(camera.clone());
             }
         }
         let camera = setup.build_camera().map_err(to_py)?;
-        *built = Some((key, camera.clone()));
+        *built = Some((setup.camera.clone(), setup.pose, size, camera.clone()));
         Ok(camera)
     }
 
@@ -262,17 +262,13 @@ impl Camera {
         aperture: Option<&Bound<'_, PyAny>>,
         scene_unit_m: Option<f64>,
     ) -> PyResult<Camera> {
-        let sensor_depth_mm = match (sensor_depth_mm, sensor_mm) {
-            (Some(_), Some(_)) => return Err(value_error("give sensor_depth_mm, not also sensor_mm (its old name)")),
-            (None, Some(mm)) => {
-                deprecated(
-                    py,
-                    "Camera.realistic(sensor_mm=...) is deprecated; use sensor_depth_mm=...",
-                )?;
-                Some(mm)
-            }
-            (depth, None) => depth,
-        };
+        let sensor_depth_mm = renamed(
+            py,
+            "Camera.realistic",
+            ("sensor_depth_mm", sensor_depth_mm),
+            ("sensor_mm", sensor_mm),
+            "the same mm behind the stop",
+        )?;
         let lens = lens.map(lens_from_py).transpose()?;
         let focus = match (focus_distance, sensor_depth_mm) {
             (Some(_), Some(_)) => return Err(value_error("give focus_distance or sensor_depth_mm, not both")),
