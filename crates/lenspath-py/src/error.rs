@@ -52,3 +52,28 @@ pub(crate) fn deprecated(py: Python<'_>, message: &str) -> PyResult<()> {
         2,
     )
 }
+
+/// An argument of `function` given by its name, `new`, or by its deprecated
+/// old name, `old` (with a warning naming the new one; `same` says what the
+/// old one meant), never both.
+pub(crate) fn renamed<T>(
+    py: Python<'_>,
+    function: &str,
+    (new_name, new): (&str, Option<T>),
+    (old_name, old): (&str, Option<T>),
+    same: &str,
+) -> PyResult<Option<T>> {
+    match (new, old) {
+        (Some(_), Some(_)) => Err(PyValueError::new_err(format!(
+            "give {new_name}, not also {old_name} (its old name)"
+        ))),
+        (None, Some(value)) => {
+            deprecated(
+                py,
+                &format!("{function}({old_name}=...) is deprecated; use {new_name}=... ({same})"),
+            )?;
+            Ok(Some(value))
+        }
+        (new, None) => Ok(new),
+    }
+}

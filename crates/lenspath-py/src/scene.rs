@@ -19,7 +19,7 @@ use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use crate::error::{deprecated, to_py, value_error};
+use crate::error::{deprecated, renamed, to_py, value_error};
 
 /// Where a [`Scene`] came from: how to make it again (pickling it, and
 /// `lenspath.distributed`'s workers, need that).
@@ -158,17 +158,14 @@ impl Scene {
         alpha: Option<f32>,
         roughness: Option<f32>,
     ) -> PyResult<u32> {
-        let alpha = match (alpha, roughness) {
-            (Some(_), Some(_)) => return Err(value_error("give alpha, not also roughness (its old name)")),
-            (None, Some(r)) => {
-                deprecated(
-                    py,
-                    "add_material(roughness=...) is deprecated; use alpha=... (the same GGX alpha)",
-                )?;
-                r
-            }
-            (alpha, None) => alpha.unwrap_or(0.0),
-        };
+        let alpha = renamed(
+            py,
+            "add_material",
+            ("alpha", alpha),
+            ("roughness", roughness),
+            "the same GGX alpha",
+        )?
+        .unwrap_or(0.0);
         let kind = match kind {
             "glass" | "metal" => {
                 let new = if kind == "glass" { "dielectric" } else { "conductor" };
@@ -303,26 +300,14 @@ impl Scene {
         exponent: f32,
         cone_angle_deg: Option<f32>,
     ) -> PyResult<()> {
-        let cutoff_angle_deg = match (cutoff_angle_deg, cone_angle_deg) {
-            (Some(angle), None) => angle,
-            (None, Some(angle)) => {
-                deprecated(
-                    py,
-                    "add_spot_light(cone_angle_deg=...) is deprecated; use cutoff_angle_deg=... (the same half angle)",
-                )?;
-                angle
-            }
-            (Some(_), Some(_)) => {
-                return Err(value_error(
-                    "give cutoff_angle_deg, not also cone_angle_deg (its old name)",
-                ))
-            }
-            (None, None) => {
-                return Err(value_error(
-                    "a spot light needs cutoff_angle_deg (the cone's half angle)",
-                ))
-            }
-        };
+        let cutoff_angle_deg = renamed(
+            py,
+            "add_spot_light",
+            ("cutoff_angle_deg", cutoff_angle_deg),
+            ("cone_angle_deg", cone_angle_deg),
+            "the same half angle",
+        )?
+        .ok_or_else(|| value_error("a spot light needs cutoff_angle_deg (the cone's half angle)"))?;
         let light = Light::spot(
             finite_point("position", position)?,
             Vec3::from(direction),
