@@ -67,38 +67,22 @@ const EXIT_INTERRUPTED: u8 = 130;
 fn command() -> clap::Command {
     use lenspath::defaults as d;
     let (w, h) = d::IMAGE_SIZE;
-    let scene_file_else = [
-        ("spp", d::SPP.to_string()),
-        ("light_samples", d::LIGHT_SAMPLES.to_string()),
-        ("max_depth", d::MAX_DEPTH.to_string()),
-        ("res", format!("{w}x{h}")),
-        ("seed", d::SEED.to_string()),
-        ("sampler", d::SAMPLER.name().to_string()),
-        ("lens", d::LENS.to_string()),
-        (
-            "sensor",
-            format!(
-                "{}x{}",
-                d::SENSOR_WIDTH_MM,
-                d::SENSOR_WIDTH_MM * f64::from(h) / f64::from(w)
-            ),
-        ),
-        ("scene_unit", d::SCENE_UNIT_M.to_string()),
-    ];
-    let library = [
+    let scene_file_else = |value: String| format!("the scene file's, else {value}");
+    let defaults = [
+        ("spp", scene_file_else(d::SPP.to_string())),
+        ("light_samples", scene_file_else(d::LIGHT_SAMPLES.to_string())),
+        ("max_depth", scene_file_else(d::MAX_DEPTH.to_string())),
+        ("res", scene_file_else(format!("{w}x{h}"))),
+        ("seed", scene_file_else(d::SEED.to_string())),
+        ("sampler", scene_file_else(d::SAMPLER.name().to_string())),
+        ("lens", scene_file_else(d::LENS.to_string())),
+        ("sensor", scene_file_else(format!("{} mm wide", d::SENSOR_WIDTH_MM))),
+        ("scene_unit", scene_file_else(d::SCENE_UNIT_M.to_string())),
         ("aperture_radius", d::THIN_LENS_APERTURE_RADIUS.to_string()),
         ("radiometry", "normalized".to_string()),
     ];
     let with_defaults = |mut c: clap::Command| {
-        for (id, value) in &scene_file_else {
-            if c.get_arguments().any(|a| a.get_id() == id) {
-                c = c.mut_arg(id, |a| {
-                    let help = a.get_help().map(ToString::to_string).unwrap_or_default();
-                    a.help(format!("{help} [default: the scene file's, else {value}]"))
-                });
-            }
-        }
-        for (id, value) in &library {
+        for (id, value) in &defaults {
             if c.get_arguments().any(|a| a.get_id() == id) {
                 c = c.mut_arg(id, |a| {
                     let help = a.get_help().map(ToString::to_string).unwrap_or_default();

@@ -259,10 +259,11 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
     let compiled = scene.compile(&BvhSettings::default())?;
     if let Some(patch) = args.autofocus {
         let search = autofocus_before_render(&setup, patch)?;
-        let result = Focuser::new(&compiled, search.pose, search.settings.clone())?.run(search.strategy)?;
+        let scene_unit_m = search.settings.camera.scene_unit_m;
+        let result = Focuser::new(&compiled, search.pose, search.settings)?.run(search.strategy)?;
         eprintln!(
             "{}",
-            crate::autofocus::summary_line(&result, defaults::AUTOFOCUS_METRIC, search.settings.camera.scene_unit_m)
+            crate::autofocus::summary_line(&result, defaults::AUTOFOCUS_METRIC, scene_unit_m)
         );
         if let CameraSettings::Realistic(camera) = &mut setup.camera {
             camera.focus = LensFocus::SensorPositionMm(result.sensor_z_mm);

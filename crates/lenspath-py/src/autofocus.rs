@@ -105,13 +105,15 @@ pub(crate) fn autofocus(
         camera: description.clone(),
     };
     let search = resolve_autofocus(&scene.options, &view, patch, &overrides).map_err(to_py)?;
-    let (settings, search, metric) = (search.settings, search.strategy, overrides.metric);
-    let metric = metric.unwrap_or_else(|| lenspath::defaults::AUTOFOCUS_METRIC.to_string());
+    // The result names the measure as asked; `resolve_autofocus` took the same default.
+    let metric = overrides
+        .metric
+        .unwrap_or_else(|| lenspath::defaults::AUTOFOCUS_METRIC.to_string());
     let compiled = scene.compiled(py)?;
     let (result, depth_of_focus_mm) = py
         .detach(|| {
-            let mut focuser = Focuser::new(&compiled, view.pose, settings)?;
-            let result = focuser.run(search)?;
+            let mut focuser = Focuser::new(&compiled, search.pose, search.settings)?;
+            let result = focuser.run(search.strategy)?;
             let dof = focuser.depth_of_focus_mm(result.sensor_z_mm);
             Ok::<_, Error>((result, dof))
         })

@@ -204,10 +204,7 @@ pub fn resolve(options: &SceneOptions, view: &SceneView, overrides: &RenderOverr
 
 /// The render settings alone (no camera), validated.
 pub fn resolve_settings(options: &SceneOptions, overrides: &RenderOverrides) -> Result<RenderSettings> {
-    let (width, height) = overrides
-        .resolution
-        .or(options.resolution)
-        .unwrap_or(defaults::IMAGE_SIZE);
+    let (width, height) = image_size(overrides.resolution, options);
     // What no caller and no scene file sets: the library's own (box filter, 16-pixel tiles, the depth channel).
     let library = RenderSettings::default();
     let settings = RenderSettings {
@@ -231,6 +228,11 @@ pub fn resolve_settings(options: &SceneOptions, overrides: &RenderOverrides) -> 
     };
     settings.validate()?;
     Ok(settings)
+}
+
+/// The image size the caller asks for, else the scene file's, else the default.
+fn image_size(asked: Option<(u32, u32)>, options: &SceneOptions) -> (u32, u32) {
+    asked.or(options.resolution).unwrap_or(defaults::IMAGE_SIZE)
 }
 
 /// The camera `description` asks for, for a `width` × `height` image of a
@@ -394,10 +396,7 @@ pub fn resolve_autofocus(
     patch: NormalizedRect,
     overrides: &AutofocusOverrides,
 ) -> Result<AutofocusSetup> {
-    let size = overrides
-        .resolution
-        .or(options.resolution)
-        .unwrap_or(defaults::IMAGE_SIZE);
+    let size = image_size(overrides.resolution, options);
     let camera = realistic_settings(options, view, &overrides.camera, size.0, size.1)?;
     autofocus_setup(camera, size, patch, overrides, view.pose)
 }
@@ -418,14 +417,13 @@ pub fn autofocus_setup(
         overrides.patience.unwrap_or(defaults::AUTOFOCUS_PATIENCE),
     )?;
     // Checked by `Focuser::new`, with the rest of the search's settings.
-    let spp = overrides.spp.unwrap_or(defaults::AUTOFOCUS_PATCH_SPP);
     let settings = AutofocusSettings {
         camera,
         width,
         height,
         patch: patch.to_pixels(width, height),
         measure,
-        spp,
+        spp: overrides.spp.unwrap_or(defaults::AUTOFOCUS_PATCH_SPP),
         integrator: Integrator::path(overrides.max_depth.unwrap_or(defaults::AUTOFOCUS_PATCH_MAX_DEPTH), 1),
         seed: overrides.seed.unwrap_or(defaults::AUTOFOCUS_SEED),
         threads: overrides.threads,
@@ -437,10 +435,10 @@ pub fn autofocus_setup(
     })
 }
 
-/// The autofocus of `lenspath render --autofocus` (and of the viewer's
-/// click): the default strategy and measure on `patch` through the render's
-/// camera, its patch renders with the render's seed and threads and its depth
-/// capped at [`defaults::AUTOFOCUS_PATCH_MAX_DEPTH`].
+/// The autofocus of `lenspath render --autofocus`: the default strategy and
+/// measure on `patch` through the render's camera, its patch renders with the
+/// render's seed and threads and its depth capped at
+/// [`defaults::AUTOFOCUS_PATCH_MAX_DEPTH`].
 pub fn autofocus_before_render(setup: &RenderSetup, patch: NormalizedRect) -> Result<AutofocusSetup> {
     let CameraSettings::Realistic(camera) = &setup.camera else {
         return Err(Error::InvalidArgument("autofocus needs the realistic camera".into()));
