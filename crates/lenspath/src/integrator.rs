@@ -1,15 +1,20 @@
 //! The unidirectional path tracer: next-event estimation with several
 //! shadow rays per light, multiple importance sampling with the power
 //! heuristic, and Russian roulette (after pbrt-v4 `PathIntegrator`).
+//!
+//! Transport is spectral: a path carries the four wavelengths its camera
+//! sample drew ([`SampledWavelengths`]) and its throughput at each; the
+//! estimate becomes linear sRGB at the end ([`SampledWavelengths::to_rgb`]).
 
 use glam::{Vec2, Vec3};
 
 use crate::lights::LightSample;
-use crate::materials::Material;
-use crate::math::{max_component, Frame, Rgb};
+use crate::materials::Bsdf;
+use crate::math::{Frame, Rgb};
 use crate::ray::{offset_origin, Ray};
 use crate::sampling::{power_heuristic, Sampler};
 use crate::scene::{CompiledScene, SurfaceHit};
+use crate::spectrum::{SampledSpectrum, SampledWavelengths, Spectrum};
 
 /// How far and how carefully paths are traced.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -55,19 +60,35 @@ impl Integrator {
         }
     }
 
-    /// Radiance arriving along a camera ray. `rays` counts traced rays.
-    pub fn radiance(&self, scene: &CompiledScene, camera_ray: Ray, sampler: &mut Sampler, rays: &mut u64) -> Rgb {
-        self.li(scene, camera_ray, sampler, rays)
+    /// Radiance arriving along a camera ray at the wavelengths `lambda`, as
+    /// linear sRGB. `rays` counts traced rays.
+    pub fn radiance(
+        &self,
+        scene: &CompiledScene,
+        camera_ray: Ray,
+        lambda: SampledWavelengths,
+        sampler: &mut Sampler,
+        rays: &mut u64,
+    ) -> Rgb {
+        self.li(scene, camera_ray, lambda, sampler, rays)
     }
 
     /// [`Integrator::radiance`], inlined into its caller: the loops over a
     /// render's tiles and a light field's rows, compiled for two CPU
     /// targets, each get a copy.
     #[inline(always)]
-    pub(crate) fn li(&self, scene: &CompiledScene, camera_ray: Ray, sampler: &mut Sampler, rays: &mut u64) -> Rgb {
-        match self {
-            Integrator::Path(settings) => trace_path(scene, camera_ray, sampler, settings, rays),
-        }
+    pub(crate) fn li(
+        &self,
+        scene: &CompiledScene,
+        camera_ray: Ray,
+        mut lambda: SampledWavelengths,
+        sampler: &mut Sampler,
+        rays: &mut u64,
+    ) -> Rgb {
+        let l = match self {
+            Integrator::Path(settings) => trace_path(scene, camera_ray, &mut lambda, sampler, settings, rays),
+        };
+        lambda.to_rgb(l)
     }
 }
 
@@ -79,13 +100,14 @@ const SHADOW_EPSILON: f32 = 1e-4;
 fn trace_path(
     scene: &CompiledScene,
     camera_ray: Ray,
+    lambda: &mut SampledWavelengths,
     sampler: &mut Sampler,
     settings: &PathSettings,
     rays: &mut u64,
-) -> Rgb {
+) -> SampledSpectrum {
     let n_light = settings.light_samples as f32;
-    let mut l = Rgb::ZERO;
-    let mut beta = Rgb::ONE;
+    let mut l = SampledSpectrum::ZERO;
+    let mut beta = SampledSpectrum::ONE;
     let mut eta_scale = 1.0f32;
     // The camera ray and specular bounces see emitters directly, without MIS.
     let mut specular_bounce = true;
@@ -95,14 +117,14 @@ fn trace_path(
     loop {
         *rays += 1;
         let Some(hit) = scene.intersect(&ray) else {
-            for light in scene.lights() {
-                if let Some((le, light_pdf)) = light.escaped() {
+            for (light, emission) in scene.lights_with_emission() {
+                if let Some(light_pdf) = light.escaped_pdf() {
                     let w = if specular_bounce {
                         1.0
                     } else {
                         power_heuristic(1.0, bsdf_pdf, n_light, light_pdf)
                     };
-                    l += beta * le * w;
+                    l += beta * emission.sample(lambda) * w;
                 }
             }
             break;
@@ -118,7 +140,7 @@ fn trace_path(
                 } else {
                     power_heuristic(1.0, bsdf_pdf, n_light, light.pdf(hit.t, cos_light))
                 };
-                l += beta * light.radiance * w;
+                l += beta * light.emission.sample(lambda) * w;
             }
         }
         if depth == settings.max_depth {
@@ -126,21 +148,21 @@ fn trace_path(
         }
         depth += 1;
 
-        let material = scene.material(hit.material);
+        let bsdf = scene.spectral_material(hit.material).bsdf(lambda);
         let frame = Frame::from_normal(hit.shading_normal);
         let wo = frame.to_local(-ray.direction);
-        if !material.is_specular() && settings.light_samples > 0 {
-            l += beta * direct_lighting(scene, &hit, material, &frame, wo, sampler, settings, rays);
+        if !bsdf.is_specular() && settings.light_samples > 0 {
+            l += beta * direct_lighting(scene, &hit, &bsdf, &frame, wo, lambda, sampler, settings, rays);
         }
 
         // Continue the path by sampling the BSDF.
         let uc = sampler.get_1d();
         let u = sampler.get_2d();
-        let Some(bs) = material.sample(wo, uc, u) else {
+        let Some(bs) = bsdf.sample(wo, uc, u) else {
             break;
         };
         beta *= bs.f * (bs.wi.z.abs() / bs.pdf);
-        if beta == Rgb::ZERO || !beta.is_finite() {
+        if beta == SampledSpectrum::ZERO || !beta.is_finite() {
             break;
         }
         specular_bounce = bs.specular;
@@ -150,7 +172,7 @@ fn trace_path(
         ray = Ray::new(offset_origin(hit.p, hit.geometric_normal, wi), wi);
 
         // Russian roulette on the throughput without the radiance scaling of refraction.
-        let rr_beta = max_component(beta * eta_scale);
+        let rr_beta = (beta * eta_scale).max_element();
         if rr_beta < 1.0 && depth > 1 {
             let q = (1.0 - rr_beta).max(0.0);
             if sampler.get_1d() < q {
@@ -170,30 +192,32 @@ fn trace_path(
 fn direct_lighting(
     scene: &CompiledScene,
     hit: &SurfaceHit,
-    material: &Material,
+    bsdf: &Bsdf,
     frame: &Frame,
     wo: Vec3,
+    lambda: &SampledWavelengths,
     sampler: &mut Sampler,
     settings: &PathSettings,
     rays: &mut u64,
-) -> Rgb {
+) -> SampledSpectrum {
     let mut shading = Shading {
         scene,
         hit,
-        material,
+        bsdf,
         frame,
         wo,
+        lambda,
         sampler,
         settings,
         rays,
     };
     // Two loops, not one over `dyn` lights: each light's sampling inlines.
-    let mut sum = Rgb::ZERO;
+    let mut sum = SampledSpectrum::ZERO;
     for light in scene.area_lights() {
-        sum += shading.light_sum(|p, u| light.sample(p, u));
+        sum += shading.light_sum(&light.emission, |p, u| light.sample(p, u));
     }
-    for light in scene.lights() {
-        sum += shading.light_sum(|p, u| light.sample(p, u));
+    for (light, emission) in scene.lights_with_emission() {
+        sum += shading.light_sum(emission, |p, u| light.sample(p, u));
     }
     sum
 }
@@ -202,32 +226,39 @@ fn direct_lighting(
 struct Shading<'a> {
     scene: &'a CompiledScene,
     hit: &'a SurfaceHit,
-    material: &'a Material,
+    bsdf: &'a Bsdf,
     frame: &'a Frame,
     wo: Vec3,
+    lambda: &'a SampledWavelengths,
     sampler: &'a mut Sampler,
     settings: &'a PathSettings,
     rays: &'a mut u64,
 }
 
 impl Shading<'_> {
-    /// One light's `light_samples` shadow rays, its samples drawn by `sample_light`.
+    /// One light's `light_samples` shadow rays, its samples drawn by
+    /// `sample_light`, what it emits `emission`.
     #[inline(always)]
-    fn light_sum(&mut self, sample_light: impl Fn(Vec3, Vec2) -> Option<LightSample>) -> Rgb {
-        let (hit, material, wo) = (self.hit, self.material, self.wo);
+    fn light_sum(
+        &mut self,
+        emission: &Spectrum,
+        sample_light: impl Fn(Vec3, Vec2) -> Option<LightSample>,
+    ) -> SampledSpectrum {
+        let (hit, bsdf, wo) = (self.hit, self.bsdf, self.wo);
         let n_light = self.settings.light_samples as f32;
-        let mut sum = Rgb::ZERO;
+        let mut sum = SampledSpectrum::ZERO;
+        let mut emitted = None;
         for _ in 0..self.settings.light_samples {
             let u = self.sampler.get_2d();
             let Some(ls) = sample_light(hit.p, u) else {
                 continue;
             };
-            if ls.pdf <= 0.0 || ls.radiance == Rgb::ZERO {
+            if ls.pdf <= 0.0 || ls.scale == 0.0 {
                 continue;
             }
             let wi = self.frame.to_local(ls.wi);
-            let f = material.eval(wo, wi) * wi.z.abs();
-            if f == Rgb::ZERO {
+            let f = bsdf.eval(wo, wi) * wi.z.abs();
+            if f == SampledSpectrum::ZERO {
                 continue;
             }
             *self.rays += 1;
@@ -245,9 +276,10 @@ impl Shading<'_> {
             let w = if ls.delta {
                 1.0
             } else {
-                power_heuristic(n_light, ls.pdf, 1.0, material.pdf(wo, wi))
+                power_heuristic(n_light, ls.pdf, 1.0, bsdf.pdf(wo, wi))
             };
-            sum += f * ls.radiance * (w / (ls.pdf * n_light));
+            let emitted = *emitted.get_or_insert_with(|| emission.sample(self.lambda));
+            sum += f * emitted * (ls.scale * w / (ls.pdf * n_light));
         }
         sum
     }
@@ -281,11 +313,12 @@ mod tests {
         fn trace_path_v3(
             scene: &CompiledScene,
             ray: Ray,
+            lambda: SampledWavelengths,
             sampler: &mut Sampler,
             integrator: &Integrator,
             rays: &mut u64,
         ) -> Rgb {
-            integrator.li(scene, ray, sampler, rays)
+            integrator.li(scene, ray, lambda, sampler, rays)
         }
         let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/glass-and-gold.toml");
         let scene = load_scene(path.as_ref())
@@ -301,11 +334,12 @@ mod tests {
             let mut setup = Sampler::new(SamplerKind::Independent, i, 0, 0, 3);
             let u = setup.get_2d();
             let ray = Ray::new(origin, uniform_sphere(u.x, u.y));
+            let lambda = SampledWavelengths::sample_visible(setup.get_1d());
             let mut sampler_a = Sampler::new(SamplerKind::Sobol, i, 1, 0, 3);
             let mut sampler_b = Sampler::new(SamplerKind::Sobol, i, 1, 0, 3);
-            let a = integrator.radiance(&scene, ray, &mut sampler_a, &mut rays_a);
+            let a = integrator.radiance(&scene, ray, lambda, &mut sampler_a, &mut rays_a);
             // SAFETY: the CPU has every feature `trace_path_v3` is compiled for (checked above).
-            let b = unsafe { trace_path_v3(&scene, ray, &mut sampler_b, &integrator, &mut rays_b) };
+            let b = unsafe { trace_path_v3(&scene, ray, lambda, &mut sampler_b, &integrator, &mut rays_b) };
             assert_eq!(
                 a.to_array().map(f32::to_bits),
                 b.to_array().map(f32::to_bits),

@@ -53,5 +53,6 @@ pub mod sampling;
 pub mod scene;
 pub mod setup;
 pub mod shapes;
+pub mod spectrum;
 
 pub use error::{Error, FileKind, Result};

@@ -6,6 +6,7 @@ use glam::{Vec2, Vec3};
 use crate::error::{Error, Result};
 use crate::math::Rgb;
 use crate::sampling::{uniform_sphere, uniform_triangle, Distribution1D, UNIFORM_SPHERE_PDF};
+use crate::spectrum::Spectrum;
 
 /// A light a scene declares directly. Area lights come from emissive shapes.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -72,15 +73,15 @@ pub enum AreaShape {
 pub struct AreaLight {
     /// Where it is.
     pub shape: AreaShape,
-    /// Emitted radiance.
-    pub radiance: Rgb,
+    /// Emitted spectral radiance.
+    pub emission: Spectrum,
     /// Total surface area.
     pub area: f32,
 }
 
 impl AreaLight {
     /// An area light over `triangles`; `None` when they have no area.
-    pub fn from_triangles(triangles: Vec<[Vec3; 3]>, radiance: Rgb) -> Option<Self> {
+    pub fn from_triangles(triangles: Vec<[Vec3; 3]>, emission: Spectrum) -> Option<Self> {
         let crosses: Vec<Vec3> = triangles.iter().map(|[a, b, c]| (*b - *a).cross(*c - *a)).collect();
         let areas: Vec<f32> = crosses.iter().map(|n| 0.5 * n.length()).collect();
         let area: f32 = areas.iter().sum();
@@ -95,16 +96,16 @@ impl AreaLight {
                 triangles,
                 normals,
             },
-            radiance,
+            emission,
             area,
         })
     }
 
     /// An area light on a sphere.
-    pub fn from_sphere(center: Vec3, radius: f32, radiance: Rgb) -> Self {
+    pub fn from_sphere(center: Vec3, radius: f32, emission: Spectrum) -> Self {
         AreaLight {
             shape: AreaShape::Sphere { center, radius },
-            radiance,
+            emission,
             area: 4.0 * std::f32::consts::PI * radius * radius,
         }
     }
@@ -148,7 +149,7 @@ impl AreaLight {
         }
         Some(LightSample {
             wi,
-            radiance: self.radiance,
+            scale: 1.0,
             pdf: dist2 / (cos_light * self.area),
             distance,
             delta: false,
@@ -170,8 +171,10 @@ impl AreaLight {
 pub struct LightSample {
     /// Unit direction from the shading point to the light.
     pub wi: Vec3,
-    /// Incident radiance (irradiance for delta lights), before visibility.
-    pub radiance: Rgb,
+    /// What arrives, before visibility, as a factor on the light's emission
+    /// spectrum: incident radiance is `scale` × emission (irradiance for
+    /// delta lights: 1 / distance² for a point light).
+    pub scale: f32,
     /// Density per solid angle (1 for delta lights).
     pub pdf: f32,
     /// Distance to the light sample (infinite for distant lights).
@@ -217,12 +220,12 @@ impl Light {
     /// Samples the light from point `p`.
     pub fn sample(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
         match *self {
-            Light::Point { position, intensity } => {
+            Light::Point { position, .. } => {
                 let to_light = position - p;
                 let dist2 = to_light.length_squared();
                 (dist2 > 0.0).then(|| LightSample {
                     wi: to_light / dist2.sqrt(),
-                    radiance: intensity / dist2,
+                    scale: 1.0 / dist2,
                     pdf: 1.0,
                     distance: dist2.sqrt(),
                     delta: true,
@@ -231,9 +234,9 @@ impl Light {
             Light::Spot {
                 position,
                 direction,
-                intensity,
                 cos_cutoff,
                 exponent,
+                ..
             } => {
                 let to_light = position - p;
                 let dist2 = to_light.length_squared();
@@ -244,22 +247,22 @@ impl Light {
                 let cos_axis = -wi.dot(direction);
                 (cos_axis >= cos_cutoff && cos_axis > 0.0).then(|| LightSample {
                     wi,
-                    radiance: intensity * (cos_axis.powf(exponent) / dist2),
+                    scale: cos_axis.powf(exponent) / dist2,
                     pdf: 1.0,
                     distance: dist2.sqrt(),
                     delta: true,
                 })
             }
-            Light::Directional { direction, irradiance } => Some(LightSample {
+            Light::Directional { direction, .. } => Some(LightSample {
                 wi: -direction,
-                radiance: irradiance,
+                scale: 1.0,
                 pdf: 1.0,
                 distance: f32::INFINITY,
                 delta: true,
             }),
-            Light::Environment { radiance } => Some(LightSample {
+            Light::Environment { .. } => Some(LightSample {
                 wi: uniform_sphere(u.x, u.y),
-                radiance,
+                scale: 1.0,
                 pdf: UNIFORM_SPHERE_PDF,
                 distance: f32::INFINITY,
                 delta: false,
@@ -267,11 +270,22 @@ impl Light {
         }
     }
 
-    /// Radiance seen along an escaping ray, and its sampling density.
-    pub fn escaped(&self) -> Option<(Rgb, f32)> {
+    /// For a light seen along escaping rays (the environment), the density
+    /// with which [`Light::sample`] picks a direction; what is seen is its
+    /// emission.
+    pub fn escaped_pdf(&self) -> Option<f32> {
         match *self {
-            Light::Environment { radiance } => Some((radiance, UNIFORM_SPHERE_PDF)),
+            Light::Environment { .. } => Some(UNIFORM_SPHERE_PDF),
             _ => None,
+        }
+    }
+
+    /// Its colour as the scene gives it: intensity, irradiance or radiance.
+    pub fn rgb(&self) -> Rgb {
+        match *self {
+            Light::Point { intensity, .. } | Light::Spot { intensity, .. } => intensity,
+            Light::Directional { irradiance, .. } => irradiance,
+            Light::Environment { radiance } => radiance,
         }
     }
 }
@@ -294,14 +308,17 @@ mod tests {
             Vec3::new(-a, a, h),
         ];
         // Wound so the normal faces -z, toward the receiver at the origin.
-        let light = AreaLight::from_triangles(vec![[quad[0], quad[2], quad[1]], [quad[0], quad[3], quad[2]]], Rgb::ONE)
-            .unwrap();
+        let light = AreaLight::from_triangles(
+            vec![[quad[0], quad[2], quad[1]], [quad[0], quad[3], quad[2]]],
+            Spectrum::Constant(1.0),
+        )
+        .unwrap();
         let mut rng = Rng::new(4);
         let n = 400_000;
         let mut e = 0.0f64;
         for _ in 0..n {
             if let Some(s) = light.sample(Vec3::ZERO, Vec2::new(rng.uniform(), rng.uniform())) {
-                e += f64::from(s.radiance.x * s.wi.z / s.pdf);
+                e += f64::from(s.scale * s.wi.z / s.pdf);
             }
         }
         let e = e / n as f64;
@@ -325,7 +342,7 @@ mod tests {
             exponent: 2.0,
         };
         let on_axis = spot.sample(Vec3::ZERO, Vec2::ZERO).unwrap();
-        assert!((on_axis.radiance.x - 2.0).abs() < 1e-6);
+        assert!((on_axis.scale * 8.0 - 2.0).abs() < 1e-6);
         // 20° off axis at the same distance: 8·cos²20°/4.
         let p = Vec3::new(
             2.0 * 20f32.to_radians().sin(),
@@ -333,7 +350,7 @@ mod tests {
             2.0 - 2.0 * 20f32.to_radians().cos(),
         );
         let off = spot.sample(p, Vec2::ZERO).unwrap();
-        assert!((off.radiance.x - 2.0 * 20f32.to_radians().cos().powi(2)).abs() < 1e-5);
+        assert!((off.scale * 8.0 - 2.0 * 20f32.to_radians().cos().powi(2)).abs() < 1e-5);
         let outside = Vec3::new(
             2.0 * 40f32.to_radians().sin(),
             0.0,
@@ -344,7 +361,7 @@ mod tests {
 
     #[test]
     fn sphere_light_pdf_matches_sample() {
-        let light = AreaLight::from_sphere(Vec3::new(0.0, 0.0, 5.0), 1.0, Rgb::ONE);
+        let light = AreaLight::from_sphere(Vec3::new(0.0, 0.0, 5.0), 1.0, Spectrum::Constant(1.0));
         let mut rng = Rng::new(8);
         let mut seen = 0;
         for _ in 0..1000 {

@@ -1,5 +1,10 @@
 //! Materials and their BSDFs, evaluated in the local shading frame (normal = +z).
 //!
+//! A [`Material`] is what a scene says (RGB colours, as every scene format
+//! gives them); [`SpectralMaterial`] is its spectra, fitted once when the
+//! scene is compiled; [`Bsdf`] is those spectra at one path's wavelengths,
+//! made at each hit, whose `eval`, `pdf` and `sample` the path tracer calls.
+//!
 //! Formulas follow pbrt-v4 (Pharr, Jakob, Humphreys, *Physically Based
 //! Rendering*, 4th ed., ch. 9): `DiffuseBxDF`, `DielectricBxDF` (smooth),
 //! `ConductorBxDF` with the Trowbridge–Reitz (GGX) distribution and
@@ -12,6 +17,7 @@ use glam::{Vec2, Vec3};
 
 use crate::math::Rgb;
 use crate::sampling::cosine_hemisphere;
+use crate::spectrum::{SampledSpectrum, SampledWavelengths, Spectrum};
 
 /// Roughness below which a conductor is treated as a perfect specular reflector.
 const SMOOTH_ALPHA: f32 = 1e-3;
@@ -56,8 +62,8 @@ pub enum Material {
 pub struct BsdfSample {
     /// Incident direction (local frame).
     pub wi: Vec3,
-    /// BSDF value for (wo, wi).
-    pub f: Rgb,
+    /// BSDF value for (wo, wi), at the path's wavelengths.
+    pub f: SampledSpectrum,
     /// Density of `wi` per solid angle (a discrete probability for specular lobes).
     pub pdf: f32,
     /// True for a Dirac delta lobe (mirror, glass).
@@ -75,44 +81,169 @@ impl Material {
             transmittance: Rgb::ONE,
         }
     }
+}
 
+/// A material's spectra, fitted to its RGB colours once, when the scene is
+/// compiled (spectral upsampling costs about 0.1 ms a colour).
+#[derive(Clone, Debug, PartialEq)]
+pub enum SpectralMaterial {
+    /// Lambertian reflector.
+    Diffuse {
+        /// Reflectance spectrum in [0, 1].
+        reflectance: Spectrum,
+    },
+    /// Perfect specular mirror.
+    Mirror {
+        /// Reflectance spectrum in [0, 1].
+        reflectance: Spectrum,
+    },
+    /// Smooth dielectric.
+    Dielectric {
+        /// Index of refraction inside over outside.
+        eta: f32,
+        /// Tint of the reflected lobe.
+        reflectance: Spectrum,
+        /// Tint of the transmitted lobe.
+        transmittance: Spectrum,
+    },
+    /// Microfacet conductor.
+    Conductor {
+        /// Real part of the index of refraction.
+        eta: Spectrum,
+        /// Imaginary part (absorption).
+        k: Spectrum,
+        /// Trowbridge–Reitz roughness α.
+        alpha: f32,
+    },
+}
+
+impl SpectralMaterial {
+    /// The spectra of `material`: reflectances and tints upsampled to
+    /// bounded spectra, a conductor's RGB η and k to unbounded ones.
+    pub fn new(material: &Material) -> Self {
+        match *material {
+            Material::Diffuse { reflectance } => SpectralMaterial::Diffuse {
+                reflectance: Spectrum::reflectance(reflectance),
+            },
+            Material::Mirror { reflectance } => SpectralMaterial::Mirror {
+                reflectance: Spectrum::reflectance(reflectance),
+            },
+            Material::Dielectric {
+                eta,
+                reflectance,
+                transmittance,
+            } => SpectralMaterial::Dielectric {
+                eta,
+                reflectance: Spectrum::reflectance(reflectance),
+                transmittance: Spectrum::reflectance(transmittance),
+            },
+            Material::Conductor { eta, k, alpha } => SpectralMaterial::Conductor {
+                eta: Spectrum::unbounded(eta),
+                k: Spectrum::unbounded(k),
+                alpha,
+            },
+        }
+    }
+
+    /// The BSDF at the wavelengths `lambda`.
+    #[inline(always)]
+    pub fn bsdf(&self, lambda: &SampledWavelengths) -> Bsdf {
+        match self {
+            SpectralMaterial::Diffuse { reflectance } => Bsdf::Diffuse {
+                reflectance: reflectance.sample(lambda),
+            },
+            SpectralMaterial::Mirror { reflectance } => Bsdf::Mirror {
+                reflectance: reflectance.sample(lambda),
+            },
+            SpectralMaterial::Dielectric {
+                eta,
+                reflectance,
+                transmittance,
+            } => Bsdf::Dielectric {
+                eta: *eta,
+                reflectance: reflectance.sample(lambda),
+                transmittance: transmittance.sample(lambda),
+            },
+            SpectralMaterial::Conductor { eta, k, alpha } => Bsdf::Conductor {
+                eta: eta.sample(lambda),
+                k: k.sample(lambda),
+                alpha: *alpha,
+            },
+        }
+    }
+}
+
+/// A material at one path's wavelengths: the BSDF the path tracer samples.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Bsdf {
+    /// Lambertian reflector.
+    Diffuse {
+        /// Reflectance at each wavelength.
+        reflectance: SampledSpectrum,
+    },
+    /// Perfect specular mirror.
+    Mirror {
+        /// Reflectance at each wavelength.
+        reflectance: SampledSpectrum,
+    },
+    /// Smooth dielectric (Fresnel reflection and refraction).
+    Dielectric {
+        /// Index of refraction inside over outside.
+        eta: f32,
+        /// Tint of the reflected lobe.
+        reflectance: SampledSpectrum,
+        /// Tint of the transmitted lobe.
+        transmittance: SampledSpectrum,
+    },
+    /// GGX microfacet conductor.
+    Conductor {
+        /// Real part of the index of refraction at each wavelength.
+        eta: SampledSpectrum,
+        /// Imaginary part at each wavelength.
+        k: SampledSpectrum,
+        /// Trowbridge–Reitz roughness α (0 = polished mirror).
+        alpha: f32,
+    },
+}
+
+impl Bsdf {
     /// True when the BSDF is made only of delta lobes, so light sampling cannot help.
     pub fn is_specular(&self) -> bool {
         match self {
-            Material::Diffuse { .. } => false,
-            Material::Mirror { .. } | Material::Dielectric { .. } => true,
-            Material::Conductor { alpha, .. } => *alpha < SMOOTH_ALPHA,
+            Bsdf::Diffuse { .. } => false,
+            Bsdf::Mirror { .. } | Bsdf::Dielectric { .. } => true,
+            Bsdf::Conductor { alpha, .. } => *alpha < SMOOTH_ALPHA,
         }
     }
 
     /// The BSDF value f(wo, wi) (zero for delta lobes).
-    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+    pub fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum {
         if wo.z * wi.z <= 0.0 {
-            return Rgb::ZERO;
+            return SampledSpectrum::ZERO;
         }
         match *self {
-            Material::Diffuse { reflectance } => reflectance * FRAC_1_PI,
-            Material::Conductor { eta, k, alpha } if alpha >= SMOOTH_ALPHA => {
+            Bsdf::Diffuse { reflectance } => reflectance * FRAC_1_PI,
+            Bsdf::Conductor { eta, k, alpha } if alpha >= SMOOTH_ALPHA => {
                 let (wo, wi) = upper(wo, wi);
                 let Some(wm) = (wo + wi).try_normalize() else {
-                    return Rgb::ZERO;
+                    return SampledSpectrum::ZERO;
                 };
                 let ggx = Ggx { alpha };
-                let fresnel = fresnel_complex_rgb(wo.dot(wm).abs(), eta, k);
+                let fresnel = fresnel_complex4(wo.dot(wm).abs(), eta, k);
                 fresnel * (ggx.d(wm) * ggx.g(wo, wi) / (4.0 * wo.z * wi.z))
             }
-            _ => Rgb::ZERO,
+            _ => SampledSpectrum::ZERO,
         }
     }
 
-    /// Density per solid angle with which [`Material::sample`] returns `wi` (zero for delta lobes).
+    /// Density per solid angle with which [`Bsdf::sample`] returns `wi` (zero for delta lobes).
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         if wo.z * wi.z <= 0.0 {
             return 0.0;
         }
         match *self {
-            Material::Diffuse { .. } => wi.z.abs() * FRAC_1_PI,
-            Material::Conductor { alpha, .. } if alpha >= SMOOTH_ALPHA => {
+            Bsdf::Diffuse { .. } => wi.z.abs() * FRAC_1_PI,
+            Bsdf::Conductor { alpha, .. } if alpha >= SMOOTH_ALPHA => {
                 let (wo, wi) = upper(wo, wi);
                 let Some(wm) = (wo + wi).try_normalize() else {
                     return 0.0;
@@ -133,7 +264,7 @@ impl Material {
         }
         let side = wo.z.signum();
         match *self {
-            Material::Diffuse { reflectance } => {
+            Bsdf::Diffuse { reflectance } => {
                 let mut wi = cosine_hemisphere(u);
                 wi.z *= side;
                 let pdf = wi.z.abs() * FRAC_1_PI;
@@ -145,7 +276,7 @@ impl Material {
                     eta: 1.0,
                 })
             }
-            Material::Mirror { reflectance } => {
+            Bsdf::Mirror { reflectance } => {
                 let wi = Vec3::new(-wo.x, -wo.y, wo.z);
                 Some(BsdfSample {
                     wi,
@@ -155,17 +286,17 @@ impl Material {
                     eta: 1.0,
                 })
             }
-            Material::Conductor { eta, k, alpha } if alpha < SMOOTH_ALPHA => {
+            Bsdf::Conductor { eta, k, alpha } if alpha < SMOOTH_ALPHA => {
                 let wi = Vec3::new(-wo.x, -wo.y, wo.z);
                 Some(BsdfSample {
                     wi,
-                    f: fresnel_complex_rgb(wi.z.abs(), eta, k) / wi.z.abs(),
+                    f: fresnel_complex4(wi.z.abs(), eta, k) / wi.z.abs(),
                     pdf: 1.0,
                     specular: true,
                     eta: 1.0,
                 })
             }
-            Material::Conductor { alpha, .. } => {
+            Bsdf::Conductor { alpha, .. } => {
                 let wo_up = wo * side;
                 let ggx = Ggx { alpha };
                 let wm = ggx.sample_visible_normal(wo_up, u);
@@ -183,7 +314,7 @@ impl Material {
                     eta: 1.0,
                 })
             }
-            Material::Dielectric {
+            Bsdf::Dielectric {
                 eta,
                 reflectance,
                 transmittance,
@@ -221,10 +352,10 @@ impl Material {
     }
 }
 
-/// Mean of the three channels.
+/// Mean over the wavelengths.
 #[inline]
-fn mean(c: Rgb) -> f32 {
-    (c.x + c.y + c.z) / 3.0
+fn mean(c: SampledSpectrum) -> f32 {
+    c.element_sum() / 4.0
 }
 
 /// Both directions mirrored into the +z hemisphere (they share one already).
@@ -340,11 +471,13 @@ pub fn fresnel_complex(cos_i: f32, eta: f32, k: f32) -> f32 {
     0.5 * (r_parl.norm() + r_perp.norm())
 }
 
-fn fresnel_complex_rgb(cos_i: f32, eta: Rgb, k: Rgb) -> Rgb {
-    Rgb::new(
+/// [`fresnel_complex`] at each wavelength.
+fn fresnel_complex4(cos_i: f32, eta: SampledSpectrum, k: SampledSpectrum) -> SampledSpectrum {
+    SampledSpectrum::new(
         fresnel_complex(cos_i, eta.x, k.x),
         fresnel_complex(cos_i, eta.y, k.y),
         fresnel_complex(cos_i, eta.z, k.z),
+        fresnel_complex(cos_i, eta.w, k.w),
     )
 }
 
@@ -425,28 +558,36 @@ mod tests {
         Vec3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos())
     }
 
-    fn glossy_materials() -> Vec<Material> {
+    fn glossy_materials() -> Vec<Bsdf> {
         vec![
-            Material::Diffuse {
-                reflectance: Rgb::new(0.8, 0.5, 0.2),
+            Bsdf::Diffuse {
+                reflectance: SampledSpectrum::new(0.8, 0.5, 0.2, 0.6),
             },
             // Gold, silver and copper at three roughnesses.
-            Material::Conductor {
-                eta: Rgb::new(0.143, 0.374, 1.442),
-                k: Rgb::new(3.983, 2.385, 1.603),
+            Bsdf::Conductor {
+                eta: SampledSpectrum::new(0.143, 0.374, 1.442, 0.5),
+                k: SampledSpectrum::new(3.983, 2.385, 1.603, 2.0),
                 alpha: 0.05,
             },
-            Material::Conductor {
-                eta: Rgb::new(0.155, 0.117, 0.138),
-                k: Rgb::new(4.828, 3.122, 2.147),
+            Bsdf::Conductor {
+                eta: SampledSpectrum::new(0.155, 0.117, 0.138, 0.13),
+                k: SampledSpectrum::new(4.828, 3.122, 2.147, 4.0),
                 alpha: 0.3,
             },
-            Material::Conductor {
-                eta: Rgb::new(0.200, 0.924, 1.102),
-                k: Rgb::new(3.912, 2.452, 2.142),
+            Bsdf::Conductor {
+                eta: SampledSpectrum::new(0.200, 0.924, 1.102, 0.3),
+                k: SampledSpectrum::new(3.912, 2.452, 2.142, 3.5),
                 alpha: 0.7,
             },
         ]
+    }
+
+    fn clear_glass(eta: f32) -> Bsdf {
+        Bsdf::Dielectric {
+            eta,
+            reflectance: SampledSpectrum::ONE,
+            transmittance: SampledSpectrum::ONE,
+        }
     }
 
     /// ∫ pdf(wo, wi) dwi over the sphere, by uniform sampling, equals the
@@ -459,7 +600,7 @@ mod tests {
         // by the sample/eval agreement test.
         let resolvable = glossy_materials()
             .into_iter()
-            .filter(|m| !matches!(m, Material::Conductor { alpha, .. } if *alpha < 0.2));
+            .filter(|m| !matches!(m, Bsdf::Conductor { alpha, .. } if *alpha < 0.2));
         for m in resolvable {
             for theta in [0.0, 30.0, 60.0, 85.0, 120.0] {
                 let wo = direction(theta, 20.0);
@@ -481,7 +622,7 @@ mod tests {
                     (integral - probability).abs() < 0.03,
                     "{m:?} θo={theta}: ∫pdf = {integral}, P(sample) = {probability}"
                 );
-                if let Material::Diffuse { .. } = m {
+                if let Bsdf::Diffuse { .. } = m {
                     assert!((integral - 1.0).abs() < 0.01);
                 }
             }
@@ -528,9 +669,9 @@ mod tests {
     fn albedo_is_at_most_one() {
         let mut materials = glossy_materials();
         // A conductor with a huge k reflects almost everything.
-        materials.push(Material::Conductor {
-            eta: Rgb::splat(0.05),
-            k: Rgb::splat(20.0),
+        materials.push(Bsdf::Conductor {
+            eta: SampledSpectrum::splat(0.05),
+            k: SampledSpectrum::splat(20.0),
             alpha: 0.2,
         });
         for m in materials {
@@ -538,18 +679,18 @@ mod tests {
                 let wo = direction(theta, 0.0);
                 let mut rng = Rng::new(1);
                 let n = 100_000;
-                let mut sum = glam::DVec3::ZERO;
+                let mut sum = glam::DVec4::ZERO;
                 for _ in 0..n {
                     if let Some(s) = m.sample(wo, rng.uniform(), Vec2::new(rng.uniform(), rng.uniform())) {
-                        sum += (s.f * s.wi.z.abs() / s.pdf).as_dvec3();
+                        sum += (s.f * s.wi.z.abs() / s.pdf).as_dvec4();
                     }
                 }
-                let albedo = (sum / n as f64).as_vec3();
+                let albedo = (sum / n as f64).as_vec4();
                 assert!(albedo.max_element() <= 1.0 + 5e-3, "{m:?} θ={theta}: albedo {albedo}");
-                if let Material::Diffuse { reflectance } = m {
+                if let Bsdf::Diffuse { reflectance } = m {
                     assert!((albedo - reflectance).abs().max_element() < 1e-4);
                 }
-                if let Material::Conductor { k, .. } = m {
+                if let Bsdf::Conductor { k, .. } = m {
                     if k.x == 20.0 && theta < 50.0 {
                         assert!(
                             albedo.x > 0.9,
@@ -567,7 +708,7 @@ mod tests {
     #[test]
     fn dielectric_conserves_energy_and_obeys_snell() {
         let eta = 1.5;
-        let glass = Material::clear_dielectric(eta);
+        let glass = clear_glass(eta);
         for theta in [0.0, 20.0, 40.0, 41.0, 60.0, 89.0, 100.0, 130.0, 150.0, 179.0] {
             let wo = direction(theta, 35.0);
             let mut energy = 0.0;
@@ -610,11 +751,11 @@ mod tests {
     fn tinted_dielectric_weights_each_lobe_by_its_tint() {
         let eta = 1.45;
         for (reflectance, transmittance) in [
-            (Rgb::ONE, Rgb::new(1.0, 0.75, 0.75)),
-            (Rgb::ZERO, Rgb::ONE),
-            (Rgb::new(0.5, 1.0, 0.2), Rgb::ZERO),
+            (SampledSpectrum::ONE, SampledSpectrum::new(1.0, 0.75, 0.75, 0.5)),
+            (SampledSpectrum::ZERO, SampledSpectrum::ONE),
+            (SampledSpectrum::new(0.5, 1.0, 0.2, 0.1), SampledSpectrum::ZERO),
         ] {
-            let glass = Material::Dielectric {
+            let glass = Bsdf::Dielectric {
                 eta,
                 reflectance,
                 transmittance,
@@ -623,7 +764,7 @@ mod tests {
             let fresnel = fresnel_dielectric(wo.z, eta);
             let expected = reflectance * fresnel + transmittance * ((1.0 - fresnel) / (eta * eta));
             let n = 4000;
-            let mut sum = Rgb::ZERO;
+            let mut sum = SampledSpectrum::ZERO;
             for i in 0..n {
                 let s = glass.sample(wo, (i as f32 + 0.5) / n as f32, Vec2::ZERO).unwrap();
                 sum += s.f * s.wi.z.abs() / s.pdf;
@@ -634,12 +775,39 @@ mod tests {
                 "R={reflectance} T={transmittance}: {got} vs {expected}"
             );
         }
-        let black = Material::Dielectric {
+        let black = Bsdf::Dielectric {
             eta,
-            reflectance: Rgb::ZERO,
-            transmittance: Rgb::ZERO,
+            reflectance: SampledSpectrum::ZERO,
+            transmittance: SampledSpectrum::ZERO,
         };
         assert!(black.sample(direction(30.0, 0.0), 0.5, Vec2::ZERO).is_none());
+    }
+
+    /// A material's spectra at a path's wavelengths are its fitted spectra's
+    /// values there, and a flat RGB gives a flat spectrum.
+    #[test]
+    fn spectral_material_evaluates_its_fitted_spectra() {
+        let lambda = SampledWavelengths::new(SampledSpectrum::new(450.0, 520.0, 600.0, 680.0), SampledSpectrum::ONE);
+        let orange = Rgb::new(0.8, 0.4, 0.1);
+        let spectral = SpectralMaterial::new(&Material::Diffuse { reflectance: orange });
+        let Bsdf::Diffuse { reflectance } = spectral.bsdf(&lambda) else {
+            panic!("a diffuse material gives a diffuse BSDF");
+        };
+        let fitted = Spectrum::reflectance(orange);
+        for i in 0..4 {
+            assert_eq!(reflectance[i], fitted.at(lambda.lambda_nm[i]));
+        }
+        assert!(
+            reflectance.w > reflectance.x,
+            "orange reflects more red than blue: {reflectance}"
+        );
+        let grey = SpectralMaterial::new(&Material::Mirror {
+            reflectance: Rgb::splat(0.3),
+        });
+        let Bsdf::Mirror { reflectance } = grey.bsdf(&lambda) else {
+            panic!("a mirror gives a mirror");
+        };
+        assert!((reflectance - SampledSpectrum::splat(0.3)).abs().max_element() < 1e-6);
     }
 
     #[test]

@@ -5,12 +5,6 @@ use glam::{Vec3, Vec3A};
 /// A linear RGB radiometric quantity (radiance, reflectance, power...).
 pub type Rgb = Vec3;
 
-/// Largest component of an RGB triple, used for Russian roulette and light power.
-#[inline]
-pub fn max_component(c: Rgb) -> f32 {
-    c.x.max(c.y).max(c.z)
-}
-
 /// An axis-aligned bounding box. Empty boxes have `min > max`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Bounds3 {

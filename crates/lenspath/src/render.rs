@@ -349,7 +349,7 @@ fn pixel_depth(
     py: u32,
 ) -> (f32, u64) {
     let film = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
-    let ray = depth_lens_samples().find_map(|lens| camera.generate_ray(CameraSample { film, lens }));
+    let ray = depth_lens_samples().find_map(|lens| camera.generate_ray(CameraSample::new(film, lens)));
     let depth = ray
         .and_then(|cr| scene.intersect(&cr.ray))
         .map_or(f32::INFINITY, |hit| (hit.p - axis.0).dot(axis.1));
@@ -425,7 +425,10 @@ fn render_tile(
                 };
                 let mut trace = |ray: Option<CameraRay>, sampler: &mut Sampler, slot: usize| {
                     let l = ray.map_or(Rgb::ZERO, |cr| {
-                        cr.weight * settings.integrator.li(scene, cr.ray, sampler, &mut tile_rays)
+                        cr.weight
+                            * settings
+                                .integrator
+                                .li(scene, cr.ray, cr.wavelengths, sampler, &mut tile_rays)
                     });
                     if l.is_finite() {
                         tile.sum[slot] += l.as_dvec3();

@@ -8,10 +8,11 @@ use crate::accel::{Bvh, BvhSettings, PrimGeometry};
 use crate::camera::CameraPose;
 use crate::error::{Error, Result};
 use crate::lights::{AreaLight, Light};
-use crate::materials::Material;
+use crate::materials::{Material, SpectralMaterial};
 use crate::math::{Bounds3, Rgb};
 use crate::ray::Ray;
 use crate::shapes::{MaterialId, Sphere, TriangleMesh};
+use crate::spectrum::Spectrum;
 
 /// The camera placement and field of view a scene suggests.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -70,6 +71,10 @@ pub struct SurfaceHit {
 pub struct CompiledScene {
     scene: Scene,
     bvh: Bvh<PrimRef>,
+    /// Each material's spectra, by `MaterialId`.
+    materials: Vec<SpectralMaterial>,
+    /// Each of `scene.lights`' emission spectrum.
+    light_emission: Vec<Spectrum>,
     area_lights: Vec<AreaLight>,
     mesh_light: Vec<Option<u32>>,
     sphere_light: Vec<Option<u32>>,
@@ -252,7 +257,7 @@ impl Scene {
             .map(|m| {
                 let radiance = m.emission.filter(|e| e.max_element() > 0.0)?;
                 let tris = m.triangles().collect();
-                let light = AreaLight::from_triangles(tris, radiance)?;
+                let light = AreaLight::from_triangles(tris, Spectrum::illuminant(radiance))?;
                 area_lights.push(light);
                 Some(area_lights.len() as u32 - 1)
             })
@@ -262,13 +267,21 @@ impl Scene {
             .iter()
             .map(|s| {
                 let radiance = s.emission.filter(|e| e.max_element() > 0.0)?;
-                area_lights.push(AreaLight::from_sphere(s.center, s.radius, radiance));
+                area_lights.push(AreaLight::from_sphere(
+                    s.center,
+                    s.radius,
+                    Spectrum::illuminant(radiance),
+                ));
                 Some(area_lights.len() as u32 - 1)
             })
             .collect();
+        let materials = self.materials.iter().map(SpectralMaterial::new).collect();
+        let light_emission = self.lights.iter().map(|l| Spectrum::illuminant(l.rgb())).collect();
         Ok(CompiledScene {
             scene: self,
             bvh,
+            materials,
+            light_emission,
             area_lights,
             mesh_light,
             sphere_light,
@@ -292,10 +305,15 @@ impl CompiledScene {
         &self.scene.lights
     }
 
-    /// Material `id`.
-    #[inline]
-    pub fn material(&self, id: MaterialId) -> &Material {
-        &self.scene.materials[id as usize]
+    /// [`CompiledScene::lights`] with each one's emission spectrum.
+    pub fn lights_with_emission(&self) -> impl Iterator<Item = (&Light, &Spectrum)> {
+        self.scene.lights.iter().zip(&self.light_emission)
+    }
+
+    /// Material `id`'s spectra.
+    #[inline(always)]
+    pub fn spectral_material(&self, id: MaterialId) -> &SpectralMaterial {
+        &self.materials[id as usize]
     }
 
     /// True when something lies on `ray` within `0 < t < t_max`.

@@ -161,7 +161,7 @@ fn moved_and_resized_cameras_are_the_built_ones() {
             Vec2::new(u(0.569_840), u(0.381_966)),
         );
         let ray = |c: &RealisticCamera, film: Vec2| {
-            c.generate_ray(CameraSample { film, lens })
+            c.generate_ray(CameraSample::new(film, lens))
                 .map(|r| (r.ray.origin, r.ray.direction, r.weight))
         };
         assert_eq!(ray(&moved, film), ray(&built_there, film));
@@ -421,10 +421,10 @@ fn pupil_sampling_loses_no_light_across_the_field() {
             let n = 200_000;
             let sum: f64 = (0..n)
                 .filter_map(|_| {
-                    cam.generate_ray(CameraSample {
-                        film: Vec2::new(px, py),
-                        lens: Vec2::new(rng.uniform(), rng.uniform()),
-                    })
+                    cam.generate_ray(CameraSample::new(
+                        Vec2::new(px, py),
+                        Vec2::new(rng.uniform(), rng.uniform()),
+                    ))
                 })
                 .map(|r| f64::from(r.weight))
                 .sum();

@@ -48,7 +48,7 @@ impl Focuser<'_> {
                 // The first of a few lens positions the optics let through.
                 let ray = [Vec2::splat(0.5), Vec2::new(0.25, 0.5), Vec2::new(0.75, 0.5)]
                     .into_iter()
-                    .find_map(|lens| camera.generate_ray(CameraSample { film, lens }));
+                    .find_map(|lens| camera.generate_ray(CameraSample::new(film, lens)));
                 if let Some(cr) = ray {
                     self.camera_rays += 1;
                     if let Some(hit) = self.scene.intersect(&cr.ray) {

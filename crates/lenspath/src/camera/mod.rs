@@ -13,6 +13,7 @@ use glam::{Affine3A, Mat3A, Vec2, Vec3, Vec3A};
 use crate::film::Filter;
 use crate::ray::Ray;
 use crate::sampling::{concentric_disk, Sampler, SamplerKind};
+use crate::spectrum::SampledWavelengths;
 
 mod aperture;
 mod realistic;
@@ -27,6 +28,21 @@ pub struct CameraSample {
     pub film: Vec2,
     /// Lens (aperture) sample in [0, 1)².
     pub lens: Vec2,
+    /// The wavelengths the sample carries (a dispersive lens traces its hero).
+    pub wavelengths: SampledWavelengths,
+}
+
+impl CameraSample {
+    /// A sample at `film` and `lens` carrying only the d line (587.6 nm), the
+    /// wavelength lens prescriptions give their indices at: for questions of
+    /// geometry (where a ray goes, what it hits), not radiometry.
+    pub fn new(film: Vec2, lens: Vec2) -> Self {
+        CameraSample {
+            film,
+            lens,
+            wavelengths: SampledWavelengths::single(crate::spectrum::D_LINE_NM),
+        }
+    }
 }
 
 /// A generated camera ray and its radiometric weight.
@@ -36,6 +52,9 @@ pub struct CameraRay {
     pub ray: Ray,
     /// Factor applied to the radiance the ray brings back.
     pub weight: f32,
+    /// The wavelengths the ray carries: the sample's, with only the hero
+    /// left when the camera's optics disperse.
+    pub wavelengths: SampledWavelengths,
 }
 
 /// The interface every camera implements.
@@ -176,6 +195,7 @@ impl Camera for PerspectiveCamera {
         Some(CameraRay {
             ray: Ray::new(m.transform_point3(origin), m.transform_vector3(dir).normalize()),
             weight,
+            wavelengths: sample.wavelengths,
         })
     }
 
@@ -186,8 +206,8 @@ impl Camera for PerspectiveCamera {
 }
 
 /// Sample `index` of pixel `(px, py)` of the `kind` sequence under `seed`: its camera sample (the
-/// film position, the pixel centre moved by `filter`'s offset, and the lens
-/// position: the sampler's first two dimensions) and the sampler, which the
+/// film position, the pixel centre moved by `filter`'s offset, the lens
+/// position and the wavelengths: the sampler's first five dimensions) and the sampler, which the
 /// path goes on with. Every render and light field draws its samples here,
 /// so the same seed gives the same samples. Pixels past the image's left or
 /// top edge (a light field's margin) get samplers of their own, seeded with
@@ -207,7 +227,15 @@ pub fn pixel_sample(
     let centre = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
     let film = centre + filter.sample_offset(sampler.get_2d());
     let lens = sampler.get_2d();
-    (sampler, CameraSample { film, lens })
+    let wavelengths = SampledWavelengths::sample_visible(sampler.get_1d());
+    (
+        sampler,
+        CameraSample {
+            film,
+            lens,
+            wavelengths,
+        },
+    )
 }
 
 #[cfg(test)]
@@ -219,25 +247,16 @@ mod tests {
         let pose = CameraPose::look_at(Vec3::new(1.0, 2.0, 3.0), Vec3::new(1.0, 2.0, -7.0), Vec3::Y);
         let cam = PerspectiveCamera::pinhole(pose, 60.0, 200, 100);
         let centre = cam
-            .generate_ray(CameraSample {
-                film: Vec2::new(100.0, 50.0),
-                lens: Vec2::splat(0.5),
-            })
+            .generate_ray(CameraSample::new(Vec2::new(100.0, 50.0), Vec2::splat(0.5)))
             .unwrap();
         assert!((centre.ray.direction - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-6);
         // The top edge's centre is 30° above the axis; image right is scene +x here.
         let top = cam
-            .generate_ray(CameraSample {
-                film: Vec2::new(100.0, 0.0),
-                lens: Vec2::ZERO,
-            })
+            .generate_ray(CameraSample::new(Vec2::new(100.0, 0.0), Vec2::ZERO))
             .unwrap();
         assert!((top.ray.direction.y.asin().to_degrees() - 30.0).abs() < 1e-4);
         let right = cam
-            .generate_ray(CameraSample {
-                film: Vec2::new(200.0, 50.0),
-                lens: Vec2::ZERO,
-            })
+            .generate_ray(CameraSample::new(Vec2::new(200.0, 50.0), Vec2::ZERO))
             .unwrap();
         assert!(right.ray.direction.x > 0.0);
     }
@@ -250,16 +269,13 @@ mod tests {
         let points: Vec<Vec3> = [Vec2::new(0.1, 0.2), Vec2::new(0.9, 0.5), Vec2::new(0.4, 0.95)]
             .iter()
             .map(|&lens| {
-                let r = cam.generate_ray(CameraSample { film, lens }).unwrap().ray;
+                let r = cam.generate_ray(CameraSample::new(film, lens)).unwrap().ray;
                 r.at((4.0 - r.origin.z) / r.direction.z)
             })
             .collect();
         assert!((points[0] - points[1]).length() < 1e-5 && (points[0] - points[2]).length() < 1e-5);
         let r = cam
-            .generate_ray(CameraSample {
-                film,
-                lens: Vec2::new(0.1, 0.2),
-            })
+            .generate_ray(CameraSample::new(film, Vec2::new(0.1, 0.2)))
             .unwrap()
             .ray;
         assert!(r.origin.length() > 0.1, "lens samples must spread over the aperture");

@@ -7,6 +7,7 @@ use glam::{Vec2, Vec3};
 use super::*;
 use crate::camera::{CameraRay, CameraSample};
 use crate::lens::{Direction, LensRay};
+use crate::spectrum::SampledWavelengths;
 
 /// A sample's ray from the film and, unless the lens blocks it, the ray
 /// leaving the lens with its unnormalised weight.
@@ -59,7 +60,7 @@ impl RealisticCamera {
         let rear_raster = Vec2::new(((0.5 - rear.x / sw) * w) as f32, ((0.5 + rear.y / sh) * h) as f32);
         LensSample {
             rear_raster,
-            ray: out.map(|(out, weight)| self.scene_ray(&out, weight)),
+            ray: out.map(|(out, weight)| self.scene_ray(&out, weight, sample.wavelengths)),
         }
     }
 
@@ -92,8 +93,8 @@ impl RealisticCamera {
         (centre - half, centre + half)
     }
 
-    /// The scene ray of a ray leaving the lens, with its weight.
-    pub(super) fn scene_ray(&self, out: &LensRay, weight: f64) -> CameraRay {
+    /// The scene ray of a ray leaving the lens, with its weight and wavelengths.
+    pub(super) fn scene_ray(&self, out: &LensRay, weight: f64, wavelengths: SampledWavelengths) -> CameraRay {
         // Lens coordinates → camera space: the sensor centre is the origin,
         // +z looks into the scene (lens z runs the other way), mm → scene units.
         let origin = Vec3::new(
@@ -106,6 +107,7 @@ impl RealisticCamera {
         CameraRay {
             ray: Ray::new(m.transform_point3(origin), m.transform_vector3(direction).normalize()),
             weight: (weight * self.weight_scale) as f32,
+            wavelengths,
         }
     }
 }

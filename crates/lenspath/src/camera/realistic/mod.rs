@@ -363,7 +363,7 @@ impl RealisticCamera {
         let passed = (0..samples)
             .filter(|_| {
                 let lens = Vec2::new(rng.uniform(), rng.uniform());
-                self.generate_ray(CameraSample { film, lens }).is_some()
+                self.generate_ray(CameraSample::new(film, lens)).is_some()
             })
             .count();
         passed as f64 / samples as f64
@@ -374,7 +374,7 @@ impl Camera for RealisticCamera {
     fn generate_ray(&self, sample: CameraSample) -> Option<CameraRay> {
         let (_, out) = self.traced_sample(sample)?;
         let (out, weight) = out?;
-        Some(self.scene_ray(&out, weight))
+        Some(self.scene_ray(&out, weight, sample.wavelengths))
     }
 
     fn generate_ray_pair(&self, samples: [CameraSample; 2]) -> [Option<CameraRay>; 2] {
@@ -384,15 +384,17 @@ impl Camera for RealisticCamera {
         let starts = samples.map(|s| self.lens_ray(self.film_point(s.film), s.lens));
         let [Some((a, weight_a)), Some((b, weight_b))] = starts else {
             // A film point with no open pupil: trace whichever ray there is on its own.
-            return starts.map(|start| {
+            let mut rays = starts.into_iter().zip(samples).map(|(start, sample)| {
                 let (ray, weight) = start?;
-                Some(self.scene_ray(&self.system.trace(&ray, Direction::ToScene)?, weight))
+                let out = self.system.trace(&ray, Direction::ToScene)?;
+                Some(self.scene_ray(&out, weight, sample.wavelengths))
             });
+            return [rays.next().flatten(), rays.next().flatten()];
         };
         let [out_a, out_b] = self.system.trace_many(&[a, b], Direction::ToScene);
         [
-            out_a.map(|o| self.scene_ray(&o, weight_a)),
-            out_b.map(|o| self.scene_ray(&o, weight_b)),
+            out_a.map(|o| self.scene_ray(&o, weight_a, samples[0].wavelengths)),
+            out_b.map(|o| self.scene_ray(&o, weight_b, samples[1].wavelengths)),
         ]
     }
 

@@ -1,0 +1,237 @@
+//! Colorimetry: the CIE 1931 2° colour matching functions, the D65
+//! illuminant, and the conversion from CIE XYZ to linear sRGB.
+//!
+//! The tables are the CIE's (`data/cie/`, copied from pbrt-v4's
+//! `spectrum.cpp`; see `data/README.md`). The sRGB matrices are derived,
+//! as pbrt-v4's `RGBColorSpace` does, from the primaries' chromaticities
+//! (IEC 61966-2-1) and the white point the D65 table itself integrates to,
+//! so a spectrum equal to D65 maps to RGB (1, 1, 1) exactly rather than to
+//! within the rounding of the standard's printed white.
+
+use std::sync::OnceLock;
+
+use glam::{DMat3, DVec3, Mat3, Vec3, Vec4};
+
+use super::{LAMBDA_MAX_NM, LAMBDA_MIN_NM};
+use crate::math::Rgb;
+
+/// The CIE 1931 2° observer, 360–830 nm at 1 nm: `wavelength_nm,x,y,z`.
+const CIE_1931_CSV: &str = include_str!("../../data/cie/cie1931_2deg_xyz.csv");
+/// The CIE standard illuminant D65, 300–830 nm at 5 nm: `wavelength_nm,value`.
+const D65_CSV: &str = include_str!("../../data/cie/illuminant_d65.csv");
+
+/// sRGB primaries' chromaticities (x, y): red, green, blue (IEC 61966-2-1).
+const SRGB_PRIMARIES: [(f64, f64); 3] = [(0.64, 0.33), (0.30, 0.60), (0.15, 0.06)];
+
+/// Number of 1 nm steps in the tables: 360..=830.
+const SAMPLES: usize = (LAMBDA_MAX_NM - LAMBDA_MIN_NM) as usize + 1;
+
+/// The colorimetric tables, read once.
+pub struct CieTables {
+    /// x̄, ȳ, z̄ at 360, 361, … 830 nm.
+    xyz_bar: Vec<Vec3>,
+    /// The same as linear sRGB and divided by ∫ȳ: what one wavelength of
+    /// radiance adds to a pixel.
+    rgb_bar: Vec<Vec3>,
+    /// D65 at the same wavelengths, scaled so its luminance is 1:
+    /// ∫ D65 ȳ dλ / ∫ ȳ dλ = 1.
+    d65: Vec<f32>,
+    /// ∫ ȳ(λ) dλ over 360–830 nm (pbrt's `CIE_Y_integral`, 106.857).
+    pub y_integral: f32,
+    /// CIE XYZ of the normalised D65: the white point, Y = 1.
+    pub white_xyz: Vec3,
+    xyz_to_rgb: Mat3,
+    rgb_to_xyz: DMat3,
+}
+
+/// The tables (parsed from the embedded CSV on first use).
+#[inline(always)]
+pub fn tables() -> &'static CieTables {
+    static TABLES: OnceLock<CieTables> = OnceLock::new();
+    TABLES.get_or_init(CieTables::load)
+}
+
+/// Rows of numbers of a CSV with one header line.
+fn csv_rows(text: &'static str) -> impl Iterator<Item = Vec<f64>> {
+    text.lines().skip(1).filter(|l| !l.trim().is_empty()).map(|line| {
+        line.split(',')
+            .map(|v| v.trim().parse::<f64>().expect("the embedded CIE tables are numbers"))
+            .collect()
+    })
+}
+
+impl CieTables {
+    fn load() -> Self {
+        let xyz_bar: Vec<Vec3> = csv_rows(CIE_1931_CSV)
+            .map(|r| Vec3::new(r[1] as f32, r[2] as f32, r[3] as f32))
+            .collect();
+        assert_eq!(xyz_bar.len(), SAMPLES, "the CIE table covers 360–830 nm at 1 nm");
+        let d65_5nm: Vec<(f64, f64)> = csv_rows(D65_CSV).map(|r| (r[0], r[1])).collect();
+        let d65_raw: Vec<f64> = (0..SAMPLES)
+            .map(|i| {
+                let lambda = f64::from(LAMBDA_MIN_NM) + i as f64;
+                let j = d65_5nm.partition_point(|p| p.0 <= lambda).clamp(1, d65_5nm.len() - 1);
+                let ((l0, v0), (l1, v1)) = (d65_5nm[j - 1], d65_5nm[j]);
+                v0 + (lambda - l0) / (l1 - l0) * (v1 - v0)
+            })
+            .collect();
+        let integrate = |f: &dyn Fn(usize) -> f64| -> f64 {
+            // Trapezoids on the 1 nm grid: exact for the tables' linear interpolants' sums.
+            (0..SAMPLES)
+                .map(|i| f(i) * if i == 0 || i == SAMPLES - 1 { 0.5 } else { 1.0 })
+                .sum()
+        };
+        let y_integral = integrate(&|i| f64::from(xyz_bar[i].y));
+        let d65_y = integrate(&|i| d65_raw[i] * f64::from(xyz_bar[i].y)) / y_integral;
+        let d65: Vec<f32> = d65_raw.iter().map(|v| (v / d65_y) as f32).collect();
+        let white = DVec3::new(
+            integrate(&|i| f64::from(d65[i]) * f64::from(xyz_bar[i].x)),
+            integrate(&|i| f64::from(d65[i]) * f64::from(xyz_bar[i].y)),
+            integrate(&|i| f64::from(d65[i]) * f64::from(xyz_bar[i].z)),
+        ) / y_integral;
+        let rgb_to_xyz = rgb_to_xyz_matrix(SRGB_PRIMARIES, white);
+        let xyz_to_rgb = rgb_to_xyz.inverse().as_mat3();
+        let rgb_bar = xyz_bar
+            .iter()
+            .map(|&bar| xyz_to_rgb * bar / y_integral as f32)
+            .collect();
+        CieTables {
+            xyz_bar,
+            rgb_bar,
+            d65,
+            y_integral: y_integral as f32,
+            white_xyz: white.as_vec3(),
+            xyz_to_rgb,
+            rgb_to_xyz,
+        }
+    }
+
+    /// Index and fraction of `lambda_nm` on the 1 nm grid, or `None` outside it.
+    #[inline(always)]
+    fn locate(lambda_nm: f32) -> Option<(usize, f32)> {
+        let x = lambda_nm - LAMBDA_MIN_NM;
+        if !(0.0..=(SAMPLES - 1) as f32).contains(&x) {
+            return None;
+        }
+        let i = (x as usize).min(SAMPLES - 2);
+        Some((i, x - i as f32))
+    }
+
+    /// x̄, ȳ, z̄ at `lambda_nm` (linear between the 1 nm entries; zero outside 360–830 nm).
+    #[inline(always)]
+    pub fn xyz_bar(&self, lambda_nm: f32) -> Vec3 {
+        match Self::locate(lambda_nm) {
+            Some((i, t)) => self.xyz_bar[i].lerp(self.xyz_bar[i + 1], t),
+            None => Vec3::ZERO,
+        }
+    }
+
+    /// x̄, ȳ, z̄ at `lambda_nm` as linear sRGB over ∫ȳ (see `rgb_bar`).
+    #[inline(always)]
+    pub fn rgb_bar(&self, lambda_nm: f32) -> Vec3 {
+        match Self::locate(lambda_nm) {
+            Some((i, t)) => self.rgb_bar[i].lerp(self.rgb_bar[i + 1], t),
+            None => Vec3::ZERO,
+        }
+    }
+
+    /// The luminance-normalised D65 at `lambda_nm` (zero outside 360–830 nm).
+    #[inline(always)]
+    pub fn d65(&self, lambda_nm: f32) -> f32 {
+        match Self::locate(lambda_nm) {
+            Some((i, t)) => self.d65[i] + t * (self.d65[i + 1] - self.d65[i]),
+            None => 0.0,
+        }
+    }
+
+    /// [`CieTables::d65`] at four wavelengths.
+    #[inline(always)]
+    pub fn d65_4(&self, lambda_nm: Vec4) -> Vec4 {
+        Vec4::new(
+            self.d65(lambda_nm.x),
+            self.d65(lambda_nm.y),
+            self.d65(lambda_nm.z),
+            self.d65(lambda_nm.w),
+        )
+    }
+
+    /// Linear sRGB of CIE XYZ.
+    #[inline(always)]
+    pub fn xyz_to_rgb(&self, xyz: Vec3) -> Rgb {
+        self.xyz_to_rgb * xyz
+    }
+
+    /// CIE XYZ of linear sRGB.
+    pub fn rgb_to_xyz(&self, rgb: Rgb) -> Vec3 {
+        (self.rgb_to_xyz * rgb.as_dvec3()).as_vec3()
+    }
+
+    /// The linear sRGB → XYZ matrix, in double precision (the spectral fit's).
+    pub(crate) fn rgb_to_xyz_f64(&self) -> DMat3 {
+        self.rgb_to_xyz
+    }
+
+    /// CIE XYZ of the spectral radiance `f(λ)`, integrated at 1 nm over
+    /// 360–830 nm and divided by ∫ȳ (a unit spectrum has Y = 1).
+    pub fn spectrum_to_xyz(&self, f: impl Fn(f32) -> f32) -> Vec3 {
+        let mut sum = DVec3::ZERO;
+        for (i, bar) in self.xyz_bar.iter().enumerate() {
+            let w = if i == 0 || i == SAMPLES - 1 { 0.5 } else { 1.0 };
+            sum += bar.as_dvec3() * f64::from(f(LAMBDA_MIN_NM + i as f32)) * w;
+        }
+        (sum / f64::from(self.y_integral)).as_vec3()
+    }
+
+    /// Linear sRGB of the spectral radiance `f(λ)`.
+    pub fn spectrum_to_rgb(&self, f: impl Fn(f32) -> f32) -> Rgb {
+        self.xyz_to_rgb(self.spectrum_to_xyz(f))
+    }
+
+    /// Linear sRGB of a surface of spectral reflectance `f(λ)` lit by D65
+    /// (what an RGB reflectance must round-trip to).
+    pub fn reflectance_to_rgb(&self, f: impl Fn(f32) -> f32) -> Rgb {
+        self.spectrum_to_rgb(|l| f(l) * self.d65(l))
+    }
+}
+
+/// The matrix from linear RGB with `primaries` (xy chromaticities) and
+/// `white` (XYZ) to XYZ: each primary's XYZ scaled so the three sum to the
+/// white (SMPTE RP 177-1993).
+fn rgb_to_xyz_matrix(primaries: [(f64, f64); 3], white: DVec3) -> DMat3 {
+    let xyz_of = |(x, y): (f64, f64)| DVec3::new(x / y, 1.0, (1.0 - x - y) / y);
+    let p = DMat3::from_cols(xyz_of(primaries[0]), xyz_of(primaries[1]), xyz_of(primaries[2]));
+    let s = p.inverse() * white;
+    DMat3::from_cols(p.x_axis * s.x, p.y_axis * s.y, p.z_axis * s.z)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The tables read: ∫ȳ is pbrt's CIE_Y_integral, D65's white has the
+    /// standard's chromaticity (0.3127, 0.3290) to 4 decimals, and the
+    /// matrix is the standard sRGB one to 3e-3 (it differs only by that
+    /// rounding of the white).
+    #[test]
+    fn tables_match_the_standards() {
+        let t = tables();
+        assert!((t.y_integral - 106.856_895).abs() < 1e-3, "{}", t.y_integral);
+        let w = t.white_xyz;
+        let (x, y) = (w.x / (w.x + w.y + w.z), w.y / (w.x + w.y + w.z));
+        assert!(
+            (x - 0.3127).abs() < 1e-4 && (y - 0.3290).abs() < 1e-4,
+            "white ({x}, {y})"
+        );
+        assert!((w.y - 1.0).abs() < 1e-6);
+        // IEC 61966-2-1's XYZ → sRGB matrix.
+        let standard = Mat3::from_cols_array(&[
+            3.2406, -0.9689, 0.0557, -1.5372, 1.8758, -0.2040, -0.4986, 0.0415, 1.0570,
+        ]);
+        let diff = (t.xyz_to_rgb - standard).to_cols_array();
+        assert!(diff.iter().all(|d| d.abs() < 3e-3), "{:?}", t.xyz_to_rgb);
+        let white_rgb = t.spectrum_to_rgb(|l| t.d65(l));
+        assert!((white_rgb - Vec3::ONE).abs().max_element() < 1e-5, "{white_rgb}");
+        assert_eq!(t.xyz_bar(200.0), Vec3::ZERO);
+        assert!((t.xyz_bar(555.0).y - 1.0).abs() < 2e-3);
+    }
+}

@@ -1,0 +1,475 @@
+//! Light as spectra: the wavelengths a camera sample carries, spectral
+//! values at those wavelengths, and the spectra a scene's colours and
+//! lights become.
+//!
+//! lenspath's transport is spectral (after pbrt-v4, Pharr et al. 4th ed.
+//! §4.5–4.6): every camera sample carries [`WAVELENGTHS_PER_SAMPLE`]
+//! wavelengths chosen by hero-wavelength sampling (Wilkie et al. 2014,
+//! "Hero Wavelength Spectral Sampling"), importance-sampled toward the
+//! visible ([`SampledWavelengths::sample_visible`]); a path carries their
+//! [`SampledSpectrum`] and the film turns it into CIE XYZ and linear sRGB
+//! ([`cie`]). Scene colours stay RGB: reflectances become smooth spectra in
+//! [0, 1] and emission becomes a spectrum times the D65 illuminant
+//! ([`upsample`], Jakob & Hanika 2019).
+
+pub mod cie;
+pub mod metals;
+pub mod upsample;
+
+use std::sync::Arc;
+
+use glam::{Vec3, Vec4};
+
+use crate::error::{Error, Result};
+use crate::math::Rgb;
+pub use upsample::SigmoidPolynomial;
+
+/// Shortest wavelength transported, nm (the CIE tables' first entry).
+pub const LAMBDA_MIN_NM: f32 = 360.0;
+/// Longest wavelength transported, nm (the CIE tables' last entry).
+pub const LAMBDA_MAX_NM: f32 = 830.0;
+/// The helium d line, nm: the wavelength at which lens prescriptions give
+/// their indices (n_d) and the Abbe number V_d is defined.
+pub const D_LINE_NM: f32 = 587.5618;
+/// Wavelengths each camera sample carries (pbrt-v4's `NSpectrumSamples`).
+pub const WAVELENGTHS_PER_SAMPLE: usize = 4;
+
+/// Values of a spectral quantity at a sample's [`SampledWavelengths`], one
+/// per lane (a SIMD vector: the path loop multiplies these as it did RGB).
+pub type SampledSpectrum = Vec4;
+
+/// The wavelengths one camera sample carries and their densities.
+///
+/// The first is the hero; the others are its rotations through the sampled
+/// range, so one uniform number stratifies all four (Wilkie et al. 2014).
+/// An interface whose direction depends on the wavelength (a dispersive
+/// glass) keeps only the hero: [`SampledWavelengths::terminate_secondary`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampledWavelengths {
+    /// Wavelengths, nm.
+    pub lambda_nm: Vec4,
+    /// Density of each, per nm (zero for a terminated wavelength).
+    pub pdf: Vec4,
+}
+
+impl SampledWavelengths {
+    /// Wavelengths for the uniform number `u` in [0, 1), importance-sampled
+    /// toward where the eye is sensitive: density ∝ 1 / cosh²(0.0072 (λ − 538))
+    /// on [360, 830] nm (pbrt-v4 `SampleVisibleWavelengths`, a fit to the
+    /// luminous efficiency curve that inverts in closed form).
+    #[inline(always)]
+    pub fn sample_visible(u: f32) -> Self {
+        // The four rotations of u, wrapped into [0, 1).
+        let ui = Vec4::splat(u) + Vec4::new(0.0, 0.25, 0.5, 0.75);
+        let ui = ui - Vec4::select(ui.cmpge(Vec4::ONE), Vec4::ONE, Vec4::ZERO);
+        // λ = 538 − 138.89 atanh(t), atanh t = ½ ln((1 + t) / (1 − t)). As
+        // 0.0072 · 138.89 = 1, the density's cosh²(0.0072 (λ − 538)) is
+        // cosh²(atanh t) = 1 / (1 − t²): one logarithm per wavelength, and
+        // that one four lanes at once.
+        let t = Vec4::splat(0.856_910_6) - ui * 1.827_502;
+        let atanh = ln4((Vec4::ONE + t) / (Vec4::ONE - t)) * 0.5;
+        SampledWavelengths {
+            lambda_nm: Vec4::splat(538.0) - atanh * 138.888_89,
+            pdf: (Vec4::ONE - t * t) * VISIBLE_PDF_PEAK,
+        }
+    }
+
+    /// Wavelengths `lambda_nm` with density `pdf` each (tests, analysis tools).
+    pub fn new(lambda_nm: Vec4, pdf: Vec4) -> Self {
+        SampledWavelengths { lambda_nm, pdf }
+    }
+
+    /// One wavelength alone, density 1 (geometric questions and analysis).
+    pub fn single(lambda_nm: f32) -> Self {
+        SampledWavelengths {
+            lambda_nm: Vec4::splat(lambda_nm),
+            pdf: Vec4::new(1.0, 0.0, 0.0, 0.0),
+        }
+    }
+
+    /// The hero wavelength, nm: the one a dispersive interface follows.
+    pub fn hero_nm(&self) -> f32 {
+        self.lambda_nm.x
+    }
+
+    /// Keeps only the hero wavelength (a path that just split by wavelength):
+    /// the others get density 0, so they add nothing, and the hero's density
+    /// is divided by their count, so the estimate stays unbiased (pbrt-v4
+    /// `TerminateSecondary`).
+    pub fn terminate_secondary(&mut self) {
+        if self.secondary_terminated() {
+            return;
+        }
+        self.pdf = Vec4::new(self.pdf.x / WAVELENGTHS_PER_SAMPLE as f32, 0.0, 0.0, 0.0);
+    }
+
+    /// True once only the hero wavelength is left.
+    pub fn secondary_terminated(&self) -> bool {
+        self.pdf.y == 0.0 && self.pdf.z == 0.0 && self.pdf.w == 0.0
+    }
+
+    /// Linear sRGB (D65) of the spectral radiance `l` carried at these
+    /// wavelengths: its CIE XYZ estimate, then the sRGB primaries.
+    #[inline(always)]
+    pub fn to_rgb(&self, l: SampledSpectrum) -> Rgb {
+        let tables = cie::tables();
+        let mut rgb = Rgb::ZERO;
+        for i in 0..WAVELENGTHS_PER_SAMPLE {
+            if self.pdf[i] > 0.0 && l[i] != 0.0 {
+                rgb += tables.rgb_bar(self.lambda_nm[i]) * (l[i] / self.pdf[i]);
+            }
+        }
+        rgb / WAVELENGTHS_PER_SAMPLE as f32
+    }
+
+    /// The Monte Carlo estimate of CIE XYZ from `l` at these wavelengths:
+    /// the mean over lanes of L(λ) x̄ȳz̄(λ) / p(λ), over ∫ȳ (so a spectrum
+    /// equal to 1 everywhere has Y ≈ 1).
+    #[inline(always)]
+    pub fn to_xyz(&self, l: SampledSpectrum) -> Vec3 {
+        let tables = cie::tables();
+        let mut xyz = Vec3::ZERO;
+        for i in 0..WAVELENGTHS_PER_SAMPLE {
+            if self.pdf[i] > 0.0 && l[i] != 0.0 {
+                xyz += tables.xyz_bar(self.lambda_nm[i]) * (l[i] / self.pdf[i]);
+            }
+        }
+        xyz / (WAVELENGTHS_PER_SAMPLE as f32 * tables.y_integral)
+    }
+}
+
+/// The visible density's value at 538 nm, its peak, per nm.
+const VISIBLE_PDF_PEAK: f32 = 0.003_939_804;
+
+/// The argument of atanh for `u`: spans [360, 830] nm as `u` spans [0, 1].
+#[inline(always)]
+fn visible_t(u: f32) -> f32 {
+    0.856_910_6 - 1.827_502 * u
+}
+
+/// The natural logarithm of four positive normal numbers: the exponent
+/// and a mantissa m in [√½, √2) from the bits, then ln m = 2 atanh s with
+/// s = (m − 1) / (m + 1), |s| < 0.172, by its series to s⁹ (error below
+/// 1e-7 relative; Abramowitz & Stegun 4.1.27).
+#[inline(always)]
+fn ln4(x: Vec4) -> Vec4 {
+    use glam::UVec4;
+    let bits = UVec4::from_array(x.to_array().map(f32::to_bits));
+    // Shift the mantissa into [√½, √2): subtract the bits of √½ first.
+    let offset = bits - UVec4::splat(0x3f35_04f3);
+    let exponent = Vec4::from_array(offset.to_array().map(|b| ((b as i32) >> 23) as f32));
+    let mantissa_bits = (offset & UVec4::splat(0x007f_ffff)) + UVec4::splat(0x3f35_04f3);
+    let m = Vec4::from_array(mantissa_bits.to_array().map(f32::from_bits));
+    let s = (m - Vec4::ONE) / (m + Vec4::ONE);
+    let s2 = s * s;
+    let series = Vec4::ONE
+        + s2 * (Vec4::splat(1.0 / 3.0) + s2 * (Vec4::splat(0.2) + s2 * (Vec4::splat(1.0 / 7.0) + s2 * (1.0 / 9.0))));
+    exponent * std::f32::consts::LN_2 + s * series * 2.0
+}
+
+/// λ for `u` in [0, 1) under the visible density (see [`SampledWavelengths::sample_visible`]).
+pub fn sample_visible_wavelength(u: f32) -> f32 {
+    538.0 - 138.888_89 * visible_t(u).atanh()
+}
+
+/// Density, per nm, of [`sample_visible_wavelength`]: zero outside [360, 830] nm.
+pub fn visible_wavelength_pdf(lambda_nm: f32) -> f32 {
+    if !(LAMBDA_MIN_NM..=LAMBDA_MAX_NM).contains(&lambda_nm) {
+        return 0.0;
+    }
+    let c = (0.0072 * (lambda_nm - 538.0)).cosh();
+    VISIBLE_PDF_PEAK / (c * c)
+}
+
+/// A spectral distribution as a scene gives it: what a reflectance,
+/// emission or index of refraction is, evaluated at a sample's wavelengths
+/// by [`Spectrum::sample`].
+#[derive(Clone, Debug, PartialEq)]
+pub enum Spectrum {
+    /// The same value at every wavelength.
+    Constant(f32),
+    /// A smooth spectrum fitted to an RGB colour (Jakob & Hanika 2019),
+    /// times `scale`: reflectances (scale 1, values in [0, 1]) and other
+    /// unbounded RGB quantities (scale twice the largest component).
+    Rgb {
+        /// The fitted sigmoid polynomial, values in [0, 1].
+        polynomial: SigmoidPolynomial,
+        /// Factor applied to it.
+        scale: f32,
+    },
+    /// An emitter's RGB colour: a fitted spectrum times the D65 illuminant,
+    /// so RGB white (1, 1, 1) emits D65 with luminance 1 and renders as
+    /// sRGB (1, 1, 1) (pbrt-v4 `RGBIlluminantSpectrum`).
+    RgbIlluminant {
+        /// The fitted sigmoid polynomial, values in [0, 1].
+        polynomial: SigmoidPolynomial,
+        /// Factor applied to it.
+        scale: f32,
+    },
+    /// Planck's black body at `temperature_k` times `scale`, made by
+    /// [`Spectrum::blackbody`] so its luminance Y is the one asked for (1
+    /// renders as bright as RGB white).
+    Blackbody {
+        /// Temperature, kelvin.
+        temperature_k: f32,
+        /// Factor on Planck's law (W·m⁻²·sr⁻¹·nm⁻¹) giving the luminance asked for.
+        scale: f32,
+    },
+    /// Values given at wavelengths, linear between them and constant beyond
+    /// the ends (measured data: lamps, metals).
+    Tabulated(Arc<Tabulated>),
+}
+
+/// A spectrum given at increasing wavelengths, linear between them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Tabulated {
+    lambda_nm: Vec<f32>,
+    values: Vec<f32>,
+}
+
+impl Tabulated {
+    /// A table of `(wavelength_nm, value)` pairs; wavelengths must increase
+    /// strictly and every number be finite, values non-negative.
+    pub fn new(pairs: &[(f32, f32)]) -> Result<Self> {
+        let fail = |m: String| Err(Error::InvalidArgument(format!("spectrum table: {m}")));
+        if pairs.len() < 2 {
+            return fail(format!(
+                "needs at least two (wavelength_nm, value) pairs, got {}",
+                pairs.len()
+            ));
+        }
+        for (i, &(lambda, value)) in pairs.iter().enumerate() {
+            if !(lambda.is_finite() && value.is_finite() && value >= 0.0) {
+                return fail(format!(
+                    "pair {i} ({lambda}, {value}) must be finite with a non-negative value"
+                ));
+            }
+            if i > 0 && lambda <= pairs[i - 1].0 {
+                return fail(format!(
+                    "wavelengths must increase, but pair {i} has {lambda} nm after {} nm",
+                    pairs[i - 1].0
+                ));
+            }
+        }
+        Ok(Tabulated {
+            lambda_nm: pairs.iter().map(|p| p.0).collect(),
+            values: pairs.iter().map(|p| p.1).collect(),
+        })
+    }
+
+    /// The value at `lambda_nm`.
+    pub fn at(&self, lambda_nm: f32) -> f32 {
+        let n = self.lambda_nm.len();
+        if lambda_nm <= self.lambda_nm[0] {
+            return self.values[0];
+        }
+        if lambda_nm >= self.lambda_nm[n - 1] {
+            return self.values[n - 1];
+        }
+        let i = self.lambda_nm.partition_point(|&l| l <= lambda_nm) - 1;
+        let t = (lambda_nm - self.lambda_nm[i]) / (self.lambda_nm[i + 1] - self.lambda_nm[i]);
+        self.values[i] + t * (self.values[i + 1] - self.values[i])
+    }
+}
+
+impl Spectrum {
+    /// A reflectance or transmittance colour in [0, 1]³ as a spectrum in [0, 1].
+    pub fn reflectance(rgb: Rgb) -> Self {
+        Spectrum::Rgb {
+            polynomial: SigmoidPolynomial::fit(rgb.clamp(Vec3::ZERO, Vec3::ONE)),
+            scale: 1.0,
+        }
+    }
+
+    /// A non-negative RGB quantity that is not a reflectance (a conductor's
+    /// η or k): the fit of `rgb / (2 max)` times `2 max` (pbrt-v4
+    /// `RGBUnboundedSpectrum`).
+    pub fn unbounded(rgb: Rgb) -> Self {
+        let (polynomial, scale) = SigmoidPolynomial::fit_scaled(rgb);
+        Spectrum::Rgb { polynomial, scale }
+    }
+
+    /// An emitter's RGB colour as a spectrum times D65.
+    pub fn illuminant(rgb: Rgb) -> Self {
+        let (polynomial, scale) = SigmoidPolynomial::fit_scaled(rgb);
+        Spectrum::RgbIlluminant { polynomial, scale }
+    }
+
+    /// A black body at `temperature_k` with luminance `luminance`.
+    pub fn blackbody(temperature_k: f32, luminance: f32) -> Result<Self> {
+        if !(temperature_k > 0.0 && temperature_k.is_finite()) {
+            return Err(Error::InvalidArgument(format!(
+                "a black body's temperature must be positive kelvin, got {temperature_k}"
+            )));
+        }
+        if !(luminance >= 0.0 && luminance.is_finite()) {
+            return Err(Error::InvalidArgument(format!(
+                "a black body's luminance must be 0 or more, got {luminance}"
+            )));
+        }
+        let planck_luminance = cie::tables().spectrum_to_xyz(|l| planck(l, temperature_k)).y;
+        Ok(Spectrum::Blackbody {
+            temperature_k,
+            scale: luminance / planck_luminance,
+        })
+    }
+
+    /// The spectrum's values at `lambda`.
+    #[inline(always)]
+    pub fn sample(&self, lambda: &SampledWavelengths) -> SampledSpectrum {
+        match self {
+            Spectrum::Constant(c) => Vec4::splat(*c),
+            Spectrum::Rgb { polynomial, scale } => polynomial.eval4(lambda.lambda_nm) * *scale,
+            Spectrum::RgbIlluminant { polynomial, scale } => {
+                polynomial.eval4(lambda.lambda_nm) * *scale * cie::tables().d65_4(lambda.lambda_nm)
+            }
+            Spectrum::Blackbody { temperature_k, scale } => {
+                Vec4::from_array(lambda.lambda_nm.to_array().map(|l| planck(l, *temperature_k) * scale))
+            }
+            Spectrum::Tabulated(table) => Vec4::from_array(lambda.lambda_nm.to_array().map(|l| table.at(l))),
+        }
+    }
+
+    /// The value at one wavelength.
+    pub fn at(&self, lambda_nm: f32) -> f32 {
+        self.sample(&SampledWavelengths::new(Vec4::splat(lambda_nm), Vec4::ONE))
+            .x
+    }
+
+    /// True when every value is zero (a black emitter, a zero tint).
+    pub fn is_black(&self) -> bool {
+        match self {
+            Spectrum::Constant(c) => *c == 0.0,
+            Spectrum::Rgb { scale, polynomial } | Spectrum::RgbIlluminant { scale, polynomial } => {
+                *scale == 0.0 || polynomial.is_zero()
+            }
+            Spectrum::Blackbody { scale, .. } => *scale == 0.0,
+            Spectrum::Tabulated(t) => t.values.iter().all(|&v| v == 0.0),
+        }
+    }
+
+    /// Linear sRGB of this spectrum: as an emitter's radiance when it is an
+    /// illuminant or a light's own spectrum, integrated against the CIE
+    /// matching functions at 1 nm.
+    pub fn to_rgb(&self) -> Rgb {
+        cie::tables().spectrum_to_rgb(|l| self.at(l))
+    }
+}
+
+/// Planck's law: spectral radiance of a black body at `temperature_k`, in
+/// W·m⁻²·sr⁻¹·nm⁻¹, at `lambda_nm` (CODATA 2018 constants).
+pub fn planck(lambda_nm: f32, temperature_k: f32) -> f32 {
+    const C: f64 = 299_792_458.0;
+    const H: f64 = 6.626_070_15e-34;
+    const KB: f64 = 1.380_649e-23;
+    let l = f64::from(lambda_nm) * 1e-9;
+    let t = f64::from(temperature_k);
+    let radiance_per_m = 2.0 * H * C * C / (l.powi(5) * ((H * C / (l * KB * t)).exp_m1()));
+    (radiance_per_m * 1e-9) as f32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The visible density integrates to 1 over [360, 830] nm and the
+    /// sampling formula inverts its CDF: the fraction of samples below a
+    /// wavelength equals the density's integral up to it.
+    #[test]
+    fn visible_sampling_matches_its_density() {
+        let integral: f64 = (0..47_000)
+            .map(|i| f64::from(visible_wavelength_pdf(360.0 + (i as f32 + 0.5) * 0.01)) * 0.01)
+            .sum();
+        assert!((integral - 1.0).abs() < 1e-4, "∫pdf = {integral}");
+        for cut in [420.0f32, 500.0, 560.0, 650.0, 780.0] {
+            let n = 100_000;
+            let below = (0..n)
+                .filter(|&i| sample_visible_wavelength((i as f32 + 0.5) / n as f32) < cut)
+                .count();
+            let cdf: f64 = (0..((cut - 360.0) * 100.0) as usize)
+                .map(|i| f64::from(visible_wavelength_pdf(360.0 + (i as f32 + 0.5) * 0.01)) * 0.01)
+                .sum();
+            assert!(
+                (below as f64 / n as f64 - cdf).abs() < 1e-3,
+                "{cut} nm: {below} vs {cdf}"
+            );
+        }
+        for u in [0.0, 0.13, 0.5, 0.77, 0.99] {
+            let w = SampledWavelengths::sample_visible(u);
+            assert!((w.lambda_nm.x - sample_visible_wavelength(u)).abs() < 1e-3);
+            let pdf = visible_wavelength_pdf(w.lambda_nm.x);
+            assert!((w.pdf.x - pdf).abs() < 1e-5 * pdf, "u = {u}: {} vs {pdf}", w.pdf.x);
+        }
+        assert!((sample_visible_wavelength(0.0) - 360.0).abs() < 0.1);
+        assert!((sample_visible_wavelength(0.999_999) - 830.0).abs() < 0.5);
+    }
+
+    /// The four-lane logarithm agrees with the standard library's.
+    #[test]
+    fn ln4_is_accurate() {
+        let mut worst = 0.0f32;
+        for i in 0..100_000 {
+            let x = 1e-3 * 1.0002f32.powi(i);
+            let got = ln4(Vec4::splat(x)).x;
+            worst = worst.max((got - x.ln()).abs() / x.ln().abs().max(1.0));
+        }
+        assert!(worst < 3e-7, "worst relative error {worst}");
+    }
+
+    /// Terminating the secondaries leaves an estimate with the same mean: the
+    /// XYZ of a constant spectrum averaged over many hero wavelengths.
+    #[test]
+    fn terminating_secondary_wavelengths_keeps_the_mean() {
+        let n = 20_000;
+        let (mut all, mut hero) = (Vec3::ZERO, Vec3::ZERO);
+        for i in 0..n {
+            let mut w = SampledWavelengths::sample_visible((i as f32 + 0.5) / n as f32);
+            all += w.to_xyz(Vec4::ONE);
+            w.terminate_secondary();
+            assert!(w.secondary_terminated());
+            hero += w.to_xyz(Vec4::ONE);
+        }
+        let (all, hero) = (all / n as f32, hero / n as f32);
+        assert!((all.y - 1.0).abs() < 1e-3, "Y of a unit spectrum {}", all.y);
+        assert!((all - hero).abs().max_element() < 2e-3, "{all} vs {hero}");
+    }
+
+    /// Planck's law: the peak sits at Wien's b / T and the radiance at the
+    /// peak of a 5778 K body is the tabulated 2.6e13 W·m⁻²·sr⁻¹·m⁻¹.
+    #[test]
+    fn planck_peaks_at_wien() {
+        let t = 5778.0;
+        let peak = (3000..9000)
+            .map(|i| i as f32 * 0.1)
+            .max_by(|a, b| planck(*a, t).total_cmp(&planck(*b, t)))
+            .unwrap();
+        assert!((peak - 2.897_772e6 / t).abs() < 0.2, "peak at {peak} nm");
+        let radiance = planck(peak, t) * 1e9;
+        assert!((radiance / 2.63e13 - 1.0).abs() < 0.01, "{radiance}");
+    }
+
+    /// A 6504 K black body is near D65's white, a 2700 K lamp is warm, and
+    /// the luminance asked for is the luminance given.
+    #[test]
+    fn blackbody_colours() {
+        let d65ish = Spectrum::blackbody(6504.0, 1.0).unwrap();
+        let xyz = cie::tables().spectrum_to_xyz(|l| d65ish.at(l));
+        assert!((xyz.y - 1.0).abs() < 1e-4, "Y = {}", xyz.y);
+        let rgb = d65ish.to_rgb();
+        assert!((rgb - Vec3::ONE).abs().max_element() < 0.1, "{rgb}");
+        let warm = Spectrum::blackbody(2700.0, 2.0).unwrap().to_rgb();
+        assert!(warm.x > 1.4 * warm.z, "{warm}");
+        assert!(Spectrum::blackbody(-3.0, 1.0).is_err());
+    }
+
+    #[test]
+    fn tabulated_interpolates_and_refuses_bad_tables() {
+        let t = Tabulated::new(&[(400.0, 1.0), (500.0, 3.0), (600.0, 0.0)]).unwrap();
+        assert_eq!(t.at(450.0), 2.0);
+        assert_eq!(t.at(300.0), 1.0);
+        assert_eq!(t.at(700.0), 0.0);
+        assert!(Tabulated::new(&[(400.0, 1.0), (400.0, 2.0)]).is_err());
+        assert!(Tabulated::new(&[(400.0, -1.0), (500.0, 2.0)]).is_err());
+        assert!(Tabulated::new(&[(400.0, 1.0)]).is_err());
+    }
+}
