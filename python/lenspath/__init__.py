@@ -23,6 +23,7 @@ from . import _core
 from ._core import (
     AutofocusResult,
     Camera,
+    Glass,
     Lens,
     LensError,
     LenspathError,
@@ -45,6 +46,7 @@ __version__: str = _core.__version__
 __all__ = [
     "AutofocusResult",
     "Camera",
+    "Glass",
     "Lens",
     "LensError",
     "LenspathError",

@@ -20,6 +20,7 @@ __all__ = [
     "SceneError",
     "LensError",
     "Scene",
+    "Glass",
     "Lens",
     "Camera",
     "load",
@@ -93,11 +94,18 @@ class Scene:
         k: tuple[float, float, float] | None = None,
         alpha: float | None = None,
         roughness: float | None = None,
+        glass: str | None = None,
+        n_d: float | None = None,
+        v_d: float | None = None,
+        metal: str | None = None,
     ) -> int:
         """Adds a material and returns its index, with the scene files' names: ``diffuse`` and
-        ``mirror`` use ``reflectance``; ``dielectric`` uses ``eta[0]`` (default 1.5);
-        ``conductor`` needs ``eta`` and ``k`` per channel and a GGX ``alpha`` (default 0).
-        ``glass``, ``metal`` and ``roughness`` are the deprecated old names."""
+        ``mirror`` use ``reflectance``; ``dielectric`` takes one of ``eta[0]`` (a constant
+        index; default 1.5), ``glass`` (a catalogue glass, ``"N-BK7"``: it disperses) or
+        ``n_d`` with optionally ``v_d`` (the Abbe model); ``conductor`` needs ``eta`` and
+        ``k`` per channel, or a measured ``metal`` (``"gold"``, ``"Ag"``...), and a GGX
+        ``alpha`` (default 0). The kinds ``glass`` and ``metal`` and the keyword
+        ``roughness`` are the deprecated old names."""
     def add_mesh(
         self,
         vertices: npt.ArrayLike,
@@ -159,6 +167,36 @@ def load(path: str | PathLike[str]) -> Scene:
 
 def builtin_scenes() -> list[str]:
     """The built-in scenes' names."""
+
+@final
+class Glass:
+    """An optical glass of the embedded catalogues (Schott, Ohara, Hoya, CDGM, Sumita,
+    Hikari) by name, ``Glass("N-BK7")`` or ``Glass("ohara:S-LAH59")``; a bare name is
+    looked up in that order. Raises ``ValueError`` for an unknown name."""
+
+    def __init__(self, name: str) -> None: ...
+    @staticmethod
+    def abbe(n_d: float, v_d: float) -> Glass:
+        """A model glass with index ``n_d`` at the d line and Abbe number ``v_d``
+        (two-term Cauchy)."""
+    @overload
+    def index(self, wavelength_nm: float) -> float: ...
+    @overload
+    def index(self, wavelength_nm: npt.ArrayLike) -> npt.NDArray[np.float64]: ...
+    def index(self, wavelength_nm: float | npt.ArrayLike) -> float | npt.NDArray[np.float64]:
+        """The index of refraction at ``wavelength_nm``."""
+    @property
+    def maker(self) -> str | None:
+        """The catalogue (``"schott"``), None for a model glass."""
+    @property
+    def name(self) -> str:
+        """The glass's name."""
+    @property
+    def n_d(self) -> float:
+        """The index at the d line, 587.5618 nm."""
+    @property
+    def v_d(self) -> float:
+        """The Abbe number (n_d - 1) / (n_F - n_C)."""
 
 @final
 class Lens:

@@ -96,7 +96,7 @@ fn summarize(loaded: &LoadedScene) -> serde_json::Value {
             "diffuse": count(&|m| matches!(m, Material::Diffuse { .. })),
             "mirror": count(&|m| matches!(m, Material::Mirror { .. })),
             "dielectric": count(&|m| matches!(m, Material::Dielectric { .. })),
-            "conductor": count(&|m| matches!(m, Material::Conductor { .. })),
+            "conductor": count(&|m| matches!(m, Material::Conductor { .. } | Material::MeasuredConductor { .. })),
         },
         "emitters": emitters,
         "lights": {

@@ -8,12 +8,13 @@
 //! poll for Ctrl-C (see [`render::render`]).
 //!
 //! One module per concept, as the library: `error` (exceptions), `scene`,
-//! `lens`, `camera`, `render`, `autofocus`, `image`; this file only
+//! `glass`, `lens`, `camera`, `render`, `autofocus`, `image`; this file only
 //! registers them.
 
 mod autofocus;
 mod camera;
 mod error;
+mod glass;
 mod image;
 mod lens;
 mod render;
@@ -31,6 +32,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SceneError", py.get_type::<SceneError>())?;
     m.add("LensError", py.get_type::<LensError>())?;
     m.add_class::<scene::Scene>()?;
+    m.add_class::<glass::Glass>()?;
     m.add_class::<lens::Lens>()?;
     m.add_class::<camera::Camera>()?;
     m.add_function(wrap_pyfunction!(scene::load, m)?)?;

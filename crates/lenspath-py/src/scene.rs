@@ -8,6 +8,7 @@ use glam::Vec3;
 use lenspath::accel::BvhSettings;
 use lenspath::builtin::{builtin_scene, BUILTIN_SCENES, DEFAULT_MESH_TRIANGLES};
 use lenspath::camera::CameraPose;
+use lenspath::glass::Dispersion;
 use lenspath::io::load_scene;
 use lenspath::lights::Light;
 use lenspath::materials::Material;
@@ -142,11 +143,12 @@ impl Scene {
     }
 
     /// Adds a material: `kind` is "diffuse" (reflectance), "mirror"
-    /// (reflectance), "dielectric" (eta) or "conductor" (eta, k, alpha: the
-    /// GGX roughness), as in scene files; returns its index. "glass", "metal"
-    /// and `roughness` are the deprecated old names.
-    #[pyo3(signature = (kind, *, reflectance = (0.8, 0.8, 0.8), eta = None, k = None, alpha = None, roughness = None),
-           text_signature = "($self, kind, *, reflectance=(0.8, 0.8, 0.8), eta=None, k=None, alpha=None, roughness=None)")]
+    /// (reflectance), "dielectric" (eta, or a catalogue `glass`, or `n_d`
+    /// with `v_d`) or "conductor" (eta and k, or a measured `metal`; alpha:
+    /// the GGX roughness), as in scene files; returns its index. "glass",
+    /// "metal" and `roughness` are the deprecated old names.
+    #[pyo3(signature = (kind, *, reflectance = (0.8, 0.8, 0.8), eta = None, k = None, alpha = None, roughness = None, glass = None, n_d = None, v_d = None, metal = None),
+           text_signature = "($self, kind, *, reflectance=(0.8, 0.8, 0.8), eta=None, k=None, alpha=None, roughness=None, glass=None, n_d=None, v_d=None, metal=None)")]
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn add_material(
         &mut self,
@@ -157,6 +159,10 @@ impl Scene {
         k: Option<(f32, f32, f32)>,
         alpha: Option<f32>,
         roughness: Option<f32>,
+        glass: Option<&str>,
+        n_d: Option<f64>,
+        v_d: Option<f64>,
+        metal: Option<&str>,
     ) -> PyResult<u32> {
         let alpha = renamed(
             py,
@@ -182,12 +188,12 @@ impl Scene {
             "mirror" => Material::Mirror {
                 reflectance: rgb(reflectance),
             },
-            "dielectric" => Material::clear_dielectric(eta.map_or(1.5, |e| e.0)),
-            "conductor" => Material::Conductor {
-                eta: rgb(eta.ok_or_else(|| value_error("a conductor needs eta=(r, g, b)"))?),
-                k: rgb(k.ok_or_else(|| value_error("a conductor needs k=(r, g, b)"))?),
-                alpha,
+            "dielectric" => Material::Dielectric {
+                eta: Dispersion::described(eta.map(|e| f64::from(e.0)), glass, n_d, v_d).map_err(to_py)?,
+                reflectance: Vec3::ONE,
+                transmittance: Vec3::ONE,
             },
+            "conductor" => Material::conductor(eta.map(rgb), k.map(rgb), metal, alpha).map_err(to_py)?,
             other => {
                 return Err(value_error(format!(
                     "unknown material kind '{other}'; use diffuse, mirror, dielectric or conductor"

@@ -38,6 +38,7 @@ pub mod color;
 pub mod defaults;
 pub mod error;
 pub mod film;
+pub mod glass;
 pub mod integrator;
 pub mod io;
 pub mod lens;

@@ -15,8 +15,11 @@ use std::f32::consts::{FRAC_1_PI, PI};
 
 use glam::{Vec2, Vec3};
 
+use crate::error::{Error, Result};
+use crate::glass::Dispersion;
 use crate::math::Rgb;
 use crate::sampling::cosine_hemisphere;
+use crate::spectrum::metals::Metal;
 use crate::spectrum::{SampledSpectrum, SampledWavelengths, Spectrum};
 
 /// Roughness below which a conductor is treated as a perfect specular reflector.
@@ -39,8 +42,10 @@ pub enum Material {
     /// The two tints scale the lobes as Mitsuba 3's `specular_reflectance` and
     /// `specular_transmittance` do (1 for clear glass).
     Dielectric {
-        /// Index of refraction inside over outside (1.5 for glass).
-        eta: f32,
+        /// Index of refraction inside over outside against wavelength
+        /// (`Dispersion::Constant(1.5)` for plain glass, a catalogue glass's
+        /// dispersion for real glass, which splits white light).
+        eta: Dispersion,
         /// Tint of the reflected lobe in [0, 1].
         reflectance: Rgb,
         /// Tint of the transmitted lobe in [0, 1].
@@ -52,6 +57,14 @@ pub enum Material {
         eta: Rgb,
         /// Absorption coefficient (imaginary part) per RGB channel.
         k: Rgb,
+        /// Trowbridge–Reitz roughness α (0 = polished mirror).
+        alpha: f32,
+    },
+    /// Metal with measured spectral n + ik (gold, silver, copper,
+    /// aluminium): a microfacet conductor like [`Material::Conductor`].
+    MeasuredConductor {
+        /// Which metal.
+        metal: Metal,
         /// Trowbridge–Reitz roughness α (0 = polished mirror).
         alpha: f32,
     },
@@ -73,10 +86,26 @@ pub struct BsdfSample {
 }
 
 impl Material {
+    /// A conductor as a scene or a caller describes it: RGB `eta` and `k`,
+    /// or a measured `metal` by name (see [`Metal::from_name`]), with GGX
+    /// roughness `alpha`. The rule every front end's conductor goes through.
+    pub fn conductor(eta: Option<Rgb>, k: Option<Rgb>, metal: Option<&str>, alpha: f32) -> Result<Self> {
+        match (eta, k, metal) {
+            (Some(eta), Some(k), None) => Ok(Material::Conductor { eta, k, alpha }),
+            (None, None, Some(name)) => Ok(Material::MeasuredConductor {
+                metal: Metal::from_name(name)?,
+                alpha,
+            }),
+            _ => Err(Error::InvalidArgument(
+                "a conductor needs either eta and k (RGB) or metal (a name such as \"gold\")".into(),
+            )),
+        }
+    }
+
     /// Clear glass-like dielectric of relative index `eta`, untinted.
     pub fn clear_dielectric(eta: f32) -> Self {
         Material::Dielectric {
-            eta,
+            eta: Dispersion::Constant(f64::from(eta)),
             reflectance: Rgb::ONE,
             transmittance: Rgb::ONE,
         }
@@ -99,8 +128,8 @@ pub enum SpectralMaterial {
     },
     /// Smooth dielectric.
     Dielectric {
-        /// Index of refraction inside over outside.
-        eta: f32,
+        /// Index of refraction inside over outside against wavelength.
+        eta: Dispersion,
         /// Tint of the reflected lobe.
         reflectance: Spectrum,
         /// Tint of the transmitted lobe.
@@ -142,12 +171,18 @@ impl SpectralMaterial {
                 k: Spectrum::unbounded(k),
                 alpha,
             },
+            Material::MeasuredConductor { metal, alpha } => {
+                let (eta, k) = metal.eta_k();
+                SpectralMaterial::Conductor { eta, k, alpha }
+            }
         }
     }
 
-    /// The BSDF at the wavelengths `lambda`.
+    /// The BSDF at the wavelengths `lambda`. A dispersive dielectric bends
+    /// each wavelength its own way, so it keeps only the hero wavelength
+    /// (pbrt-v4's rule, unbiased: see [`SampledWavelengths::terminate_secondary`]).
     #[inline(always)]
-    pub fn bsdf(&self, lambda: &SampledWavelengths) -> Bsdf {
+    pub fn bsdf(&self, lambda: &mut SampledWavelengths) -> Bsdf {
         match self {
             SpectralMaterial::Diffuse { reflectance } => Bsdf::Diffuse {
                 reflectance: reflectance.sample(lambda),
@@ -159,11 +194,20 @@ impl SpectralMaterial {
                 eta,
                 reflectance,
                 transmittance,
-            } => Bsdf::Dielectric {
-                eta: *eta,
-                reflectance: reflectance.sample(lambda),
-                transmittance: transmittance.sample(lambda),
-            },
+            } => {
+                let eta = match eta {
+                    Dispersion::Constant(n) => *n as f32,
+                    dispersive => {
+                        lambda.terminate_secondary();
+                        dispersive.index(f64::from(lambda.hero_nm())) as f32
+                    }
+                };
+                Bsdf::Dielectric {
+                    eta,
+                    reflectance: reflectance.sample(lambda),
+                    transmittance: transmittance.sample(lambda),
+                }
+            }
             SpectralMaterial::Conductor { eta, k, alpha } => Bsdf::Conductor {
                 eta: eta.sample(lambda),
                 k: k.sample(lambda),
@@ -790,7 +834,7 @@ mod tests {
         let lambda = SampledWavelengths::new(SampledSpectrum::new(450.0, 520.0, 600.0, 680.0), SampledSpectrum::ONE);
         let orange = Rgb::new(0.8, 0.4, 0.1);
         let spectral = SpectralMaterial::new(&Material::Diffuse { reflectance: orange });
-        let Bsdf::Diffuse { reflectance } = spectral.bsdf(&lambda) else {
+        let Bsdf::Diffuse { reflectance } = spectral.bsdf(&mut lambda.clone()) else {
             panic!("a diffuse material gives a diffuse BSDF");
         };
         let fitted = Spectrum::reflectance(orange);
@@ -804,10 +848,59 @@ mod tests {
         let grey = SpectralMaterial::new(&Material::Mirror {
             reflectance: Rgb::splat(0.3),
         });
-        let Bsdf::Mirror { reflectance } = grey.bsdf(&lambda) else {
+        let Bsdf::Mirror { reflectance } = grey.bsdf(&mut lambda.clone()) else {
             panic!("a mirror gives a mirror");
         };
         assert!((reflectance - SampledSpectrum::splat(0.3)).abs().max_element() < 1e-6);
+    }
+
+    /// Real glass refracts each wavelength its own way and keeps only the
+    /// hero: N-BK7 takes its datasheet index at the hero wavelength, and a
+    /// constant index leaves the four wavelengths alone.
+    #[test]
+    fn dispersive_glass_keeps_the_hero_wavelength() {
+        let bk7 = crate::glass::find("N-BK7").unwrap().dispersion;
+        let glass = SpectralMaterial::new(&Material::Dielectric {
+            eta: bk7,
+            reflectance: Rgb::ONE,
+            transmittance: Rgb::ONE,
+        });
+        let mut lambda = SampledWavelengths::sample_visible(0.1);
+        let hero = lambda.hero_nm();
+        let Bsdf::Dielectric { eta, .. } = glass.bsdf(&mut lambda) else {
+            panic!("glass gives a dielectric");
+        };
+        assert!((f64::from(eta) - bk7.index(f64::from(hero))).abs() < 1e-6);
+        assert!(lambda.secondary_terminated());
+        let mut plain = SampledWavelengths::sample_visible(0.1);
+        SpectralMaterial::new(&Material::clear_dielectric(1.5)).bsdf(&mut plain);
+        assert!(!plain.secondary_terminated());
+        // Light arriving at 45° refracts by Snell's law with Schott's
+        // datasheet index of each line: blue (F, n = 1.52238) bends more than
+        // red (C, n = 1.51432), 0.160° apart.
+        let wo = Vec3::new(45f32.to_radians().sin(), 0.0, 45f32.to_radians().cos());
+        let refracted_deg = |nm: f32| {
+            let mut lambda =
+                SampledWavelengths::new(SampledSpectrum::new(nm, 500.0, 600.0, 700.0), SampledSpectrum::ONE);
+            let bsdf = glass.bsdf(&mut lambda);
+            // uc near 1 picks the transmitted lobe (reflection takes the first F of [0, 1)).
+            let s = bsdf.sample(wo, 0.999, Vec2::ZERO).unwrap();
+            assert!(s.wi.z < 0.0, "transmitted");
+            (-s.wi.z).acos().to_degrees()
+        };
+        let snell = |n: f32| (45f32.to_radians().sin() / n).asin().to_degrees();
+        let (blue, red) = (refracted_deg(486.1327), refracted_deg(656.2725));
+        assert!(
+            (blue - snell(1.52238)).abs() < 2e-3,
+            "F line {blue}° vs {}°",
+            snell(1.52238)
+        );
+        assert!(
+            (red - snell(1.51432)).abs() < 2e-3,
+            "C line {red}° vs {}°",
+            snell(1.51432)
+        );
+        assert!((red - blue - 0.160).abs() < 3e-3, "spread {}°", red - blue);
     }
 
     #[test]

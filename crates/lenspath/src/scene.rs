@@ -89,6 +89,16 @@ fn check_rgb(what: &str, c: Rgb) -> Result<()> {
     Ok(())
 }
 
+/// A microfacet roughness must be finite and non-negative.
+fn check_alpha(material: usize, alpha: f32) -> Result<()> {
+    if !(alpha >= 0.0 && alpha.is_finite()) {
+        return Err(Error::InvalidScene(format!(
+            "material {material}: alpha must be ≥ 0, got {alpha}"
+        )));
+    }
+    Ok(())
+}
+
 impl Scene {
     /// Total number of triangles in all meshes.
     pub fn triangle_count(&self) -> usize {
@@ -159,22 +169,20 @@ impl Scene {
                     reflectance,
                     transmittance,
                 } => {
-                    if !(eta > 0.0 && eta.is_finite()) {
+                    let n_d = eta.n_d();
+                    if !(n_d > 0.0 && n_d.is_finite()) {
                         return Err(Error::InvalidScene(format!(
-                            "material {i}: eta must be positive, got {eta}"
+                            "material {i}: eta must be positive, got {n_d}"
                         )));
                     }
                     check_rgb(&format!("material {i} reflectance"), reflectance)?;
                     check_rgb(&format!("material {i} transmittance"), transmittance)?;
                 }
+                Material::MeasuredConductor { alpha, .. } => check_alpha(i, alpha)?,
                 Material::Conductor { eta, k, alpha } => {
                     check_rgb(&format!("material {i} eta"), eta)?;
                     check_rgb(&format!("material {i} k"), k)?;
-                    if !(alpha >= 0.0 && alpha.is_finite()) {
-                        return Err(Error::InvalidScene(format!(
-                            "material {i}: alpha must be ≥ 0, got {alpha}"
-                        )));
-                    }
+                    check_alpha(i, alpha)?;
                 }
             }
         }

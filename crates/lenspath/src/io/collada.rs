@@ -46,6 +46,7 @@ use super::import::{
 };
 use crate::camera::CameraPose;
 use crate::error::{Error, Result};
+use crate::glass::Dispersion;
 use crate::lights::Light;
 use crate::materials::Material;
 use crate::math::Rgb;
@@ -876,6 +877,15 @@ impl<'a, 'input> Reader<'a, 'input> {
                     if child(bsdf, "roughness").is_some() && self.scalar(bsdf, "roughness")? > 0.0 {
                         self.warnings.add("rough glass is rendered smooth (lenspath's dielectric is smooth)");
                     }
+                    // lenspath's extension: an <abbe> (V_d) child makes the glass disperse.
+                    let eta = match child(bsdf, "abbe") {
+                        None => Dispersion::Constant(f64::from(eta)),
+                        Some(_) => {
+                            let v_d = self.scalar(bsdf, "abbe")?;
+                            Dispersion::from_abbe(f64::from(eta), f64::from(v_d))
+                                .map_err(|e| self.error(bsdf, e.to_string()))?
+                        }
+                    };
                     plain(Material::Dielectric {
                         eta,
                         // The CS184 refraction BSDF transmits only: no reflected lobe.

@@ -28,6 +28,7 @@ use super::import::{
 };
 use crate::camera::CameraPose;
 use crate::error::{Error, Result};
+use crate::glass::Dispersion;
 use crate::lights::Light;
 use crate::materials::Material;
 use crate::math::Rgb;
@@ -379,8 +380,18 @@ impl Loader<'_> {
         }
         let transmission = m.transmission().map_or(0.0, |t| t.transmission_factor());
         let material = if transmission >= 0.5 {
+            let ior = f64::from(m.ior().filter(|n| *n > 1.0 && n.is_finite()).unwrap_or(1.5));
+            // KHR_materials_dispersion gives 20 / V_d; 0 (its default) is none.
+            let dispersion = m
+                .extension_value("KHR_materials_dispersion")
+                .and_then(|v| v.get("dispersion"))
+                .and_then(|v| v.as_f64())
+                .filter(|d| *d > 0.0 && d.is_finite());
             Material::Dielectric {
-                eta: m.ior().filter(|n| *n > 0.0 && n.is_finite()).unwrap_or(1.5),
+                eta: match dispersion {
+                    Some(d) => Dispersion::from_abbe(ior, 20.0 / d).unwrap_or(Dispersion::Constant(ior)),
+                    None => Dispersion::Constant(ior),
+                },
                 reflectance: Rgb::ONE,
                 transmittance: base,
             }

@@ -24,6 +24,7 @@ use super::import::{
     DEFAULT_REFLECTANCE, EMITTER_MATERIAL,
 };
 use crate::error::{Error, Result};
+use crate::glass::Dispersion;
 use crate::materials::Material;
 use crate::math::Rgb;
 use crate::scene::Scene;
@@ -168,7 +169,7 @@ fn convert_material(m: &tobj::Material, warnings: &mut Warnings) -> (Material, O
         let transmittance = param("Tf").unwrap_or(Rgb::ONE).clamp(Rgb::ZERO, Rgb::ONE);
         return (
             Material::Dielectric {
-                eta,
+                eta: Dispersion::Constant(f64::from(eta)),
                 reflectance: Rgb::ONE,
                 transmittance,
             },
@@ -289,7 +290,7 @@ mod tests {
             }
         );
         assert_eq!(s.meshes[1].emission, Some(Rgb::new(5.0, 5.0, 4.0)));
-        assert!(matches!(mat(2), Material::Dielectric { eta, .. } if (eta - 1.33).abs() < 1e-6));
+        assert!(matches!(mat(2), Material::Dielectric { eta, .. } if (eta.n_d() - 1.33).abs() < 1e-6));
         let Material::Conductor { eta, k, alpha } = mat(3) else {
             panic!("{:?}", mat(3))
         };

@@ -20,6 +20,7 @@ use super::import::{
 use crate::builtin::{builtin_scene, DEFAULT_MESH_TRIANGLES};
 use crate::camera::{ApertureShape, CameraPose};
 use crate::error::{Error, Result};
+use crate::glass::Dispersion;
 use crate::lights::Light;
 use crate::materials::Material;
 use crate::math::Rgb;
@@ -114,13 +115,29 @@ enum MaterialSpec {
         reflectance: Color,
     },
     Dielectric {
-        eta: f32,
+        /// A constant index (no dispersion).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        eta: Option<f32>,
+        /// A catalogue glass (`N-BK7`, `ohara:S-LAH59`): its dispersion.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        glass: Option<String>,
+        /// n_d, with `v_d` for the Abbe (Cauchy) dispersion model.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        n_d: Option<f64>,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        v_d: Option<f64>,
         reflectance: Option<Color>,
         transmittance: Option<Color>,
     },
     Conductor {
-        eta: Color,
-        k: Color,
+        /// RGB indices, or `metal` instead.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        eta: Option<Color>,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        k: Option<Color>,
+        /// A measured metal by name (`gold`, `Ag`...).
+        #[serde(skip_serializing_if = "Option::is_none")]
+        metal: Option<String>,
         #[serde(default)]
         alpha: f32,
     },
@@ -606,7 +623,7 @@ fn one_line(e: &toml::de::Error, text: &str) -> String {
 }
 
 fn material(spec: &MaterialSpec) -> std::result::Result<Material, String> {
-    Ok(match *spec {
+    Ok(match spec {
         MaterialSpec::Diffuse { reflectance } => Material::Diffuse {
             reflectance: reflectance.rgb(),
         },
@@ -615,18 +632,20 @@ fn material(spec: &MaterialSpec) -> std::result::Result<Material, String> {
         },
         MaterialSpec::Dielectric {
             eta,
+            glass,
+            n_d,
+            v_d,
             reflectance,
             transmittance,
         } => Material::Dielectric {
-            eta,
+            eta: Dispersion::described(eta.map(f64::from), glass.as_deref(), *n_d, *v_d).map_err(|e| e.to_string())?,
             reflectance: reflectance.map_or(Rgb::ONE, Color::rgb),
             transmittance: transmittance.map_or(Rgb::ONE, Color::rgb),
         },
-        MaterialSpec::Conductor { eta, k, alpha } => Material::Conductor {
-            eta: eta.rgb(),
-            k: k.rgb(),
-            alpha,
-        },
+        MaterialSpec::Conductor { eta, k, metal, alpha } => {
+            Material::conductor(eta.map(Color::rgb), k.map(Color::rgb), metal.as_deref(), *alpha)
+                .map_err(|e| e.to_string())?
+        }
     })
 }
 

@@ -1,0 +1,334 @@
+//! Optical glass: the index of refraction as a function of wavelength, and
+//! the six makers' catalogues (Schott, Ohara, Hoya, CDGM, Sumita, Hikari;
+//! 1,609 glasses from the refractiveindex.info database, CC0, embedded from
+//! `data/glass/catalogue.tsv`, written by `scripts/glass_catalogue.py`).
+//!
+//! Used by dielectric materials and by lens prescriptions alike: a glass is
+//! named (`N-BK7`, `ohara:S-LAH59`) or given by n_d and V_d, from which a
+//! two-term Cauchy model is built.
+
+use std::sync::OnceLock;
+
+use crate::error::{Error, Result};
+
+/// The Fraunhofer lines lens designers quote, `(name, wavelength_nm)`:
+/// g (mercury), F (hydrogen), d (helium), C (hydrogen).
+pub const FRAUNHOFER_LINES: [(&str, f64); 4] = [("g", 435.8343), ("F", 486.1327), ("d", 587.5618), ("C", 656.2725)];
+/// The d line, nm, where n_d is given.
+pub const D_LINE_NM: f64 = 587.5618;
+/// The F line, nm.
+pub const F_LINE_NM: f64 = 486.1327;
+/// The C line, nm.
+pub const C_LINE_NM: f64 = 656.2725;
+
+/// The catalogues in the order a bare glass name is looked up.
+pub const MAKERS: [&str; 6] = ["schott", "ohara", "hoya", "cdgm", "sumita", "hikari"];
+
+/// Most terms a catalogue formula has (the polynomial's seven pairs).
+const MAX_TERMS: usize = 7;
+
+/// An index of refraction as a function of wavelength.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Dispersion {
+    /// The same index at every wavelength (no dispersion).
+    Constant(f64),
+    /// Sellmeier (refractiveindex.info formula 2, the makers' own):
+    /// n² − 1 = c₀ + Σ Bᵢ λ² / (λ² − Cᵢ), λ in µm.
+    Sellmeier {
+        /// c₀.
+        constant: f64,
+        /// (Bᵢ, Cᵢ) pairs; the first `count` are used.
+        terms: [(f64, f64); MAX_TERMS],
+        /// How many pairs there are.
+        count: usize,
+    },
+    /// Polynomial (refractiveindex.info formula 3, the Schott/Ohara
+    /// "Laurent" form): n² = c₀ + Σ aᵢ λ^eᵢ, λ in µm.
+    Polynomial {
+        /// c₀.
+        constant: f64,
+        /// (aᵢ, eᵢ) pairs; the first `count` are used.
+        terms: [(f64, f64); MAX_TERMS],
+        /// How many pairs there are.
+        count: usize,
+    },
+    /// Cauchy's n = a + b / λ² (λ in µm), fitted by [`Dispersion::from_abbe`]
+    /// to n_d and the Abbe number V_d = (n_d − 1) / (n_F − n_C).
+    Cauchy {
+        /// a.
+        a: f64,
+        /// b, µm².
+        b: f64,
+    },
+}
+
+impl Dispersion {
+    /// The Cauchy model through n_d with Abbe number V_d: the model lens
+    /// tables with only (n_d, V_d) get. Refuses n_d ≤ 1 and V_d ≤ 0; V_d =
+    /// ∞ (written 0 nowhere; use [`Dispersion::Constant`]) is no dispersion.
+    pub fn from_abbe(n_d: f64, v_d: f64) -> Result<Self> {
+        if !(n_d > 1.0 && n_d.is_finite()) {
+            return Err(Error::InvalidArgument(format!(
+                "n_d must be a finite number above 1, got {n_d}"
+            )));
+        }
+        if !(v_d > 0.0 && v_d.is_finite()) {
+            return Err(Error::InvalidArgument(format!(
+                "V_d must be a positive Abbe number, got {v_d}"
+            )));
+        }
+        let inv2 = |nm: f64| 1.0 / (nm * 1e-3).powi(2);
+        let b = (n_d - 1.0) / v_d / (inv2(F_LINE_NM) - inv2(C_LINE_NM));
+        Ok(Dispersion::Cauchy {
+            a: n_d - b * inv2(D_LINE_NM),
+            b,
+        })
+    }
+
+    /// A dielectric's index as a scene or a caller describes it, by exactly
+    /// one of: `eta` (a constant), `glass` (a catalogue name, see [`find`]),
+    /// `n_d` (a constant) with optionally `v_d` (then the Abbe model). The
+    /// rule every front end's dielectric goes through.
+    pub fn described(eta: Option<f64>, glass: Option<&str>, n_d: Option<f64>, v_d: Option<f64>) -> Result<Self> {
+        let constant = |n: f64| {
+            if n > 0.0 && n.is_finite() {
+                Ok(Dispersion::Constant(n))
+            } else {
+                Err(Error::InvalidArgument(format!(
+                    "an index of refraction must be positive, got {n}"
+                )))
+            }
+        };
+        match (eta, glass, n_d, v_d) {
+            (Some(eta), None, None, None) => constant(eta),
+            (None, Some(name), None, None) => Ok(find(name)?.dispersion),
+            (None, None, Some(n_d), None) => constant(n_d),
+            (None, None, Some(n_d), Some(v_d)) => Dispersion::from_abbe(n_d, v_d),
+            (None, None, None, None) => Ok(Dispersion::Constant(1.5)),
+            _ => Err(Error::InvalidArgument(
+                "give a dielectric one of eta, glass, or n_d (with v_d for its dispersion)".into(),
+            )),
+        }
+    }
+
+    /// The index at `lambda_nm`.
+    pub fn index(&self, lambda_nm: f64) -> f64 {
+        let l = lambda_nm * 1e-3;
+        let l2 = l * l;
+        match *self {
+            Dispersion::Constant(n) => n,
+            Dispersion::Sellmeier { constant, terms, count } => {
+                let sum: f64 = terms[..count].iter().map(|&(b, c)| b * l2 / (l2 - c)).sum();
+                (1.0 + constant + sum).max(0.0).sqrt()
+            }
+            Dispersion::Polynomial { constant, terms, count } => {
+                let sum: f64 = terms[..count].iter().map(|&(a, e)| a * l.powf(e)).sum();
+                (constant + sum).max(0.0).sqrt()
+            }
+            Dispersion::Cauchy { a, b } => a + b / l2,
+        }
+    }
+
+    /// True when the index does not change with wavelength.
+    pub fn is_constant(&self) -> bool {
+        matches!(self, Dispersion::Constant(_))
+    }
+
+    /// The index at the d line.
+    pub fn n_d(&self) -> f64 {
+        self.index(D_LINE_NM)
+    }
+
+    /// The Abbe number V_d = (n_d − 1) / (n_F − n_C) (∞ without dispersion).
+    pub fn abbe_number(&self) -> f64 {
+        (self.n_d() - 1.0) / (self.index(F_LINE_NM) - self.index(C_LINE_NM))
+    }
+}
+
+/// A catalogue glass.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Glass {
+    /// Its maker's catalogue (`schott`, `ohara`, …).
+    pub maker: &'static str,
+    /// Its name in that catalogue (`N-BK7`).
+    pub name: &'static str,
+    /// Its index against wavelength.
+    pub dispersion: Dispersion,
+    /// The catalogue's n_d.
+    pub n_d: f64,
+    /// The catalogue's Abbe number V_d.
+    pub v_d: f64,
+    /// The six-digit glass code (nnnvvv) and density where given.
+    pub glass_code: Option<&'static str>,
+    /// Wavelengths, nm, over which the maker's formula holds.
+    pub range_nm: (f64, f64),
+}
+
+const CATALOGUE_TSV: &str = include_str!("../data/glass/catalogue.tsv");
+
+/// Every catalogue glass, in [`MAKERS`] order.
+pub fn catalogue() -> &'static [Glass] {
+    static GLASSES: OnceLock<Vec<Glass>> = OnceLock::new();
+    GLASSES.get_or_init(|| {
+        CATALOGUE_TSV
+            .lines()
+            .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+            .map(|line| parse_row(line).unwrap_or_else(|| panic!("bad embedded glass row: {line}")))
+            .collect()
+    })
+}
+
+/// One row of the embedded catalogue.
+fn parse_row(line: &'static str) -> Option<Glass> {
+    let fields: Vec<&'static str> = line.split('\t').collect();
+    let [maker, name, formula, min_um, max_um, nd, vd, code, coefficients] = fields[..] else {
+        return None;
+    };
+    let numbers: Vec<f64> = coefficients.split(' ').map(|c| c.parse().ok()).collect::<Option<_>>()?;
+    let (&constant, pairs) = numbers.split_first()?;
+    let mut terms = [(0.0, 0.0); MAX_TERMS];
+    let count = pairs.len() / 2;
+    if count > MAX_TERMS || pairs.len() % 2 != 0 {
+        return None;
+    }
+    for (slot, pair) in terms.iter_mut().zip(pairs.chunks_exact(2)) {
+        *slot = (pair[0], pair[1]);
+    }
+    let dispersion = match formula {
+        "2" => Dispersion::Sellmeier { constant, terms, count },
+        "3" => Dispersion::Polynomial { constant, terms, count },
+        _ => return None,
+    };
+    let maker = MAKERS.iter().find(|m| **m == maker)?;
+    Some(Glass {
+        maker,
+        name,
+        dispersion,
+        n_d: nd.parse().ok()?,
+        v_d: vd.parse().ok()?,
+        glass_code: (code != "-").then_some(code),
+        range_nm: (min_um.parse::<f64>().ok()? * 1e3, max_um.parse::<f64>().ok()? * 1e3),
+    })
+}
+
+/// The glass named `name`: `N-BK7` (the first maker in [`MAKERS`] order
+/// with that name), or `maker:name` (`ohara:S-LAH59`); any case.
+pub fn find(name: &str) -> Result<&'static Glass> {
+    let query = name.trim();
+    let (maker, glass) = match query.split_once(':') {
+        Some((maker, glass)) => (Some(maker.trim().to_ascii_lowercase()), glass.trim()),
+        None => (None, query),
+    };
+    if let Some(m) = &maker {
+        if !MAKERS.contains(&m.as_str()) {
+            return Err(Error::InvalidArgument(format!(
+                "unknown glass maker '{m}' in '{name}': known are {}",
+                MAKERS.join(", ")
+            )));
+        }
+    }
+    let matches = |g: &&Glass| maker.as_deref().is_none_or(|m| m == g.maker) && g.name.eq_ignore_ascii_case(glass);
+    if let Some(found) = catalogue().iter().find(matches) {
+        return Ok(found);
+    }
+    let upper = glass.to_ascii_uppercase();
+    let mut similar: Vec<String> = catalogue()
+        .iter()
+        .filter(|g| g.name.to_ascii_uppercase().contains(&upper) || upper.contains(&g.name.to_ascii_uppercase()))
+        .map(|g| format!("{}:{}", g.maker, g.name))
+        .take(6)
+        .collect();
+    similar.dedup();
+    let hint = if similar.is_empty() {
+        String::new()
+    } else {
+        format!(" (similar: {})", similar.join(", "))
+    };
+    Err(Error::InvalidArgument(format!(
+        "unknown glass '{name}': not in the {} catalogues{hint}",
+        MAKERS.join(", ")
+    )))
+}
+
+/// The catalogue glass nearest to (n_d, V_d): least (Δn_d / 0.01)² + (ΔV_d / 1)²,
+/// the weighting of a glass map's axes.
+pub fn nearest(n_d: f64, v_d: f64) -> &'static Glass {
+    let distance = |g: &Glass| ((g.n_d - n_d) / 0.01).powi(2) + (g.v_d - v_d).powi(2);
+    catalogue()
+        .iter()
+        .min_by(|a, b| distance(a).total_cmp(&distance(b)))
+        .expect("the embedded catalogue is not empty")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every one of the 1,609 glasses' formulas gives its maker's n_d to
+    /// 1e-4 and V_d to 0.5%: the formulas and their coefficients are read
+    /// right, for both kinds.
+    #[test]
+    fn every_catalogue_formula_gives_its_nd_and_vd() {
+        let glasses = catalogue();
+        assert_eq!(glasses.len(), 1609);
+        for g in glasses {
+            let n_d = g.dispersion.n_d();
+            assert!(
+                (n_d - g.n_d).abs() < 1e-4,
+                "{}:{} n_d {n_d} vs {}",
+                g.maker,
+                g.name,
+                g.n_d
+            );
+            let v_d = g.dispersion.abbe_number();
+            assert!(
+                (v_d / g.v_d - 1.0).abs() < 5e-3,
+                "{}:{} V_d {v_d} vs {}",
+                g.maker,
+                g.name,
+                g.v_d
+            );
+        }
+    }
+
+    /// N-BK7 against Schott's datasheet: n_F = 1.52238, n_C = 1.51432,
+    /// n_g = 1.52668, and at 404.66 nm (h line) 1.53024.
+    #[test]
+    fn n_bk7_matches_the_schott_datasheet() {
+        let bk7 = find("n-bk7").unwrap();
+        assert_eq!((bk7.maker, bk7.name), ("schott", "N-BK7"));
+        for (nm, n) in [
+            (486.1327, 1.52238),
+            (656.2725, 1.51432),
+            (435.8343, 1.52668),
+            (404.6561, 1.53024),
+        ] {
+            assert!((bk7.dispersion.index(nm) - n).abs() < 1e-5, "{nm} nm");
+        }
+        assert_eq!(find("ohara:S-LAH59").unwrap().maker, "ohara");
+        let e = find("N-BK8").unwrap_err().to_string();
+        assert!(e.contains("unknown glass 'N-BK8'") && e.contains("schott"), "{e}");
+        assert!(find("zeiss:BK7")
+            .unwrap_err()
+            .to_string()
+            .contains("unknown glass maker 'zeiss'"));
+    }
+
+    /// The Cauchy model from (n_d, V_d) reproduces both, and lands near a
+    /// real glass with those numbers elsewhere in the visible.
+    #[test]
+    fn abbe_model_keeps_nd_and_vd() {
+        let model = Dispersion::from_abbe(1.5168, 64.17).unwrap();
+        assert!((model.n_d() - 1.5168).abs() < 1e-12);
+        assert!((model.abbe_number() - 64.17).abs() < 1e-9);
+        let bk7 = find("N-BK7").unwrap();
+        assert!((model.index(450.0) - bk7.dispersion.index(450.0)).abs() < 5e-4);
+        assert!(Dispersion::from_abbe(0.9, 50.0).is_err());
+        assert!(Dispersion::from_abbe(1.5, 0.0).is_err());
+        let near = nearest(1.5168, 64.17);
+        assert!(
+            (near.n_d - 1.5168).abs() < 2e-3 && (near.v_d - 64.17).abs() < 1.0,
+            "{near:?}"
+        );
+    }
+}
