@@ -7,6 +7,7 @@ use clap::Args;
 use glam::{Vec2, Vec3};
 use lenspath::camera::{CameraPose, LensFocus, RealisticCamera, RealisticCameraSettings};
 use lenspath::io::write_text;
+use lenspath::lens::chromatic::ChromaticAnalysis;
 use lenspath::lens::plot::layout_svg;
 use lenspath::lens::{AnalysisSettings, LensAnalysis, LensPrescription, LensSystem};
 use lenspath::{Error, Result};
@@ -122,9 +123,19 @@ pub fn run(mut args: LensArgs) -> Result<Outcome> {
         write_text(path, &layout_svg(&system, &analysis, diagonal))?;
     }
 
+    let chromatic = ChromaticAnalysis::new(&system, 0.5 * sensor_mm.0.hypot(sensor_mm.1))?;
     if args.json {
         let mut json = serde_json::to_value(analysis).map_err(|e| Error::InvalidArgument(e.to_string()))?;
         let object = json.as_object_mut().expect("a struct serialises to an object");
+        let lines: serde_json::Map<String, serde_json::Value> = chromatic
+            .lines
+            .iter()
+            .map(|l| (l.line.to_string(), serde_json::to_value(l).expect("numbers serialise")))
+            .collect();
+        object.insert("lines".into(), lines.into());
+        object.insert("longitudinal_color_mm".into(), chromatic.longitudinal_color_mm.into());
+        object.insert("lateral_color_mm".into(), chromatic.lateral_color_mm.into());
+        object.insert("lateral_color_field_height_mm".into(), chromatic.field_height_mm.into());
         object.insert("lens".into(), prescription.name().into());
         object.insert("sensor_width_mm".into(), sensor_mm.0.into());
         object.insert("sensor_height_mm".into(), sensor_mm.1.into());
@@ -171,6 +182,21 @@ pub fn run(mut args: LensArgs) -> Result<Outcome> {
     println!(
         "  field of view           {:.2} deg diagonal, {:.2} deg horizontal ({}x{} mm sensor)",
         a.diagonal_fov_deg, a.horizontal_fov_deg, sensor_mm.0, sensor_mm.1
+    );
+    println!("colour (paraxial)");
+    for l in &chromatic.lines {
+        println!(
+            "  {} line {:9.4} nm     EFL {:.4} mm, BFD {:.4} mm",
+            l.line, l.wavelength_nm, l.effective_focal_length_mm, l.back_focal_distance_mm
+        );
+    }
+    println!(
+        "  longitudinal colour     {:.4} mm (BFD F - BFD C)",
+        chromatic.longitudinal_color_mm
+    );
+    println!(
+        "  lateral colour          {:.4} mm (F - C chief ray heights at {:.2} mm image height)",
+        chromatic.lateral_color_mm, chromatic.field_height_mm
     );
     println!("real rays at {} mm height", a.ray_height_mm);
     println!("  infinity focus          sensor at {:.4} mm", a.infinity_focus_mm);

@@ -145,7 +145,7 @@ impl Lens {
         for (i, s) in surfaces.iter().enumerate() {
             a[[i, 0]] = s.radius_mm;
             a[[i, 1]] = s.thickness_mm;
-            a[[i, 2]] = s.ior;
+            a[[i, 2]] = s.ior_d();
             a[[i, 3]] = s.aperture_diameter_mm;
         }
         a.into_pyarray(py)

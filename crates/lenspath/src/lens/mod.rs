@@ -1,6 +1,7 @@
 //! Real compound lenses: prescriptions, exact tracing, first-order and
 //! real-ray analysis, focusing, and the layout plot.
 
+pub mod chromatic;
 pub mod plot;
 pub mod prescription;
 pub mod system;

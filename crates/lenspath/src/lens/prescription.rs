@@ -3,12 +3,21 @@
 //!
 //! One row per refracting surface from the front (scene side) to the back
 //! (sensor side): curvature radius, thickness to the next surface, index of
-//! refraction of the medium behind the surface, aperture diameter, all in mm.
-//! Radius 0 marks the aperture stop (its index column is 0 or 1: air).
+//! refraction of the medium behind the surface (n_d, at 587.56 nm), aperture
+//! diameter, all in mm. Radius 0 marks the aperture stop (its index column is
+//! 0 or 1: air).
+//!
+//! A glass row may have a fifth column saying how its glass disperses: a
+//! catalogue glass name (`N-BK7`, `ohara:S-LAH59`; see [`crate::glass::find`]
+//! for the search order), whose own formula is then used (its n_d must agree
+//! with the third column within 0.005), or an Abbe number V_d (the two-term
+//! Cauchy model through n_d and V_d, [`Dispersion::from_abbe`]). Four-column
+//! tables read exactly as before: every glass a constant index.
 
 use std::path::Path;
 
 use crate::error::{Error, Result};
+use crate::glass::{self, Dispersion};
 
 /// One surface of a prescription.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -19,8 +28,9 @@ pub struct LensSurface {
     /// Axial distance from this surface's vertex to the next one's, in mm
     /// (the last surface's value is not used: the sensor is placed by focusing).
     pub thickness_mm: f64,
-    /// Index of refraction of the medium behind the surface (1 = air).
-    pub ior: f64,
+    /// The medium behind the surface: its index against wavelength
+    /// (`Dispersion::Constant(1.0)` for air).
+    pub medium: Dispersion,
     /// Clear aperture diameter in mm.
     pub aperture_diameter_mm: f64,
 }
@@ -29,6 +39,11 @@ impl LensSurface {
     /// True for the aperture stop.
     pub fn is_stop(&self) -> bool {
         self.radius_mm == 0.0
+    }
+
+    /// Index of refraction of the medium behind the surface at the d line.
+    pub fn ior_d(&self) -> f64 {
+        self.medium.n_d()
     }
 }
 
@@ -89,25 +104,25 @@ impl LensPrescription {
             path: source.into(),
             message: format!("line {line}: {message}"),
         };
-        // Rows: (line number, four numbers).
-        let mut rows: Vec<(usize, [f64; 4])> = Vec::new();
+        // Rows: (line number, four numbers, the optional glass column).
+        let mut rows: Vec<(usize, [f64; 4], Option<&str>)> = Vec::new();
         for (i, raw) in text.lines().enumerate() {
             let line = raw.trim();
             if line.is_empty() || line.starts_with('#') {
                 continue;
             }
             let fields: Vec<&str> = line.split_whitespace().collect();
-            if fields.len() != 4 {
+            if fields.len() != 4 && fields.len() != 5 {
                 return Err(fail(
                     i + 1,
                     format!(
-                        "expected 4 columns (radius, thickness, index, aperture), found {}",
+                        "expected 4 columns (radius, thickness, index, aperture) and an optional fifth (glass name or Abbe number), found {}",
                         fields.len()
                     ),
                 ));
             }
             let mut row = [0.0; 4];
-            for (k, (field, name)) in fields
+            for (k, (field, name)) in fields[..4]
                 .iter()
                 .zip(["radius", "thickness", "index", "aperture"])
                 .enumerate()
@@ -120,7 +135,7 @@ impl LensPrescription {
                 }
                 row[k] = value;
             }
-            rows.push((i + 1, row));
+            rows.push((i + 1, row, fields.get(4).copied()));
         }
         if rows.is_empty() {
             return Err(Error::Parse {
@@ -143,7 +158,7 @@ impl LensPrescription {
 
         let mut surfaces = Vec::with_capacity(rows.len());
         let mut stop_line: Option<usize> = None;
-        for &(line, [radius_mm, thickness_mm, ior, aperture_diameter_mm]) in &rows {
+        for &(line, [radius_mm, thickness_mm, ior, aperture_diameter_mm], glass_column) in &rows {
             if aperture_diameter_mm <= 0.0 {
                 return Err(fail(
                     line,
@@ -152,6 +167,12 @@ impl LensPrescription {
             }
             if thickness_mm < 0.0 {
                 return Err(fail(line, format!("thickness {thickness_mm} mm is negative")));
+            }
+            if glass_column.is_some() && ior <= 1.0 {
+                return Err(fail(
+                    line,
+                    "a fifth column (glass name or Abbe number) belongs only on rows with glass behind them (index above 1)".into(),
+                ));
             }
             let ior = if radius_mm == 0.0 {
                 if let Some(first) = stop_line {
@@ -184,20 +205,24 @@ impl LensPrescription {
                 }
                 ior
             };
+            let medium = match glass_column {
+                None => Dispersion::Constant(ior),
+                Some(column) => medium_of(column, ior).map_err(|m| fail(line, m))?,
+            };
             surfaces.push(LensSurface {
                 radius_mm,
                 thickness_mm,
-                ior,
+                medium,
                 aperture_diameter_mm,
             });
         }
         let (last_line, last) = (rows[rows.len() - 1].0, surfaces[surfaces.len() - 1]);
-        if last.ior != 1.0 {
+        if last.medium != Dispersion::Constant(1.0) {
             return Err(fail(
                 last_line,
                 format!(
                     "the last surface must leave the light in air (index 1) for the sensor, not {}",
-                    last.ior
+                    last.ior_d()
                 ),
             ));
         }
@@ -224,7 +249,7 @@ impl LensPrescription {
                 .map(|s| LensSurface {
                     radius_mm: s.radius_mm * factor,
                     thickness_mm: s.thickness_mm * factor,
-                    ior: s.ior,
+                    medium: s.medium,
                     aperture_diameter_mm: s.aperture_diameter_mm * factor,
                 })
                 .collect(),
@@ -245,6 +270,31 @@ impl LensPrescription {
     pub fn stop_index(&self) -> usize {
         self.surfaces.iter().position(LensSurface::is_stop).expect("validated")
     }
+
+    /// True when some glass's index changes with wavelength (a fifth column).
+    pub fn is_dispersive(&self) -> bool {
+        self.surfaces.iter().any(|s| !s.medium.is_constant())
+    }
+}
+
+/// The most a named glass's n_d may differ from the table's index column.
+const GLASS_ND_TOLERANCE: f64 = 5e-3;
+
+/// The medium a table's fifth column names, behind a surface whose index
+/// column says `n_d`: an Abbe number, or a catalogue glass.
+fn medium_of(column: &str, n_d: f64) -> std::result::Result<Dispersion, String> {
+    if let Ok(v_d) = column.parse::<f64>() {
+        return Dispersion::from_abbe(n_d, v_d).map_err(|e| e.to_string());
+    }
+    let found = glass::find(column).map_err(|e| e.to_string())?;
+    let catalogue_n_d = found.dispersion.n_d();
+    if (catalogue_n_d - n_d).abs() > GLASS_ND_TOLERANCE {
+        return Err(format!(
+            "glass {}:{} has n_d {catalogue_n_d:.5}, but the index column says {n_d}",
+            found.maker, found.name
+        ));
+    }
+    Ok(found.dispersion)
 }
 
 #[cfg(test)]
@@ -284,7 +334,7 @@ mod tests {
         let lens = LensPrescription::parse(text, "t", TableConvention::Auto).unwrap();
         assert_eq!(lens.surfaces.len(), 3);
         assert_eq!(lens.surfaces[1].radius_mm, -10.0);
-        assert_eq!(lens.surfaces[2].ior, 1.0);
+        assert_eq!(lens.surfaces[2].ior_d(), 1.0);
     }
 
     #[test]
@@ -300,6 +350,14 @@ mod tests {
     fn bad_tables_name_the_line_and_the_fault() {
         let cases = [
             ("10 2 1.5\n0 1 0 4\n", "line 1: expected 4 columns"),
+            ("10 2 1.5 8 N-BK7 x\n0 1 0 4\n", "line 1: expected 4 columns"),
+            ("10 2 1.5 8 N-BK8\n0 1 0 4\n", "line 1: unknown glass 'N-BK8'"),
+            (
+                "10 2 1.6 8 N-BK7\n0 1 0 4\n",
+                "line 1: glass schott:N-BK7 has n_d 1.51680",
+            ),
+            ("10 2 1.5 8 -3\n0 1 0 4\n", "line 1: V_d must be a positive Abbe number"),
+            ("10 2 1.5 8\n-10 1 1 8 N-BK7\n0 1 0 4\n", "line 2: a fifth column"),
             ("10 2 glass 8\n0 1 0 4\n", "line 1: index 'glass' is not a number"),
             ("10 2 NaN 8\n0 1 0 4\n", "line 1: index 'NaN' is not finite"),
             ("10 2 1.5 0\n0 1 0 4\n", "line 1: aperture 0 mm must be positive"),
@@ -328,6 +386,23 @@ mod tests {
                 "{err:?} should contain {expected:?}"
             );
         }
+    }
+
+    /// A fifth column gives a glass its dispersion; four columns keep the
+    /// constant index they always had.
+    #[test]
+    fn glass_column_gives_dispersion() {
+        let text = "30 4 1.5168 20 N-BK7\n-30 2 1.6727 20 32.2\n-80 1 1 20\n0 5 0 10\n";
+        let lens = LensPrescription::parse(text, "t", TableConvention::Auto).unwrap();
+        assert!(lens.is_dispersive());
+        let bk7 = &lens.surfaces[0].medium;
+        assert!((bk7.index(486.1327) - 1.52238).abs() < 1e-5);
+        let flint = &lens.surfaces[1].medium;
+        assert!((flint.n_d() - 1.6727).abs() < 1e-12 && (flint.abbe_number() - 32.2).abs() < 1e-9);
+        let plain =
+            LensPrescription::parse("30 4 1.5168 20\n-80 1 1 20\n0 5 0 10\n", "t", TableConvention::Auto).unwrap();
+        assert!(!plain.is_dispersive());
+        assert_eq!(plain.surfaces[0].medium, Dispersion::Constant(1.5168));
     }
 
     #[test]

@@ -10,6 +10,7 @@ use glam::DVec3;
 
 use super::prescription::LensPrescription;
 use crate::error::{Error, Result};
+use crate::glass::D_LINE_NM;
 
 /// A ray in lens coordinates (mm) with a unit direction.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -68,12 +69,15 @@ struct Surface {
     eta_to_scene: f64,
 }
 
-/// A lens ready to trace.
+/// A lens ready to trace, at one wavelength: each glass's index is the
+/// one it has there ([`LensSystem::new`] is the d line; see
+/// [`LensSystem::at_wavelength`]).
 #[derive(Clone, Debug)]
 pub struct LensSystem {
     prescription: LensPrescription,
     surfaces: Vec<Surface>,
     stop: usize,
+    wavelength_nm: f64,
 }
 
 /// A paraxial ray in travel coordinates: position along the travel direction, height, slope.
@@ -114,8 +118,33 @@ pub struct ParaxialData {
 }
 
 impl LensSystem {
-    /// Places `prescription` on the axis with its stop at z = 0, wide open.
+    /// Places `prescription` on the axis with its stop at z = 0, wide open,
+    /// at the d line (587.56 nm), where tables give their indices.
     pub fn new(prescription: &LensPrescription) -> LensSystem {
+        Self::placed(prescription, D_LINE_NM)
+    }
+
+    /// This lens (stopped down as it is) at `wavelength_nm`: every glass at
+    /// its index there. The same lens when no glass disperses.
+    pub fn at_wavelength(&self, wavelength_nm: f64) -> LensSystem {
+        let mut system = Self::placed(&self.prescription, wavelength_nm);
+        for (s, mine) in system.surfaces.iter_mut().zip(&self.surfaces) {
+            s.aperture_radius = mine.aperture_radius;
+        }
+        system
+    }
+
+    /// The wavelength, nm, it is traced at.
+    pub fn wavelength_nm(&self) -> f64 {
+        self.wavelength_nm
+    }
+
+    /// True when some glass's index changes with wavelength.
+    pub fn is_dispersive(&self) -> bool {
+        self.prescription.is_dispersive()
+    }
+
+    fn placed(prescription: &LensPrescription, wavelength_nm: f64) -> LensSystem {
         let stop = prescription.stop_index();
         let before_stop: f64 = prescription.surfaces[..stop].iter().map(|s| s.thickness_mm).sum();
         let mut z = -before_stop;
@@ -124,22 +153,23 @@ impl LensSystem {
             .surfaces
             .iter()
             .map(|s| {
+                let ior = s.medium.index(wavelength_nm);
                 let surface = Surface {
                     z,
                     radius: s.radius_mm,
                     aperture_radius: 0.5 * s.aperture_diameter_mm,
                     ior_front,
-                    ior_back: s.ior,
+                    ior_back: ior,
                     inv_abs_radius: if s.radius_mm == 0.0 {
                         0.0
                     } else {
                         1.0 / s.radius_mm.abs()
                     },
-                    eta_to_sensor: ior_front / s.ior,
-                    eta_to_scene: s.ior / ior_front,
+                    eta_to_sensor: ior_front / ior,
+                    eta_to_scene: ior / ior_front,
                 };
                 z += s.thickness_mm;
-                ior_front = s.ior;
+                ior_front = ior;
                 surface
             })
             .collect();
@@ -147,6 +177,7 @@ impl LensSystem {
             prescription: prescription.clone(),
             surfaces,
             stop,
+            wavelength_nm,
         }
     }
 
@@ -190,7 +221,7 @@ impl LensSystem {
     /// The same lens stopped down (or opened up to its full aperture) to the
     /// paraxial f-number `f_number`; fails when the lens cannot open that wide.
     pub fn with_f_number(&self, f_number: f64) -> Result<LensSystem> {
-        let wide_open = LensSystem::new(&self.prescription);
+        let wide_open = Self::placed(&self.prescription, self.wavelength_nm);
         let data = wide_open.paraxial()?;
         if !(f_number.is_finite() && f_number > 0.0) {
             return Err(Error::InvalidArgument(format!(
@@ -383,6 +414,35 @@ impl LensSystem {
             exit_pupil_diameter_mm: exit_d,
             f_number: efl / entrance_d,
         })
+    }
+
+    /// Height on the plane `image_z_mm` of the paraxial chief ray (the ray
+    /// through the centre of the stop) from an object at infinity at a field
+    /// angle whose tangent is `tan_field`. Compared across wavelengths on one
+    /// plane it is the lateral colour (Smith, *Modern Optical Engineering*, §10.4).
+    pub fn paraxial_chief_ray_height(&self, tan_field: f64, image_z_mm: f64) -> f64 {
+        // Toward the scene the axis is mirrored: a stop slope of 1 toward
+        // the sensor starts as −1, and the object-space slope is −u out.
+        let front = self.travel_sequence(Direction::ToScene, 0..self.stop);
+        let object = Self::paraxial_trace(
+            &front,
+            ParaxialRay {
+                z: 0.0,
+                y: 0.0,
+                u: -1.0,
+            },
+        );
+        let scale = tan_field / -object.u;
+        let back = self.travel_sequence(Direction::ToSensor, self.stop + 1..self.surfaces.len());
+        let image = Self::paraxial_trace(
+            &back,
+            ParaxialRay {
+                z: 0.0,
+                y: 0.0,
+                u: scale,
+            },
+        );
+        image.y + (image_z_mm - image.z) * image.u
     }
 
     /// The real-ray image of a scene ray: where it crosses the axis behind the lens.
@@ -632,13 +692,13 @@ mod tests {
             let power = if s.is_stop() {
                 0.0
             } else {
-                (s.ior - n_before) / s.radius_mm
+                (s.ior_d() - n_before) / s.radius_mm
             };
             m = mul([[1.0, 0.0], [-power, 1.0]], m);
             if i < last {
-                m = mul([[1.0, s.thickness_mm / s.ior], [0.0, 1.0]], m);
+                m = mul([[1.0, s.thickness_mm / s.ior_d()], [0.0, 1.0]], m);
             }
-            n_before = s.ior;
+            n_before = s.ior_d();
         }
         m
     }
@@ -818,7 +878,7 @@ mod tests {
         let surface = |radius_mm, thickness_mm, ior, aperture_diameter_mm| LensSurface {
             radius_mm,
             thickness_mm,
-            ior,
+            medium: crate::glass::Dispersion::Constant(ior),
             aperture_diameter_mm,
         };
         let lenses = [

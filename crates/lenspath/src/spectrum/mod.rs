@@ -153,13 +153,17 @@ fn visible_t(u: f32) -> f32 {
 /// 1e-7 relative; Abramowitz & Stegun 4.1.27).
 #[inline(always)]
 fn ln4(x: Vec4) -> Vec4 {
-    use glam::UVec4;
-    let bits = UVec4::from_array(x.to_array().map(f32::to_bits));
-    // Shift the mantissa into [√½, √2): subtract the bits of √½ first.
-    let offset = bits - UVec4::splat(0x3f35_04f3);
-    let exponent = Vec4::from_array(offset.to_array().map(|b| ((b as i32) >> 23) as f32));
-    let mantissa_bits = (offset & UVec4::splat(0x007f_ffff)) + UVec4::splat(0x3f35_04f3);
-    let m = Vec4::from_array(mantissa_bits.to_array().map(f32::from_bits));
+    // Shift the mantissa into [√½, √2): the bits of √½ come off first
+    // (wrapping: below √½ the exponent goes negative, as it should).
+    const SQRT_HALF_BITS: u32 = 0x3f35_04f3;
+    let mut exponent = [0.0f32; 4];
+    let mut m = [0.0f32; 4];
+    for (i, v) in x.to_array().into_iter().enumerate() {
+        let offset = v.to_bits().wrapping_sub(SQRT_HALF_BITS);
+        exponent[i] = ((offset as i32) >> 23) as f32;
+        m[i] = f32::from_bits((offset & 0x007f_ffff).wrapping_add(SQRT_HALF_BITS));
+    }
+    let (exponent, m) = (Vec4::from_array(exponent), Vec4::from_array(m));
     let s = (m - Vec4::ONE) / (m + Vec4::ONE);
     let s2 = s * s;
     let series = Vec4::ONE

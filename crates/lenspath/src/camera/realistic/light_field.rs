@@ -32,14 +32,12 @@ impl RealisticCamera {
     /// open pupil.
     pub(super) fn traced_sample(&self, sample: CameraSample) -> Option<TracedSample> {
         let p_film = self.film_point(sample.film);
+        let system = self.system_at(&sample.wavelengths);
         if let Some((aperture, maps)) = &self.shaped {
-            return self.shaped_ray(aperture, maps, p_film, sample.lens);
+            return self.shaped_ray(system, aperture, maps, p_film, sample.lens);
         }
         let (ray, weight) = self.lens_ray(p_film, sample.lens)?;
-        Some((
-            ray,
-            self.system.trace(&ray, Direction::ToScene).map(|out| (out, weight)),
-        ))
+        Some((ray, system.trace(&ray, Direction::ToScene).map(|out| (out, weight))))
     }
 
     /// [`Camera::generate_ray`] with the line the sample follows inside the
@@ -93,8 +91,13 @@ impl RealisticCamera {
         (centre - half, centre + half)
     }
 
-    /// The scene ray of a ray leaving the lens, with its weight and wavelengths.
-    pub(super) fn scene_ray(&self, out: &LensRay, weight: f64, wavelengths: SampledWavelengths) -> CameraRay {
+    /// The scene ray of a ray leaving the lens, with its weight and
+    /// wavelengths: only the hero when the lens disperses (it was traced at
+    /// the hero's wavelength; the others would have left elsewhere).
+    pub(super) fn scene_ray(&self, out: &LensRay, weight: f64, mut wavelengths: SampledWavelengths) -> CameraRay {
+        if self.spectral.is_some() {
+            wavelengths.terminate_secondary();
+        }
         // Lens coordinates → camera space: the sensor centre is the origin,
         // +z looks into the scene (lens z runs the other way), mm → scene units.
         let origin = Vec3::new(

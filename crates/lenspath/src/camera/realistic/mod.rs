@@ -40,6 +40,7 @@ use crate::film::PixelRect;
 use crate::lens::{Direction, LensRay, LensSystem};
 use crate::ray::Ray;
 use crate::sampling::Rng;
+use crate::spectrum::{SampledWavelengths, LAMBDA_MAX_NM, LAMBDA_MIN_NM};
 
 /// Real-ray height used when focusing, in mm (the CS184 lens simulator's).
 const FOCUS_RAY_HEIGHT_MM: f64 = 0.1;
@@ -49,6 +50,12 @@ const FOCUS_RAY_HEIGHT_MM: f64 = 0.1;
 pub struct RealisticCamera {
     pose: CameraPose,
     system: LensSystem,
+    /// For a lens whose glasses disperse, the lens at every nanometre of
+    /// the transported range (360, 361, … 830 nm), stopped down as
+    /// `system`: a camera ray is traced at its sample's hero wavelength,
+    /// rounded to the nanometre (the index moves by under 2e-4 in half a
+    /// nanometre for the densest flints).
+    spectral: Option<Arc<[LensSystem]>>,
     sensor_z_mm: f64,
     sensor_mm: (f64, f64),
     resolution: (f64, f64),
@@ -181,9 +188,14 @@ impl RealisticCamera {
                 .collect();
             (Arc::new(aperture), maps)
         });
+        let spectral = system.is_dispersive().then(|| {
+            let (first, last) = (LAMBDA_MIN_NM as u32, LAMBDA_MAX_NM as u32);
+            (first..=last).map(|nm| system.at_wavelength(f64::from(nm))).collect()
+        });
         let mut camera = RealisticCamera {
             pose,
             system,
+            spectral,
             sensor_z_mm,
             sensor_mm: settings.sensor_mm,
             resolution: (f64::from(width), f64::from(height)),
@@ -238,9 +250,22 @@ impl RealisticCamera {
         })
     }
 
-    /// The lens as set (stopped down, if asked).
+    /// The lens as set (stopped down, if asked), at the d line.
     pub fn system(&self) -> &LensSystem {
         &self.system
+    }
+
+    /// The lens at the hero wavelength of `wavelengths` (the d-line lens
+    /// when nothing disperses).
+    #[inline(always)]
+    pub(super) fn system_at(&self, wavelengths: &SampledWavelengths) -> &LensSystem {
+        match &self.spectral {
+            None => &self.system,
+            Some(systems) => {
+                let nm = (wavelengths.hero_nm() - LAMBDA_MIN_NM).round().max(0.0) as usize;
+                &systems[nm.min(systems.len() - 1)]
+            }
+        }
     }
 
     /// Sensor position behind the aperture stop, mm.
@@ -288,6 +313,7 @@ impl RealisticCamera {
     /// samples (see the module notes).
     fn shaped_ray(
         &self,
+        system: &LensSystem,
         aperture: &Aperture,
         maps: &[Option<StopMap>],
         p_film: DVec3,
@@ -325,7 +351,7 @@ impl RealisticCamera {
         }
         let target = azimuth.rotate(q);
         let ray = LensRay::between(p_film, DVec3::new(target.x, target.y, self.rear_z_mm));
-        let out = self.system.trace_to_scene_via_stop(&ray).and_then(|(out, at_stop)| {
+        let out = system.trace_to_scene_via_stop(&ray).and_then(|(out, at_stop)| {
             let transmission = aperture.transmission(at_stop.truncate() / stop_radius);
             let cos_theta = -ray.direction.z;
             let d = self.sensor_z_mm - self.rear_z_mm;
@@ -378,7 +404,8 @@ impl Camera for RealisticCamera {
     }
 
     fn generate_ray_pair(&self, samples: [CameraSample; 2]) -> [Option<CameraRay>; 2] {
-        if self.shaped.is_some() {
+        // Paired tracing needs one lens for both rays: not so when it disperses.
+        if self.shaped.is_some() || self.spectral.is_some() {
             return samples.map(|s| self.generate_ray(s));
         }
         let starts = samples.map(|s| self.lens_ray(self.film_point(s.film), s.lens));
