@@ -14,9 +14,7 @@ root = pathlib.Path(__file__).resolve().parent.parent
 source = pathlib.Path(sys.argv[1]) if len(sys.argv) > 1 else root.parent / "shared" / "glass"
 out = root / "crates" / "lenspath" / "data" / "glass" / "catalogue.tsv"
 
-formula = re.compile(
-    r"- type: formula (\d)\n\s+wavelength_range: (\S+) (\S+)\n\s+coefficients: (.*)"
-)
+formula = re.compile(r"- type: formula (\d)\n\s+wavelength_range: (\S+) (\S+)\n\s+coefficients: (.*)")
 lines = [
     "# Optical glasses of six makers, from the refractiveindex.info database",
     "# (database/data/specs/<maker>/optical/*.yml), released under CC0 1.0",
@@ -36,8 +34,17 @@ for maker in MAKERS:
         code = re.search(r"\n\s+glass_code: (\S+)", text)
         lines.append(
             "\t".join(
-                [maker, path.stem, m.group(1), m.group(2), m.group(3), nd, vd,
-                 code.group(1) if code else "-", " ".join(m.group(4).split())]
+                [
+                    maker,
+                    path.stem,
+                    m.group(1),
+                    m.group(2),
+                    m.group(3),
+                    nd,
+                    vd,
+                    code.group(1) if code else "-",
+                    " ".join(m.group(4).split()),
+                ]
             )
         )
 out.write_text("\n".join(lines) + "\n")
