@@ -180,11 +180,10 @@ class Glass:
         """A model glass with index ``n_d`` at the d line and Abbe number ``v_d``
         (two-term Cauchy)."""
     @overload
-    def index(self, wavelength_nm: float) -> float: ...
+    def index(self, wavelength_nm: float) -> float:
+        """The index of refraction at ``wavelength_nm`` (a number, or an array of them)."""
     @overload
     def index(self, wavelength_nm: npt.ArrayLike) -> npt.NDArray[np.float64]: ...
-    def index(self, wavelength_nm: float | npt.ArrayLike) -> float | npt.NDArray[np.float64]:
-        """The index of refraction at ``wavelength_nm``."""
     @property
     def maker(self) -> str | None:
         """The catalogue (``"schott"``), None for a model glass."""

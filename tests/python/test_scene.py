@@ -109,7 +109,7 @@ def test_meshes_from_numpy_any_dtype() -> None:
         (lambda s: s.add_mesh([[0, 0], [1, 0]], [[0, 1, 2]], 0), ValueError, "N x 3"),
         (lambda s: s.add_sphere((0, 0, 0), 1.0, 5), lenspath.SceneError, "material"),
         (lambda s: s.add_material("velvet"), ValueError, "unknown material kind 'velvet'"),
-        (lambda s: s.add_material("conductor"), ValueError, "a conductor needs eta"),
+        (lambda s: s.add_material("conductor"), ValueError, "a conductor needs either eta and k"),
         (lambda s: s.look_at((0, 0, 0), (0, 0, 0)), ValueError, "eye and target must differ"),
     ],
 )
