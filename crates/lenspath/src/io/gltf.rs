@@ -380,7 +380,7 @@ impl Loader<'_> {
         }
         let transmission = m.transmission().map_or(0.0, |t| t.transmission_factor());
         let material = if transmission >= 0.5 {
-            let ior = f64::from(m.ior().filter(|n| *n > 1.0 && n.is_finite()).unwrap_or(1.5));
+            let ior = f64::from(m.ior().filter(|n| *n > 0.0 && n.is_finite()).unwrap_or(1.5));
             // KHR_materials_dispersion gives 20 / V_d; 0 (its default) is none.
             let dispersion = m
                 .extension_value("KHR_materials_dispersion")

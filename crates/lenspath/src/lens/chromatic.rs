@@ -6,7 +6,7 @@ use serde::Serialize;
 
 use super::system::LensSystem;
 use crate::error::Result;
-use crate::glass::{C_LINE_NM, FRAUNHOFER_LINES, F_LINE_NM};
+use crate::glass::{C_LINE_NM, D_LINE_NM, FRAUNHOFER_LINES, F_LINE_NM};
 
 /// Paraxial focus at one spectral line.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -54,21 +54,19 @@ impl ChromaticAnalysis {
                 })
             })
             .collect::<Result<Vec<_>>>()?;
-        let bfd = |nm: f64| {
+        let at = |nm: f64| {
             lines
                 .iter()
                 .find(|l| l.wavelength_nm == nm)
-                .map_or(f64::NAN, |l| l.back_focal_distance_mm)
+                .expect("every Fraunhofer line is in `lines`")
         };
-        let d = system.at_wavelength(crate::glass::D_LINE_NM).paraxial()?;
+        let d = at(D_LINE_NM);
         let tan_field = field_height_mm / d.effective_focal_length_mm;
-        let height = |nm: f64| {
-            system
-                .at_wavelength(nm)
-                .paraxial_chief_ray_height(tan_field, d.rear_focal_point_z_mm)
-        };
+        // The d line's paraxial image plane: rear vertex + its back focal distance.
+        let image_z = system.rear_z() + d.back_focal_distance_mm;
+        let height = |nm: f64| system.at_wavelength(nm).paraxial_chief_ray_height(tan_field, image_z);
         Ok(ChromaticAnalysis {
-            longitudinal_color_mm: bfd(F_LINE_NM) - bfd(C_LINE_NM),
+            longitudinal_color_mm: at(F_LINE_NM).back_focal_distance_mm - at(C_LINE_NM).back_focal_distance_mm,
             lateral_color_mm: height(F_LINE_NM) - height(C_LINE_NM),
             field_height_mm,
             lines,

@@ -24,7 +24,17 @@ const D65_CSV: &str = include_str!("../../data/cie/illuminant_d65.csv");
 const SRGB_PRIMARIES: [(f64, f64); 3] = [(0.64, 0.33), (0.30, 0.60), (0.15, 0.06)];
 
 /// Number of 1 nm steps in the tables: 360..=830.
-const SAMPLES: usize = (LAMBDA_MAX_NM - LAMBDA_MIN_NM) as usize + 1;
+pub(crate) const SAMPLES: usize = (LAMBDA_MAX_NM - LAMBDA_MIN_NM) as usize + 1;
+
+/// The trapezoid rule's weight of the `i`-th 1 nm sample: every integral
+/// over the tables uses it (exact for the sum of their linear interpolants).
+pub(crate) fn trapezoid_weight(i: usize) -> f64 {
+    if i == 0 || i == SAMPLES - 1 {
+        0.5
+    } else {
+        1.0
+    }
+}
 
 /// The colorimetric tables, read once.
 pub struct CieTables {
@@ -75,12 +85,7 @@ impl CieTables {
                 v0 + (lambda - l0) / (l1 - l0) * (v1 - v0)
             })
             .collect();
-        let integrate = |f: &dyn Fn(usize) -> f64| -> f64 {
-            // Trapezoids on the 1 nm grid: exact for the tables' linear interpolants' sums.
-            (0..SAMPLES)
-                .map(|i| f(i) * if i == 0 || i == SAMPLES - 1 { 0.5 } else { 1.0 })
-                .sum()
-        };
+        let integrate = |f: &dyn Fn(usize) -> f64| -> f64 { (0..SAMPLES).map(|i| f(i) * trapezoid_weight(i)).sum() };
         let y_integral = integrate(&|i| f64::from(xyz_bar[i].y));
         let d65_y = integrate(&|i| d65_raw[i] * f64::from(xyz_bar[i].y)) / y_integral;
         let d65: Vec<f32> = d65_raw.iter().map(|v| (v / d65_y) as f32).collect();
@@ -120,17 +125,20 @@ impl CieTables {
     /// x̄, ȳ, z̄ at `lambda_nm` (linear between the 1 nm entries; zero outside 360–830 nm).
     #[inline(always)]
     pub fn xyz_bar(&self, lambda_nm: f32) -> Vec3 {
-        match Self::locate(lambda_nm) {
-            Some((i, t)) => self.xyz_bar[i].lerp(self.xyz_bar[i + 1], t),
-            None => Vec3::ZERO,
-        }
+        Self::interpolate(&self.xyz_bar, lambda_nm)
     }
 
     /// x̄, ȳ, z̄ at `lambda_nm` as linear sRGB over ∫ȳ (see `rgb_bar`).
     #[inline(always)]
     pub fn rgb_bar(&self, lambda_nm: f32) -> Vec3 {
+        Self::interpolate(&self.rgb_bar, lambda_nm)
+    }
+
+    /// A table on the 1 nm grid at `lambda_nm`, linear between entries, zero outside.
+    #[inline(always)]
+    fn interpolate(table: &[Vec3], lambda_nm: f32) -> Vec3 {
         match Self::locate(lambda_nm) {
-            Some((i, t)) => self.rgb_bar[i].lerp(self.rgb_bar[i + 1], t),
+            Some((i, t)) => table[i].lerp(table[i + 1], t),
             None => Vec3::ZERO,
         }
     }
@@ -176,8 +184,7 @@ impl CieTables {
     pub fn spectrum_to_xyz(&self, f: impl Fn(f32) -> f32) -> Vec3 {
         let mut sum = DVec3::ZERO;
         for (i, bar) in self.xyz_bar.iter().enumerate() {
-            let w = if i == 0 || i == SAMPLES - 1 { 0.5 } else { 1.0 };
-            sum += bar.as_dvec3() * f64::from(f(LAMBDA_MIN_NM + i as f32)) * w;
+            sum += bar.as_dvec3() * f64::from(f(LAMBDA_MIN_NM + i as f32)) * trapezoid_weight(i);
         }
         (sum / f64::from(self.y_integral)).as_vec3()
     }

@@ -113,13 +113,7 @@ impl SampledWavelengths {
     #[inline(always)]
     pub fn to_rgb(&self, l: SampledSpectrum) -> Rgb {
         let tables = cie::tables();
-        let mut rgb = Rgb::ZERO;
-        for i in 0..WAVELENGTHS_PER_SAMPLE {
-            if self.pdf[i] > 0.0 && l[i] != 0.0 {
-                rgb += tables.rgb_bar(self.lambda_nm[i]) * (l[i] / self.pdf[i]);
-            }
-        }
-        rgb / WAVELENGTHS_PER_SAMPLE as f32
+        self.estimate(l, |lambda| tables.rgb_bar(lambda))
     }
 
     /// The Monte Carlo estimate of CIE XYZ from `l` at these wavelengths:
@@ -128,13 +122,20 @@ impl SampledWavelengths {
     #[inline(always)]
     pub fn to_xyz(&self, l: SampledSpectrum) -> Vec3 {
         let tables = cie::tables();
-        let mut xyz = Vec3::ZERO;
+        self.estimate(l, |lambda| tables.xyz_bar(lambda)) / tables.y_integral
+    }
+
+    /// The mean over lanes of L(λ) · `weight`(λ) / p(λ): the Monte Carlo
+    /// estimate of ∫ L(λ) weight(λ) dλ, terminated lanes left out.
+    #[inline(always)]
+    fn estimate(&self, l: SampledSpectrum, weight: impl Fn(f32) -> Vec3) -> Vec3 {
+        let mut sum = Vec3::ZERO;
         for i in 0..WAVELENGTHS_PER_SAMPLE {
             if self.pdf[i] > 0.0 && l[i] != 0.0 {
-                xyz += tables.xyz_bar(self.lambda_nm[i]) * (l[i] / self.pdf[i]);
+                sum += weight(self.lambda_nm[i]) * (l[i] / self.pdf[i]);
             }
         }
-        xyz / (WAVELENGTHS_PER_SAMPLE as f32 * tables.y_integral)
+        sum / WAVELENGTHS_PER_SAMPLE as f32
     }
 }
 

@@ -17,7 +17,7 @@ use std::sync::OnceLock;
 
 use glam::{DMat3, DVec3, Vec4};
 
-use super::cie::tables;
+use super::cie::{tables, trapezoid_weight, SAMPLES};
 use super::{LAMBDA_MAX_NM, LAMBDA_MIN_NM};
 use crate::math::Rgb;
 
@@ -86,11 +86,10 @@ fn fit_weights() -> &'static FitWeights {
     static WEIGHTS: OnceLock<FitWeights> = OnceLock::new();
     WEIGHTS.get_or_init(|| {
         let t = tables();
-        let n = (LAMBDA_MAX_NM - LAMBDA_MIN_NM) as usize + 1;
-        let xyz = (0..n)
+        let xyz = (0..SAMPLES)
             .map(|i| {
                 let lambda = LAMBDA_MIN_NM + i as f32;
-                let w = if i == 0 || i == n - 1 { 0.5 } else { 1.0 };
+                let w = trapezoid_weight(i);
                 t.xyz_bar(lambda).as_dvec3() * (f64::from(t.d65(lambda)) * w / f64::from(t.y_integral))
             })
             .collect();
