@@ -174,7 +174,7 @@ class Glass:
     Hikari) by name, ``Glass("N-BK7")`` or ``Glass("ohara:S-LAH59")``; a bare name is
     looked up in that order. Raises ``ValueError`` for an unknown name."""
 
-    def __init__(self, name: str) -> None: ...
+    def __new__(cls, name: str) -> Glass: ...
     @staticmethod
     def abbe(n_d: float, v_d: float) -> Glass:
         """A model glass with index ``n_d`` at the d line and Abbe number ``v_d``

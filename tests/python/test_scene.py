@@ -139,7 +139,8 @@ def _lit_floor(height: float = 2.0, albedo: float = 0.5) -> lenspath.Scene:
 
 
 def _centre(scene: lenspath.Scene) -> np.ndarray:
-    image = lenspath.render(scene, lenspath.Camera.pinhole(), spp=16, resolution=(16, 16), max_depth=1)
+    # 64 spp: a coloured light's spectrum is estimated from four wavelengths a sample.
+    image = lenspath.render(scene, lenspath.Camera.pinhole(), spp=64, resolution=(16, 16), max_depth=1)
     return image[6:10, 6:10].mean(axis=(0, 1))
 
 
