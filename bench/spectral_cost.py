@@ -1,11 +1,19 @@
-"""What spectral transport costs against the RGB renderer it replaced, on
-the default scene through dgauss50 (nothing disperses): time at equal spp,
-and mean squared error against each renderer's own converged reference at
+"""What colour costs, on the default scene at 128x96: time at equal spp, and
+mean squared error against each configuration's own converged reference at
 equal spp and at equal time. One thread, interleaved runs, two seeds.
 
-    target/python-venv/bin/python bench/spectral_cost.py RGB_BINARY SPECTRAL_BINARY
+Spectral transport against the RGB renderer it replaced (through dgauss50
+without its glass column, so nothing disperses):
 
-RGB_BINARY is a lenspath built from commit 6b3116f (before spectral transport)."""
+    target/python-venv/bin/python bench/spectral_cost.py transport RGB_BINARY SPECTRAL_BINARY
+
+RGB_BINARY is a lenspath built from commit 6b3116f (before spectral transport).
+
+dgauss50's dispersion (its patent's Abbe numbers, one wavelength per camera
+ray after the lens) against the same lens without its glass column (four
+wavelengths per path), with one binary:
+
+    target/python-venv/bin/python bench/spectral_cost.py dispersion BINARY"""
 
 from __future__ import annotations
 
@@ -19,47 +27,73 @@ import numpy as np
 
 import lenspath
 
+REPOSITORY = pathlib.Path(__file__).resolve().parent.parent
+
 
 def image(path: pathlib.Path) -> np.ndarray:
     return np.asarray(lenspath.read(path))[..., :3].astype(np.float64)
 
 
+def compare(commands: dict[str, list[str]], res: str, reference_spp: int, out: pathlib.Path) -> None:
+    """Prints, for two render commands (name: argv without spp, seed and
+    output), the second's time and error against the first's."""
+
+    def render(kind: str, spp: int, seed: int, name: str) -> tuple[np.ndarray, float]:
+        path = out / f"{name}.exr"
+        command = [*commands[kind], "--res", res, "--spp", str(spp)]
+        command += ["--threads", "1", "--seed", str(seed), "--out", str(path)]
+        start = time.perf_counter()
+        subprocess.run(command, check=True, capture_output=True)
+        return image(path), time.perf_counter() - start
+
+    a, b = commands
+    reference = {k: render(k, reference_spp, 7, f"ref-{k}")[0] for k in commands}
+    for spp in (64, 256):
+        seconds: dict[str, list[float]] = {k: [] for k in commands}
+        errors: dict[str, list[float]] = {k: [] for k in commands}
+        for seed in (1, 2):
+            for kind in commands:
+                img, t = render(kind, spp, seed, f"{kind}-{spp}-{seed}")
+                seconds[kind].append(t)
+                errors[kind].append(float(((img - reference[kind]) ** 2).mean()))
+        t = {k: np.mean(v) for k, v in seconds.items()}
+        e = {k: np.mean(v) for k, v in errors.items()}
+        print(
+            f"{spp} spp: time {a} {t[a]:.2f} s, {b} {t[b]:.2f} s ({t[b] / t[a]:.3f}x); "
+            f"MSE {a} {e[a]:.3e}, {b} {e[b]:.3e} ({e[b] / e[a]:.3f}x at equal spp, "
+            f"{e[b] * t[b] / (e[a] * t[a]):.3f}x at equal time)"
+        )
+
+
+def plain_dgauss50(out: pathlib.Path) -> str:
+    """dgauss50's table without its fifth (glass) column."""
+    table = (REPOSITORY / "crates/lenspath/lenses/dgauss50.dat").read_text()
+    rows = [" ".join(line.split()[:4]) if line.strip() and not line.startswith("#") else line for line in table.splitlines()]
+    path = out / "dgauss50-plain.dat"
+    path.write_text("\n".join(rows) + "\n")
+    return str(path)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("rgb")
-    parser.add_argument("spectral")
+    parser.add_argument("mode", choices=["transport", "dispersion"])
+    parser.add_argument("binaries", nargs="+")
     parser.add_argument("--res", default="128x96")
     parser.add_argument("--reference-spp", type=int, default=8192)
     args = parser.parse_args()
-    binaries = {"rgb": args.rgb, "spectral": args.spectral}
     with tempfile.TemporaryDirectory() as tmp:
         out = pathlib.Path(tmp)
-
-        def render(kind: str, spp: int, seed: int, name: str) -> tuple[np.ndarray, float]:
-            path = out / f"{name}.exr"
-            command = [binaries[kind], "render", "--res", args.res, "--spp", str(spp)]
-            command += ["--threads", "1", "--seed", str(seed), "--out", str(path)]
-            start = time.perf_counter()
-            subprocess.run(command, check=True, capture_output=True)
-            return image(path), time.perf_counter() - start
-
-        reference = {k: render(k, args.reference_spp, 7, f"ref-{k}")[0] for k in binaries}
-        for spp in (64, 256):
-            seconds: dict[str, list[float]] = {k: [] for k in binaries}
-            errors: dict[str, list[float]] = {k: [] for k in binaries}
-            for seed in (1, 2):
-                for kind in binaries:
-                    img, t = render(kind, spp, seed, f"{kind}-{spp}-{seed}")
-                    seconds[kind].append(t)
-                    errors[kind].append(float(((img - reference[kind]) ** 2).mean()))
-            t = {k: np.mean(v) for k, v in seconds.items()}
-            e = {k: np.mean(v) for k, v in errors.items()}
-            print(
-                f"{spp} spp: time rgb {t['rgb']:.2f} s, spectral {t['spectral']:.2f} s "
-                f"({t['spectral'] / t['rgb']:.3f}x); MSE rgb {e['rgb']:.3e}, spectral {e['spectral']:.3e} "
-                f"({e['spectral'] / e['rgb']:.3f}x at equal spp, "
-                f"{e['spectral'] * t['spectral'] / (e['rgb'] * t['rgb']):.3f}x at equal time)"
-            )
+        plain = plain_dgauss50(out)
+        if args.mode == "transport":
+            rgb, spectral = args.binaries
+            commands = {"rgb": [rgb, "render"], "spectral": [spectral, "render", "--lens", plain]}
+        else:
+            (binary,) = args.binaries
+            commands = {
+                "plain": [binary, "render", "--lens", plain],
+                "dispersive": [binary, "render", "--lens", "dgauss50"],
+            }
+        compare(commands, args.res, args.reference_spp, out)
 
 
 if __name__ == "__main__":

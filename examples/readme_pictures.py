@@ -7,7 +7,9 @@ CS184 course scenes (when ../shared is beside the repository).
 
 It writes OUT_DIR/images/cornell-spheres.png (the same image as
 `lenspath render --spp 512 --out ...`, bit for bit), OUT_DIR/lenses/NAME.svg (as
-`lenspath lens NAME --plot ...`) and OUT_DIR/images/cs184-contact-sheet.png.
+`lenspath lens NAME --plot ...`), OUT_DIR/lenses/NAME-focal-shift.svg for a lens that
+disperses (as `lenspath lens NAME --focal-shift-plot ...`) and
+OUT_DIR/images/cs184-contact-sheet.png.
 """
 
 from __future__ import annotations
@@ -35,14 +37,20 @@ def main_image(out_dir: Path, spp: int, resolution: tuple[int, int] | None) -> P
 
 
 def lens_layouts(out_dir: Path) -> list[Path]:
-    """Every built-in lens's layout, as SVG."""
+    """Every built-in lens's layout, as SVG, and the chromatic focal shift of those whose
+    glasses disperse."""
     folder = out_dir / "lenses"
     folder.mkdir(parents=True, exist_ok=True)
     paths = []
     for name in lenspath.builtin_lenses():
+        lens = lenspath.Lens.builtin(name)
         path = folder / f"{name}.svg"
-        path.write_text(lenspath.Lens.builtin(name).plot())
+        path.write_text(lens.plot())
         paths.append(path)
+        if lens.chromatic()["longitudinal_color_mm"] != 0.0:
+            path = folder / f"{name}-focal-shift.svg"
+            path.write_text(lens.focal_shift_plot())
+            paths.append(path)
     return paths
 
 

@@ -23,6 +23,7 @@ from . import _core
 from ._core import (
     AutofocusResult,
     Camera,
+    Emission,
     Glass,
     Lens,
     LensError,
@@ -46,6 +47,7 @@ __version__: str = _core.__version__
 __all__ = [
     "AutofocusResult",
     "Camera",
+    "Emission",
     "Glass",
     "Lens",
     "LensError",
@@ -113,6 +115,7 @@ def render(
     crop: tuple[int, int, int, int] | None = None,
     progress: bool | Callable[[int, int], Any] = False,
     sampler: Literal["sobol", "independent"] | None = None,
+    wavelength_nm: float | None = None,
 ) -> npt.NDArray[np.float32]: ...
 @overload
 def render(
@@ -129,6 +132,7 @@ def render(
     crop: tuple[int, int, int, int] | None = None,
     progress: bool | Callable[[int, int], Any] = False,
     sampler: Literal["sobol", "independent"] | None = None,
+    wavelength_nm: float | None = None,
 ) -> dict[str, npt.NDArray[np.float32]]: ...
 def render(
     scene: Scene | str | os.PathLike[str],
@@ -144,6 +148,7 @@ def render(
     crop: tuple[int, int, int, int] | None = None,
     progress: bool | Callable[[int, int], Any] = False,
     sampler: Literal["sobol", "independent"] | None = None,
+    wavelength_nm: float | None = None,
 ) -> npt.NDArray[np.float32] | dict[str, npt.NDArray[np.float32]]:
     """Renders ``scene`` and returns linear RGB, float32, shape (height, width, 3).
 
@@ -161,7 +166,9 @@ def render(
     the full image (``lenspath.distributed`` renders tiles so). ``sampler``:
     ``"sobol"`` (scrambled Sobol', the default) or ``"independent"``
     (uniform random numbers, as Mitsuba's and pbrt's ``independent``),
-    default the scene file's. ``progress``:
+    default the scene file's. ``wavelength_nm`` renders at that one
+    wavelength (360-830 nm): every channel is the spectral radiance there, a
+    monochromatic image (default: colour across the visible). ``progress``:
     True for a tqdm bar, or a callable ``(samples_done, samples_total)``. The
     GIL is released while rendering; Ctrl-C stops the render and raises
     KeyboardInterrupt.
@@ -180,6 +187,7 @@ def render(
             crop=crop,
             progress=callback,
             sampler=sampler,
+            wavelength_nm=wavelength_nm,
         )
     return _core.render(
         _as_scene(scene),
@@ -194,6 +202,7 @@ def render(
         crop=crop,
         progress=callback,
         sampler=sampler,
+        wavelength_nm=wavelength_nm,
     )
 
 

@@ -7,7 +7,7 @@ position is its distance behind the stop. Scene distances are in scene units
 of shape (height, width, 3); array arguments may be any array-like, converted.
 """
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from os import PathLike
 from typing import Any, Literal, final, overload
 
@@ -112,7 +112,7 @@ class Scene:
         indices: npt.ArrayLike,
         material: int,
         *,
-        emission: tuple[float, float, float] | None = None,
+        emission: tuple[float, float, float] | Emission | None = None,
     ) -> None:
         """Adds a triangle mesh: ``vertices`` N x 3, ``indices`` M x 3 (counter-clockwise
         front faces); ``emission`` (radiance) makes it an area light. Raises SceneError
@@ -123,18 +123,20 @@ class Scene:
         radius: float,
         material: int,
         *,
-        emission: tuple[float, float, float] | None = None,
+        emission: tuple[float, float, float] | Emission | None = None,
     ) -> None:
         """Adds a sphere; ``emission`` makes it an area light."""
-    def add_environment(self, radiance: tuple[float, float, float]) -> None:
+    def add_environment(self, radiance: tuple[float, float, float] | Emission) -> None:
         """Adds a uniform environment light: ``radiance`` from every direction the scene does not block."""
-    def add_point_light(self, position: tuple[float, float, float], intensity: tuple[float, float, float]) -> None:
-        """Adds an isotropic point light: ``intensity`` in W/sr per channel."""
+    def add_point_light(
+        self, position: tuple[float, float, float], intensity: tuple[float, float, float] | Emission
+    ) -> None:
+        """Adds an isotropic point light: ``intensity`` in W/sr per channel, or a spectrum."""
     def add_spot_light(
         self,
         position: tuple[float, float, float],
         direction: tuple[float, float, float],
-        intensity: tuple[float, float, float],
+        intensity: tuple[float, float, float] | Emission,
         cutoff_angle_deg: float | None = None,
         exponent: float = 0.0,
         *,
@@ -145,7 +147,7 @@ class Scene:
         the cone's half angle (as pbrt's ``coneangle`` and Mitsuba's ``cutoff_angle``, and the
         scene file's key); ``cone_angle_deg`` is its deprecated old name."""
     def add_directional_light(
-        self, direction: tuple[float, float, float], irradiance: tuple[float, float, float]
+        self, direction: tuple[float, float, float], irradiance: tuple[float, float, float] | Emission
     ) -> None:
         """Adds a distant light (the sun) travelling along ``direction``: ``irradiance`` on a
         surface facing it."""
@@ -167,6 +169,21 @@ def load(path: str | PathLike[str]) -> Scene:
 
 def builtin_scenes() -> list[str]:
     """The built-in scenes' names."""
+
+@final
+class Emission:
+    """A spectrum a light or an emitting shape gives off, scaled to a luminance (1: as bright as
+    RGB white). Every scene method that takes an RGB amount of light also takes one."""
+
+    @staticmethod
+    def blackbody(temperature_k: float, luminance: float = 1.0) -> Emission:
+        """Planck's black body at ``temperature_k`` (500 K or more)."""
+    @staticmethod
+    def tabulated(wavelengths_nm: Sequence[float], values: Sequence[float], luminance: float = 1.0) -> Emission:
+        """``values`` at increasing ``wavelengths_nm``: linear between them, zero beyond the ends."""
+    @property
+    def rgb(self) -> tuple[float, float, float]:
+        """Its colour as linear sRGB."""
 
 @final
 class Glass:
@@ -255,18 +272,31 @@ class Lens:
         origins: npt.ArrayLike,
         directions: npt.ArrayLike,
         toward: Literal["scene", "sensor"] = "scene",
+        wavelength_nm: float | None = None,
     ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.bool_]]:
         """Traces N rays (N x 3 origins and directions, lens coordinates) through every
-        surface. Returns (origins, unit directions, passed) as they leave the last surface;
-        blocked rays are NaN rows with passed False."""
+        surface, at ``wavelength_nm`` (default: the d line) when the glasses disperse. Returns
+        (origins, unit directions, passed) as they leave the last surface; blocked rays are NaN
+        rows with passed False."""
+    def chromatic(self, sensor_diagonal_mm: float | None = None) -> dict[str, Any]:
+        """The colour figures ``lenspath lens --json`` prints: ``lines`` (g, F, d, C: each
+        ``wavelength_nm``, ``effective_focal_length_mm``, ``back_focal_distance_mm``),
+        ``longitudinal_color_mm`` (BFD(F) - BFD(C)), ``lateral_color_mm`` (F - C chief-ray
+        heights on the d-line image plane) at ``lateral_color_field_height_mm`` (half the
+        sensor diagonal; default 36 x 24 mm)."""
+    def focal_shift(self, wavelengths_nm: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """The paraxial back focal distance at each wavelength minus the d line's, mm."""
+    def focal_shift_plot(self) -> str:
+        """The chromatic focal shift plot (400-700 nm) as SVG text."""
     def plot(self, sensor_diagonal_mm: float | None = None) -> str:
         """The lens layout (elements, stop, rays) as SVG text, with a sensor
         ``sensor_diagonal_mm`` across (default: 36 x 24 mm), as ``lenspath lens --plot`` draws it."""
     def layout(self, sensor_diagonal_mm: float | None = None) -> dict[str, Any]:
         """What ``plot`` draws, as arrays of (z, height) rows in mm (z along the axis from the
         stop): ``elements`` (closed outlines), ``stop`` (two blades), ``sensor`` (at infinity
-        focus), ``rays`` ((field fraction, path) pairs), ``z_range_mm``, ``half_height_mm``,
-        ``title``. ``lenspath.plot.lens_layout`` draws it with matplotlib."""
+        focus), ``rays`` ((field fraction, wavelength in nm, colour, path) tuples: at the d line,
+        or at the F, d and C lines when the glasses disperse), ``z_range_mm``,
+        ``half_height_mm``, ``title``. ``lenspath.plot.lens_layout`` draws it with matplotlib."""
 
 def builtin_lenses() -> list[str]:
     """The built-in lenses' names."""
@@ -327,6 +357,7 @@ def render(
     crop: tuple[int, int, int, int] | None = None,
     progress: Callable[[int, int], Any] | None = None,
     sampler: Literal["sobol", "independent"] | None = None,
+    wavelength_nm: float | None = None,
 ) -> npt.NDArray[np.float32]: ...
 @overload
 def render(
@@ -343,6 +374,7 @@ def render(
     crop: tuple[int, int, int, int] | None = None,
     progress: Callable[[int, int], Any] | None = None,
     sampler: Literal["sobol", "independent"] | None = None,
+    wavelength_nm: float | None = None,
 ) -> dict[str, npt.NDArray[np.float32]]: ...
 def defaults() -> dict[str, Any]:
     """The library's defaults: what a setting left out of ``render`` or ``autofocus`` becomes

@@ -18,9 +18,6 @@ if TYPE_CHECKING:
 
     from ._core import AutofocusResult, Lens
 
-#: Ray colours by field (on axis, 0.7 and the full half diagonal), as the SVG draws them.
-_FAN_COLOURS = {0.0: "#1f77b4", 0.7: "#2ca02c", 1.0: "#d62728"}
-
 
 def _axes(ax: Axes | None) -> Axes:
     """``ax``, or the axes of a new figure."""
@@ -46,8 +43,8 @@ def lens_layout(lens: Lens, ax: Axes | None = None, sensor_diagonal_mm: float | 
         ax.plot(blade[:, 0], blade[:, 1], color="black", linewidth=3)
     sensor = layout["sensor"]
     ax.plot(sensor[:, 0], sensor[:, 1], color="#444", linewidth=4)
-    for field, path in layout["rays"]:
-        ax.plot(path[:, 0], path[:, 1], color=_FAN_COLOURS.get(field, "#1f77b4"), linewidth=0.8)
+    for _field, _wavelength, colour, path in layout["rays"]:
+        ax.plot(path[:, 0], path[:, 1], color=colour, linewidth=0.8)
     ax.set_xlim(*layout["z_range_mm"])
     ax.set_ylim(-layout["half_height_mm"], layout["half_height_mm"])
     ax.set_aspect("equal")

@@ -25,6 +25,11 @@ def test_readme_pictures_match_the_clis(cli, tmp_path: Path) -> None:
         plot = tmp_path / f"{name}.svg"
         subprocess.run([str(cli), "lens", name, "--plot", str(plot)], check=True, capture_output=True)
         assert (out / "lenses" / f"{name}.svg").read_text() == plot.read_text(), name
+    # dgauss50's glasses disperse (its patent's Abbe numbers): its focal shift is drawn too.
+    shift = tmp_path / "shift.svg"
+    subprocess.run([str(cli), "lens", "dgauss50", "--focal-shift-plot", str(shift)], check=True, capture_output=True)
+    assert (out / "lenses" / "dgauss50-focal-shift.svg").read_text() == shift.read_text()
+    assert sorted(p.name for p in (out / "lenses").glob("*-focal-shift.svg")) == ["dgauss50-focal-shift.svg"]
     sheet = out / "images" / "cs184-contact-sheet.png"
     assert sheet.is_file() == (SHARED / "scenes" / "cs184").is_dir()
     if sheet.is_file():

@@ -72,3 +72,80 @@ def test_white_furnace_holds_for_dispersive_glass_and_measured_silver_is_bright(
     gold = lenspath.render(_sphere_scene(kind="conductor", metal="Au"), camera=camera, spp=16, resolution=(16, 16))
     red, _, blue = gold[6:10, 6:10].reshape(-1, 3).mean(axis=0)
     assert red > 2 * blue, (red, blue)
+
+
+def test_lights_given_as_spectra_render_in_their_colour() -> None:
+    """A white sphere under a 3200 K black-body sky renders the black body's
+    colour (the CIE integral ``Emission.rgb`` gives), as does one lit by a
+    point light whose spectrum is a table."""
+    lamp = lenspath.Emission.blackbody(3200.0, luminance=1.0)
+    assert "3200 K" in repr(lamp)
+    scene = lenspath.Scene()
+    white = scene.add_material("diffuse", reflectance=(1.0, 1.0, 1.0))
+    scene.add_sphere((0.0, 0.0, 0.0), 1.0, white)
+    scene.add_environment(lamp)
+    scene.look_at((0.0, 0.0, 4.0), (0.0, 0.0, 0.0), fov_deg=20.0)
+    image = lenspath.render(scene, lenspath.Camera.pinhole(), spp=256, resolution=(16, 16))
+    centre = image[4:12, 4:12].reshape(-1, 3).mean(axis=0)
+    assert np.allclose(centre, lamp.rgb, rtol=0.02), (centre, lamp.rgb)
+    red, _, blue = lamp.rgb
+    assert red > 1.5 * blue  # a tungsten lamp is warm
+    green = lenspath.Emission.tabulated([500.0, 530.0, 560.0], [0.0, 1.0, 0.0], luminance=2.0)
+    assert green.rgb[1] > max(green.rgb[0], green.rgb[2])
+
+
+@pytest.mark.parametrize(
+    ("make", "match"),
+    [
+        (lambda: lenspath.Emission.blackbody(100.0), "gives no visible light"),
+        (lambda: lenspath.Emission.blackbody(-5.0), "temperature must be positive"),
+        (lambda: lenspath.Emission.tabulated([900.0, 1000.0], [1.0, 1.0]), "no visible light"),
+        (lambda: lenspath.Emission.tabulated([500.0, 400.0], [1.0, 1.0]), "wavelengths must increase"),
+        (lambda: lenspath.Emission.tabulated([500.0, 600.0], [1.0]), "one value each"),
+    ],
+)
+def test_bad_light_spectra_are_refused(make, match: str) -> None:
+    with pytest.raises(ValueError, match=match):
+        make()
+
+
+def test_a_monochromatic_render_is_grey_and_reads_the_spectral_radiance() -> None:
+    """At one wavelength every channel is the same; the sky of a table lamp
+    reads the table's (scaled) value there, and nothing outside the table."""
+    scene = lenspath.Scene()
+    scene.add_environment(lenspath.Emission.tabulated([500.0, 600.0], [1.0, 1.0]))
+    scene.look_at((0.0, 0.0, 4.0), (0.0, 0.0, 0.0), fov_deg=20.0)
+    camera = lenspath.Camera.pinhole()
+    inside = lenspath.render(scene, camera, spp=4, resolution=(8, 8), wavelength_nm=550.0)
+    assert np.all(inside == inside[0, 0, 0]) and inside[0, 0, 0] > 0
+    outside = lenspath.render(scene, camera, spp=4, resolution=(8, 8), wavelength_nm=450.0)
+    assert np.all(outside == 0.0)
+    with pytest.raises(ValueError, match="wavelength must be in 360..=830 nm"):
+        lenspath.render(scene, camera, spp=1, resolution=(8, 8), wavelength_nm=1000.0)
+
+
+def test_lens_colour_figures_from_python_match_the_cli(cli) -> None:
+    """``Lens.chromatic()`` gives the numbers ``lenspath lens --json`` prints,
+    ``focal_shift`` is zero at the d line and is BFD(F) - BFD(d) at F, and a
+    ray traced at two wavelengths through dgauss50 leaves in two directions."""
+    import json
+    import subprocess
+
+    lens = lenspath.Lens.builtin("dgauss50")
+    figures = lens.chromatic()
+    printed = json.loads(subprocess.run([cli, "lens", "dgauss50", "--json"], capture_output=True, check=True).stdout)
+    assert figures["longitudinal_color_mm"] == pytest.approx(printed["longitudinal_color_mm"], rel=1e-12)
+    assert figures["lateral_color_mm"] == pytest.approx(printed["lateral_color_mm"], rel=1e-12)
+    for line in "gFdC":
+        assert figures["lines"][line] == pytest.approx(printed["lines"][line], rel=1e-12)
+    lines = figures["lines"]
+    shift = lens.focal_shift([lines["d"]["wavelength_nm"], lines["F"]["wavelength_nm"]])
+    assert shift[0] == pytest.approx(0.0, abs=1e-12)
+    assert shift[1] == pytest.approx(
+        lines["F"]["back_focal_distance_mm"] - lines["d"]["back_focal_distance_mm"], rel=1e-9
+    )
+    origin, direction = np.array([[0.0, 5.0, 40.0]]), np.array([[0.0, -0.05, -1.0]])
+    _, blue, _ = lens.trace(origin, direction, wavelength_nm=450.0)
+    _, red, _ = lens.trace(origin, direction, wavelength_nm=650.0)
+    assert not np.allclose(blue, red, rtol=0, atol=1e-9)
+    assert "<svg" in lens.focal_shift_plot()

@@ -8,7 +8,7 @@ use glam::{Vec2, Vec3};
 use lenspath::camera::{CameraPose, LensFocus, RealisticCamera, RealisticCameraSettings};
 use lenspath::io::write_text;
 use lenspath::lens::chromatic::ChromaticAnalysis;
-use lenspath::lens::plot::layout_svg;
+use lenspath::lens::plot::{focal_shift_svg, layout_svg};
 use lenspath::lens::{AnalysisSettings, LensAnalysis, LensPrescription, LensSystem};
 use lenspath::{Error, Result};
 
@@ -24,9 +24,12 @@ pub struct LensArgs {
     /// Print one JSON object instead of a table.
     #[arg(long)]
     json: bool,
-    /// Also write the lens layout (elements, stop, sensor, ray fans) as SVG.
+    /// Also write the lens layout (elements, stop, sensor, ray fans; at the F, d and C lines when the glasses disperse) as SVG.
     #[arg(long, value_name = "FILE")]
     plot: Option<PathBuf>,
+    /// Also write the chromatic focal shift (paraxial focus against wavelength, 400-700 nm) as SVG.
+    #[arg(long, value_name = "FILE")]
+    focal_shift_plot: Option<PathBuf>,
     /// Sensor WIDTHxHEIGHT in mm (field of view, pupil sampling).
     #[arg(long, default_value = "36x24", value_parser = parse_sensor)]
     sensor: SensorSize,
@@ -121,6 +124,9 @@ pub fn run(mut args: LensArgs) -> Result<Outcome> {
     if let Some(path) = &args.plot {
         let diagonal = sensor_mm.0.hypot(sensor_mm.1);
         write_text(path, &layout_svg(&system, &analysis, diagonal))?;
+    }
+    if let Some(path) = &args.focal_shift_plot {
+        write_text(path, &focal_shift_svg(&system)?)?;
     }
 
     let chromatic = ChromaticAnalysis::new(&system, 0.5 * sensor_mm.0.hypot(sensor_mm.1))?;

@@ -57,6 +57,9 @@ pub struct RenderArgs {
     /// Sample sequence.
     #[arg(long, value_enum)]
     sampler: Option<SamplerArg>,
+    /// Render at this one wavelength (360-830 nm): a grey image of the spectral radiance there (default: colour).
+    #[arg(long, value_name = "NM")]
+    wavelength_nm: Option<f32>,
     /// Output image: .png (sRGB) or .exr (linear RGB + Z).
     #[arg(long, default_value = "render.png")]
     out: PathBuf,
@@ -230,6 +233,7 @@ fn overrides(args: &RenderArgs) -> Result<RenderOverrides> {
         threads: args.threads,
         crop: args.crop,
         depth: Some(true),
+        wavelength_nm: args.wavelength_nm,
         camera,
     })
 }

@@ -4,12 +4,13 @@ use std::path::PathBuf;
 
 use glam::DVec3;
 use lenspath::lens::{
-    plot::{layout, layout_svg, Polyline},
+    chromatic::{focal_shift, ChromaticAnalysis},
+    plot::{focal_shift_svg, layout, layout_svg, Polyline},
     AnalysisSettings, Direction, LensAnalysis, LensPrescription, LensRay, LensSystem, TableConvention, BUILTIN_LENSES,
 };
 use lenspath::Error;
 use numpy::ndarray::Array2;
-use numpy::{AllowTypeChange, IntoPyArray, PyArray2, PyArrayLike2, PyUntypedArrayMethods};
+use numpy::{AllowTypeChange, IntoPyArray, PyArray1, PyArray2, PyArrayLike1, PyArrayLike2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
@@ -30,6 +31,15 @@ pub(crate) struct Lens {
 }
 
 impl Lens {
+    /// The lens as placed, at `wavelength_nm` (None: the d line).
+    fn at_wavelength(&self, wavelength_nm: Option<f64>) -> PyResult<LensSystem> {
+        match wavelength_nm {
+            None => Ok(self.system.clone()),
+            Some(nm) if nm > 0.0 && nm.is_finite() => Ok(self.system.at_wavelength(nm)),
+            Some(nm) => Err(value_error(format!("wavelength_nm must be positive, got {nm}"))),
+        }
+    }
+
     pub(crate) fn from_prescription(prescription: LensPrescription) -> PyResult<Lens> {
         let system = LensSystem::new(&prescription);
         Lens::placed(prescription, system)
@@ -250,8 +260,9 @@ impl Lens {
     /// z along the axis toward the sensor, the stop at 0) through every
     /// surface, `toward` "scene" or "sensor". Returns (origins, directions,
     /// passed): where each ray leaves the last surface, its unit direction,
-    /// and whether it got through (False rows are NaN).
-    #[pyo3(signature = (origins, directions, toward = "scene"))]
+    /// and whether it got through (False rows are NaN). At `wavelength_nm`
+    /// (default: the d line, 587.56 nm) when the glasses disperse.
+    #[pyo3(signature = (origins, directions, toward = "scene", wavelength_nm = None))]
     #[allow(clippy::type_complexity)]
     pub(crate) fn trace<'py>(
         &self,
@@ -259,6 +270,7 @@ impl Lens {
         origins: PyArrayLike2<'_, f64, AllowTypeChange>,
         directions: PyArrayLike2<'_, f64, AllowTypeChange>,
         toward: &str,
+        wavelength_nm: Option<f64>,
     ) -> PyResult<(
         Bound<'py, PyArray2<f64>>,
         Bound<'py, PyArray2<f64>>,
@@ -280,6 +292,7 @@ impl Lens {
                 directions.shape()
             )));
         }
+        let system = self.at_wavelength(wavelength_nm)?;
         let (o, d) = (origins.as_array(), directions.as_array());
         let n = o.nrows();
         let mut out_o = Array2::from_elem((n, 3), f64::NAN);
@@ -294,7 +307,7 @@ impl Lens {
                 origin: DVec3::new(o[[i, 0]], o[[i, 1]], o[[i, 2]]),
                 direction: dir.normalize(),
             };
-            if let Some(out) = self.system.trace(&ray, direction) {
+            if let Some(out) = system.trace(&ray, direction) {
                 for c in 0..3 {
                     out_o[[i, c]] = out.origin[c];
                     out_d[[i, c]] = out.direction[c];
@@ -303,6 +316,57 @@ impl Lens {
             }
         }
         Ok((out_o.into_pyarray(py), out_d.into_pyarray(py), passed.into_pyarray(py)))
+    }
+
+    /// The lens's colour figures, as `lenspath lens --json` gives them:
+    /// `lines` (the g, F, d and C lines' paraxial `wavelength_nm`,
+    /// `effective_focal_length_mm` and `back_focal_distance_mm`),
+    /// `longitudinal_color_mm` (BFD(F) − BFD(C)), `lateral_color_mm` (F − C
+    /// chief-ray heights on the d-line image plane) at
+    /// `lateral_color_field_height_mm`, half the sensor's diagonal
+    /// `sensor_diagonal_mm` (default: 36 × 24 mm).
+    #[pyo3(signature = (sensor_diagonal_mm = None))]
+    pub(crate) fn chromatic<'py>(
+        &self,
+        py: Python<'py>,
+        sensor_diagonal_mm: Option<f64>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let c = ChromaticAnalysis::new(&self.system, 0.5 * drawing_diagonal_mm(sensor_diagonal_mm)).map_err(to_py)?;
+        let lines = PyDict::new(py);
+        for line in &c.lines {
+            let d = PyDict::new(py);
+            d.set_item("wavelength_nm", line.wavelength_nm)?;
+            d.set_item("effective_focal_length_mm", line.effective_focal_length_mm)?;
+            d.set_item("back_focal_distance_mm", line.back_focal_distance_mm)?;
+            lines.set_item(line.line, d)?;
+        }
+        let d = PyDict::new(py);
+        d.set_item("lines", lines)?;
+        d.set_item("longitudinal_color_mm", c.longitudinal_color_mm)?;
+        d.set_item("lateral_color_mm", c.lateral_color_mm)?;
+        d.set_item("lateral_color_field_height_mm", c.field_height_mm)?;
+        Ok(d)
+    }
+
+    /// The chromatic focal shift: for each of `wavelengths_nm`, the paraxial
+    /// back focal distance there minus the d line's, mm.
+    pub(crate) fn focal_shift<'py>(
+        &self,
+        py: Python<'py>,
+        wavelengths_nm: PyArrayLike1<'_, f64, AllowTypeChange>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let wavelengths = wavelengths_nm.as_array().to_vec();
+        if let Some(bad) = wavelengths.iter().find(|nm| !(**nm > 0.0 && nm.is_finite())) {
+            return Err(value_error(format!("wavelengths must be positive nm, got {bad}")));
+        }
+        let shift = focal_shift(&self.system, &wavelengths).map_err(to_py)?;
+        Ok(shift.into_iter().map(|(_, mm)| mm).collect::<Vec<_>>().into_pyarray(py))
+    }
+
+    /// The chromatic focal shift plot (400–700 nm) as SVG text, as
+    /// `lenspath lens --focal-shift-plot` draws it.
+    pub(crate) fn focal_shift_plot(&self) -> PyResult<String> {
+        focal_shift_svg(&self.system).map_err(to_py)
     }
 
     /// The lens layout (elements, stop, marginal and chief rays) as SVG text;
@@ -314,7 +378,8 @@ impl Lens {
 
     /// What `plot` draws, as arrays of (z, height) rows in mm: `elements`
     /// (closed outlines), `stop` (two blades), `sensor`, `rays` ((field
-    /// fraction, path) pairs), `z_range_mm`, `half_height_mm`, `title`.
+    /// fraction, wavelength in nm, colour, path) tuples), `z_range_mm`,
+    /// `half_height_mm`, `title`.
     #[pyo3(signature = (sensor_diagonal_mm = None))]
     pub(crate) fn layout<'py>(&self, py: Python<'py>, sensor_diagonal_mm: Option<f64>) -> PyResult<Bound<'py, PyDict>> {
         let l = layout(&self.system, &self.analysis, drawing_diagonal_mm(sensor_diagonal_mm));
@@ -331,7 +396,10 @@ impl Lens {
         d.set_item("sensor", array(&l.sensor))?;
         d.set_item(
             "rays",
-            l.rays.iter().map(|(f, path)| (*f, array(path))).collect::<Vec<_>>(),
+            l.rays
+                .iter()
+                .map(|r| (r.field_fraction, r.wavelength_nm, r.colour, array(&r.path)))
+                .collect::<Vec<_>>(),
         )?;
         d.set_item("z_range_mm", l.z_range_mm)?;
         d.set_item("half_height_mm", l.half_height_mm)?;

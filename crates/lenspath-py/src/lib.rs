@@ -8,11 +8,12 @@
 //! poll for Ctrl-C (see [`render::render`]).
 //!
 //! One module per concept, as the library: `error` (exceptions), `scene`,
-//! `glass`, `lens`, `camera`, `render`, `autofocus`, `image`; this file only
+//! `emission` (light spectra), `glass`, `lens`, `camera`, `render`, `autofocus`, `image`; this file only
 //! registers them.
 
 mod autofocus;
 mod camera;
+mod emission;
 mod error;
 mod glass;
 mod image;
@@ -33,6 +34,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("LensError", py.get_type::<LensError>())?;
     m.add_class::<scene::Scene>()?;
     m.add_class::<glass::Glass>()?;
+    m.add_class::<emission::Emission>()?;
     m.add_class::<lens::Lens>()?;
     m.add_class::<camera::Camera>()?;
     m.add_function(wrap_pyfunction!(scene::load, m)?)?;

@@ -29,7 +29,7 @@ pub(crate) fn rgb_array<'py>(py: Python<'py>, image: &Image) -> Bound<'py, PyArr
 #[pyfunction]
 #[pyo3(signature = (scene, camera = None, *, spp = None, resolution = None, seed = None, max_depth = None,
                     light_samples = None, threads = None, aovs = None, crop = None, progress = None,
-                    sampler = None))]
+                    sampler = None, wavelength_nm = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn render<'py>(
     py: Python<'py>,
@@ -45,6 +45,7 @@ pub(crate) fn render<'py>(
     crop: Option<(u32, u32, u32, u32)>,
     progress: Option<Bound<'py, PyAny>>,
     sampler: Option<&str>,
+    wavelength_nm: Option<f32>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let sampler = sampler
         .map(|name| {
@@ -76,6 +77,7 @@ pub(crate) fn render<'py>(
         threads,
         crop: crop.map(|(x0, y0, width, height)| PixelRect { x0, y0, width, height }),
         depth: Some(want_depth),
+        wavelength_nm,
         camera: camera.map(|c| c.description.clone()).unwrap_or_default(),
     };
     let setup = resolve(&scene.options, &scene.view()?, &overrides).map_err(to_py)?;

@@ -15,11 +15,13 @@ use lenspath::materials::Material;
 use lenspath::options::SceneOptions;
 use lenspath::scene::{CompiledScene, Scene as CoreScene, SceneView};
 use lenspath::shapes::{Sphere, TriangleMesh};
+use lenspath::spectrum::Emission as LibraryEmission;
 use numpy::{AllowTypeChange, PyArrayLike2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
+use crate::emission::Emission;
 use crate::error::{deprecated, renamed, to_py, value_error};
 
 /// Where a [`Scene`] came from: how to make it again (pickling it, and
@@ -213,7 +215,7 @@ impl Scene {
         vertices: PyArrayLike2<'_, f32, AllowTypeChange>,
         indices: PyArrayLike2<'_, u32, AllowTypeChange>,
         material: u32,
-        emission: Option<(f32, f32, f32)>,
+        emission: Option<LightAmount>,
     ) -> PyResult<()> {
         self.changed();
         if vertices.shape()[1] != 3 || indices.shape()[1] != 3 {
@@ -257,7 +259,7 @@ impl Scene {
         center: (f32, f32, f32),
         radius: f32,
         material: u32,
-        emission: Option<(f32, f32, f32)>,
+        emission: Option<LightAmount>,
     ) -> PyResult<()> {
         self.changed();
         let mut scene = self.scene.clone();
@@ -273,7 +275,7 @@ impl Scene {
     }
 
     /// Adds a uniform environment: `radiance` from every direction the scene does not block.
-    pub(crate) fn add_environment(&mut self, radiance: (f32, f32, f32)) -> PyResult<()> {
+    pub(crate) fn add_environment(&mut self, radiance: LightAmount) -> PyResult<()> {
         self.changed();
         let radiance = light_amount("radiance", radiance)?;
         self.scene.lights.push(Light::Environment { radiance });
@@ -281,7 +283,7 @@ impl Scene {
     }
 
     /// Adds an isotropic point light at `position`: `intensity` in W/sr per channel.
-    pub(crate) fn add_point_light(&mut self, position: (f32, f32, f32), intensity: (f32, f32, f32)) -> PyResult<()> {
+    pub(crate) fn add_point_light(&mut self, position: (f32, f32, f32), intensity: LightAmount) -> PyResult<()> {
         self.changed();
         self.scene.lights.push(Light::Point {
             position: finite_point("position", position)?,
@@ -301,7 +303,7 @@ impl Scene {
         py: Python<'_>,
         position: (f32, f32, f32),
         direction: (f32, f32, f32),
-        intensity: (f32, f32, f32),
+        intensity: LightAmount,
         cutoff_angle_deg: Option<f32>,
         exponent: f32,
         cone_angle_deg: Option<f32>,
@@ -332,7 +334,7 @@ impl Scene {
     pub(crate) fn add_directional_light(
         &mut self,
         direction: (f32, f32, f32),
-        irradiance: (f32, f32, f32),
+        irradiance: LightAmount,
     ) -> PyResult<()> {
         self.changed();
         self.scene.lights.push(Light::Directional {
@@ -454,13 +456,28 @@ pub(crate) fn builtin_scenes() -> Vec<&'static str> {
     BUILTIN_SCENES.to_vec()
 }
 
-/// An amount of light (radiance, intensity, irradiance): finite, not negative.
-pub(crate) fn light_amount(what: &str, value: (f32, f32, f32)) -> PyResult<Vec3> {
-    let v = Vec3::from(value);
-    if !(v.is_finite() && v.min_element() >= 0.0) {
-        return Err(value_error(format!("{what} must be finite and non-negative, got {v}")));
+/// An amount of light as Python gives it: RGB, or a spectrum.
+#[derive(FromPyObject)]
+pub(crate) enum LightAmount {
+    /// A spectrum (`lenspath.Emission`).
+    Spectral(Emission),
+    /// (r, g, b).
+    Rgb((f32, f32, f32)),
+}
+
+/// An amount of light (radiance, intensity, irradiance): a spectrum, or
+/// RGB that is finite and not negative.
+pub(crate) fn light_amount(what: &str, value: LightAmount) -> PyResult<LibraryEmission> {
+    match value {
+        LightAmount::Spectral(e) => Ok(e.emission),
+        LightAmount::Rgb(rgb) => {
+            let v = Vec3::from(rgb);
+            if !(v.is_finite() && v.min_element() >= 0.0) {
+                return Err(value_error(format!("{what} must be finite and non-negative, got {v}")));
+            }
+            Ok(v.into())
+        }
     }
-    Ok(v)
 }
 
 /// A point with finite coordinates.

@@ -12,6 +12,7 @@ use crate::materials::Material;
 use crate::math::Rgb;
 use crate::scene::{Scene, SceneView};
 use crate::shapes::{MaterialId, Sphere, TriangleMesh};
+use crate::spectrum::Emission;
 
 /// Names accepted by [`builtin_scene`].
 pub const BUILTIN_SCENES: [&str; 3] = ["cornell-spheres", "cornell-empty", "cornell-mesh"];
@@ -43,7 +44,7 @@ pub fn builtin_scene(name: &str, mesh_triangles: usize) -> Result<Scene> {
                 material: white,
                 emission: None,
             };
-            scene.spheres.push(near);
+            scene.spheres.push(near.clone());
             // Focus on the nearer sphere's front.
             if let Some(view) = &mut scene.view {
                 let (eye, axis) = (
@@ -91,7 +92,7 @@ fn quad(a: Vec3, b: Vec3, c: Vec3, d: Vec3, material: MaterialId, emission: Opti
         positions: vec![a, b, c, d],
         indices: vec![[0, 1, 2], [0, 2, 3]],
         material,
-        emission,
+        emission: emission.map(Emission::from),
         ..Default::default()
     }
 }
@@ -191,7 +192,9 @@ pub fn checker_scene() -> Scene {
                 reflectance: Rgb::splat(0.1),
             },
         ],
-        lights: vec![Light::Environment { radiance: Rgb::ONE }],
+        lights: vec![Light::Environment {
+            radiance: Rgb::ONE.into(),
+        }],
         ..Default::default()
     }
 }

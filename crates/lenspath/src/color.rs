@@ -4,6 +4,12 @@
 
 use crate::film::Image;
 
+/// Relative luminance Y of a linear sRGB colour: the Y row of the sRGB
+/// (Rec. 709 primaries, D65) to CIE XYZ matrix, IEC 61966-2-1.
+pub fn luminance(rgb: [f32; 3]) -> f32 {
+    0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2]
+}
+
 /// The sRGB transfer function (IEC 61966-2-1) from linear to encoded.
 pub fn linear_to_srgb(x: f32) -> f32 {
     if x <= 0.003_130_8 {

@@ -81,14 +81,30 @@ impl Integrator {
         &self,
         scene: &CompiledScene,
         camera_ray: Ray,
-        mut lambda: SampledWavelengths,
+        lambda: SampledWavelengths,
         sampler: &mut Sampler,
         rays: &mut u64,
     ) -> Rgb {
+        let (l, lambda) = self.li_spectrum(scene, camera_ray, lambda, sampler, rays);
+        lambda.to_rgb(l)
+    }
+
+    /// The spectral radiance arriving along a camera ray at `lambda`, one
+    /// value per wavelength, with the wavelengths as the path left them (a
+    /// dispersive interface keeps only the hero).
+    #[inline(always)]
+    pub(crate) fn li_spectrum(
+        &self,
+        scene: &CompiledScene,
+        camera_ray: Ray,
+        mut lambda: SampledWavelengths,
+        sampler: &mut Sampler,
+        rays: &mut u64,
+    ) -> (SampledSpectrum, SampledWavelengths) {
         let l = match self {
             Integrator::Path(settings) => trace_path(scene, camera_ray, &mut lambda, sampler, settings, rays),
         };
-        lambda.to_rgb(l)
+        (l, lambda)
     }
 }
 

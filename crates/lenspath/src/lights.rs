@@ -4,19 +4,18 @@
 use glam::{Vec2, Vec3};
 
 use crate::error::{Error, Result};
-use crate::math::Rgb;
 use crate::sampling::{uniform_sphere, uniform_triangle, Distribution1D, UNIFORM_SPHERE_PDF};
-use crate::spectrum::Spectrum;
+use crate::spectrum::{Emission, Spectrum};
 
 /// A light a scene declares directly. Area lights come from emissive shapes.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Light {
     /// Isotropic point light.
     Point {
         /// Position.
         position: Vec3,
-        /// Radiant intensity (W/sr per channel).
-        intensity: Rgb,
+        /// Radiant intensity (W/sr).
+        intensity: Emission,
     },
     /// Spot light: a point light whose intensity falls off as cos^exponent of the
     /// angle from its axis and is zero outside the cone (the OpenGL / COLLADA 1.4
@@ -26,8 +25,8 @@ pub enum Light {
         position: Vec3,
         /// Axis the light points along (unit).
         direction: Vec3,
-        /// Radiant intensity on the axis (W/sr per channel).
-        intensity: Rgb,
+        /// Radiant intensity on the axis (W/sr).
+        intensity: Emission,
         /// Cosine of the cone's half angle.
         cos_cutoff: f32,
         /// Falloff exponent (0: uniform inside the cone).
@@ -38,12 +37,12 @@ pub enum Light {
         /// Direction the light travels in (unit).
         direction: Vec3,
         /// Irradiance on a surface facing the light.
-        irradiance: Rgb,
+        irradiance: Emission,
     },
     /// Constant radiance arriving from every direction not blocked by the scene.
     Environment {
         /// Radiance.
-        radiance: Rgb,
+        radiance: Emission,
     },
 }
 
@@ -192,7 +191,7 @@ impl Light {
     pub fn spot(
         position: Vec3,
         direction: Vec3,
-        intensity: Rgb,
+        intensity: Emission,
         cutoff_angle_deg: f32,
         exponent: f32,
     ) -> Result<Light> {
@@ -219,9 +218,9 @@ impl Light {
 
     /// Samples the light from point `p`.
     pub fn sample(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
-        match *self {
+        match self {
             Light::Point { position, .. } => {
-                let to_light = position - p;
+                let to_light = *position - p;
                 let dist2 = to_light.length_squared();
                 (dist2 > 0.0).then(|| LightSample {
                     wi: to_light / dist2.sqrt(),
@@ -238,23 +237,23 @@ impl Light {
                 exponent,
                 ..
             } => {
-                let to_light = position - p;
+                let to_light = *position - p;
                 let dist2 = to_light.length_squared();
                 if dist2 <= 0.0 {
                     return None;
                 }
                 let wi = to_light / dist2.sqrt();
-                let cos_axis = -wi.dot(direction);
-                (cos_axis >= cos_cutoff && cos_axis > 0.0).then(|| LightSample {
+                let cos_axis = -wi.dot(*direction);
+                (cos_axis >= *cos_cutoff && cos_axis > 0.0).then(|| LightSample {
                     wi,
-                    scale: cos_axis.powf(exponent) / dist2,
+                    scale: cos_axis.powf(*exponent) / dist2,
                     pdf: 1.0,
                     distance: dist2.sqrt(),
                     delta: true,
                 })
             }
             Light::Directional { direction, .. } => Some(LightSample {
-                wi: -direction,
+                wi: -*direction,
                 scale: 1.0,
                 pdf: 1.0,
                 distance: f32::INFINITY,
@@ -280,9 +279,9 @@ impl Light {
         }
     }
 
-    /// Its colour as the scene gives it: intensity, irradiance or radiance.
-    pub fn rgb(&self) -> Rgb {
-        match *self {
+    /// What it emits as the scene gives it: intensity, irradiance or radiance.
+    pub fn emission(&self) -> &Emission {
+        match self {
             Light::Point { intensity, .. } | Light::Spot { intensity, .. } => intensity,
             Light::Directional { irradiance, .. } => irradiance,
             Light::Environment { radiance } => radiance,
@@ -337,7 +336,7 @@ mod tests {
         let spot = Light::Spot {
             position: Vec3::new(0.0, 0.0, 2.0),
             direction: Vec3::NEG_Z,
-            intensity: Rgb::splat(8.0),
+            intensity: crate::math::Rgb::splat(8.0).into(),
             cos_cutoff: 30f32.to_radians().cos(),
             exponent: 2.0,
         };

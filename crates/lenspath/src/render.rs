@@ -17,6 +17,7 @@ use crate::math::Rgb;
 use crate::parallel::worker_pool;
 use crate::sampling::{Sampler, SamplerKind, MAX_SAMPLES_PER_PIXEL};
 use crate::scene::CompiledScene;
+use crate::spectrum::{SampledWavelengths, LAMBDA_MAX_NM, LAMBDA_MIN_NM};
 
 /// Lens samples tried for a pixel's depth: the middle of the lens first,
 /// then a 5×5 grid, for lenses that block some of their pupil.
@@ -54,6 +55,11 @@ pub struct RenderSettings {
     /// first pass. Off for renders only their colour is wanted from, such as
     /// autofocus patches.
     pub depth: bool,
+    /// Render at this one wavelength, nm, instead of across the visible:
+    /// every sample carries it alone and the image is the spectral radiance
+    /// there, the same in all three channels (a lens designer's
+    /// monochromatic image; `None`, the default, renders colour).
+    pub wavelength_nm: Option<f32>,
 }
 
 impl Default for RenderSettings {
@@ -71,6 +77,7 @@ impl Default for RenderSettings {
             tile_size: defaults::TILE_SIZE,
             crop: None,
             depth: true,
+            wavelength_nm: None,
         }
     }
 }
@@ -116,6 +123,13 @@ impl RenderSettings {
                 return fail(format!(
                     "crop {}x{} at ({}, {}) is empty or leaves the {}x{} image",
                     c.width, c.height, c.x0, c.y0, self.width, self.height
+                ));
+            }
+        }
+        if let Some(nm) = self.wavelength_nm {
+            if !(LAMBDA_MIN_NM..=LAMBDA_MAX_NM).contains(&nm) {
+                return fail(format!(
+                    "wavelength must be in {LAMBDA_MIN_NM}..={LAMBDA_MAX_NM} nm, got {nm}"
                 ));
             }
         }
@@ -414,21 +428,33 @@ fn render_tile(
             let paired = tx + 1 < tile.width;
             for index in first..pass_end {
                 let sample = |px: u32| {
-                    pixel_sample(
+                    let (sampler, mut sample) = pixel_sample(
                         settings.sampler,
                         px as i32,
                         py as i32,
                         index,
                         settings.seed,
                         settings.filter,
-                    )
+                    );
+                    if let Some(nm) = settings.wavelength_nm {
+                        sample.wavelengths = SampledWavelengths::single(nm);
+                    }
+                    (sampler, sample)
                 };
                 let mut trace = |ray: Option<CameraRay>, sampler: &mut Sampler, slot: usize| {
                     let l = ray.map_or(Rgb::ZERO, |cr| {
+                        let integrator = &settings.integrator;
                         cr.weight
-                            * settings
-                                .integrator
-                                .li(scene, cr.ray, cr.wavelengths, sampler, &mut tile_rays)
+                            * match settings.wavelength_nm {
+                                None => integrator.li(scene, cr.ray, cr.wavelengths, sampler, &mut tile_rays),
+                                // One wavelength at density 1: the estimate is the radiance itself.
+                                Some(_) => Rgb::splat(
+                                    integrator
+                                        .li_spectrum(scene, cr.ray, cr.wavelengths, sampler, &mut tile_rays)
+                                        .0
+                                        .x,
+                                ),
+                            }
                     });
                     if l.is_finite() {
                         tile.sum[slot] += l.as_dvec3();

@@ -12,7 +12,7 @@ use crate::materials::{Material, SpectralMaterial};
 use crate::math::{Bounds3, Rgb};
 use crate::ray::Ray;
 use crate::shapes::{MaterialId, Sphere, TriangleMesh};
-use crate::spectrum::Spectrum;
+use crate::spectrum::{Emission, Spectrum};
 
 /// The camera placement and field of view a scene suggests.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -89,6 +89,15 @@ fn check_rgb(what: &str, c: Rgb) -> Result<()> {
     Ok(())
 }
 
+/// An RGB emission must be finite and non-negative (a spectral one was
+/// checked when it was made).
+fn check_emission(what: &str, e: &Emission) -> Result<()> {
+    match e {
+        Emission::Rgb(c) => check_rgb(what, *c),
+        Emission::Spectral(_) => Ok(()),
+    }
+}
+
 /// A microfacet roughness must be finite and non-negative.
 fn check_alpha(material: usize, alpha: f32) -> Result<()> {
     if !(alpha >= 0.0 && alpha.is_finite()) {
@@ -143,8 +152,8 @@ impl Scene {
                     "mesh {i}: uv count differs from vertex count"
                 )));
             }
-            if let Some(e) = m.emission {
-                check_rgb(&format!("mesh {i} emission"), e)?;
+            if let Some(e) = &m.emission {
+                check_emission(&format!("mesh {i} emission"), e)?;
             }
         }
         for (i, s) in self.spheres.iter().enumerate() {
@@ -155,8 +164,8 @@ impl Scene {
                     s.center, s.radius
                 )));
             }
-            if let Some(e) = s.emission {
-                check_rgb(&format!("sphere {i} emission"), e)?;
+            if let Some(e) = &s.emission {
+                check_emission(&format!("sphere {i} emission"), e)?;
             }
         }
         for (i, m) in self.materials.iter().enumerate() {
@@ -188,7 +197,10 @@ impl Scene {
         }
         for (i, l) in self.lights.iter().enumerate() {
             let (what, value) = match *l {
-                Light::Point { intensity, position } => {
+                Light::Point {
+                    ref intensity,
+                    position,
+                } => {
                     if !position.is_finite() {
                         return Err(Error::InvalidScene(format!("light {i}: position is not finite")));
                     }
@@ -197,7 +209,7 @@ impl Scene {
                 Light::Spot {
                     position,
                     direction,
-                    intensity,
+                    ref intensity,
                     cos_cutoff,
                     exponent,
                 } => {
@@ -213,15 +225,18 @@ impl Scene {
                     }
                     ("intensity", intensity)
                 }
-                Light::Directional { irradiance, direction } => {
+                Light::Directional {
+                    ref irradiance,
+                    direction,
+                } => {
                     if !direction.is_finite() || direction.length_squared() == 0.0 {
                         return Err(Error::InvalidScene(format!("light {i}: direction must be non-zero")));
                     }
                     ("irradiance", irradiance)
                 }
-                Light::Environment { radiance } => ("radiance", radiance),
+                Light::Environment { ref radiance } => ("radiance", radiance),
             };
-            check_rgb(&format!("light {i} {what}"), value)?;
+            check_emission(&format!("light {i} {what}"), value)?;
         }
         Ok(())
     }
@@ -263,9 +278,9 @@ impl Scene {
             .meshes
             .iter()
             .map(|m| {
-                let radiance = m.emission.filter(|e| e.max_element() > 0.0)?;
+                let radiance = m.emission.as_ref().filter(|e| !e.is_black())?;
                 let tris = m.triangles().collect();
-                let light = AreaLight::from_triangles(tris, Spectrum::illuminant(radiance))?;
+                let light = AreaLight::from_triangles(tris, radiance.spectrum())?;
                 area_lights.push(light);
                 Some(area_lights.len() as u32 - 1)
             })
@@ -274,17 +289,13 @@ impl Scene {
             .spheres
             .iter()
             .map(|s| {
-                let radiance = s.emission.filter(|e| e.max_element() > 0.0)?;
-                area_lights.push(AreaLight::from_sphere(
-                    s.center,
-                    s.radius,
-                    Spectrum::illuminant(radiance),
-                ));
+                let radiance = s.emission.as_ref().filter(|e| !e.is_black())?;
+                area_lights.push(AreaLight::from_sphere(s.center, s.radius, radiance.spectrum()));
                 Some(area_lights.len() as u32 - 1)
             })
             .collect();
         let materials = self.materials.iter().map(SpectralMaterial::new).collect();
-        let light_emission = self.lights.iter().map(|l| Spectrum::illuminant(l.rgb())).collect();
+        let light_emission = self.lights.iter().map(|l| l.emission().spectrum()).collect();
         Ok(CompiledScene {
             scene: self,
             bvh,

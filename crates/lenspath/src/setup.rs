@@ -55,6 +55,8 @@ pub struct RenderOverrides {
     pub crop: Option<PixelRect>,
     /// Compute the depth channel (default: yes).
     pub depth: Option<bool>,
+    /// Render at one wavelength, nm (default: colour across the visible).
+    pub wavelength_nm: Option<f32>,
     /// The camera (default: the realistic camera with the scene's lens settings).
     pub camera: CameraDescription,
 }
@@ -224,6 +226,7 @@ pub fn resolve_settings(options: &SceneOptions, overrides: &RenderOverrides) -> 
         threads: overrides.threads,
         crop: overrides.crop,
         depth: overrides.depth.unwrap_or(library.depth),
+        wavelength_nm: overrides.wavelength_nm,
         ..library
     };
     settings.validate()?;

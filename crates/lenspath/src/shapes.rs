@@ -3,8 +3,9 @@
 
 use glam::{Vec2, Vec3, Vec3A, Vec4};
 
-use crate::math::{Bounds3, Rgb};
+use crate::math::Bounds3;
 use crate::ray::Ray;
+use crate::spectrum::Emission;
 
 /// Index into [`crate::scene::Scene::materials`].
 pub type MaterialId = u32;
@@ -23,7 +24,7 @@ pub struct TriangleMesh {
     /// Surface material.
     pub material: MaterialId,
     /// Emitted radiance from the front face, making the mesh an area light.
-    pub emission: Option<Rgb>,
+    pub emission: Option<Emission>,
 }
 
 impl TriangleMesh {
@@ -45,7 +46,7 @@ impl TriangleMesh {
 }
 
 /// An analytic sphere.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct Sphere {
     /// Centre in world space.
     pub center: Vec3,
@@ -54,7 +55,7 @@ pub struct Sphere {
     /// Surface material.
     pub material: MaterialId,
     /// Emitted radiance from the outside, making the sphere an area light.
-    pub emission: Option<Rgb>,
+    pub emission: Option<Emission>,
 }
 
 impl Sphere {

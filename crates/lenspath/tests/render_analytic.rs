@@ -31,6 +31,7 @@ fn settings(width: u32, height: u32, spp: u32, seed: u32) -> RenderSettings {
         tile_size: 16,
         crop: None,
         depth: true,
+        wavelength_nm: None,
     }
 }
 
@@ -69,7 +70,9 @@ fn white_furnace_sphere_disappears() {
                 emission: None,
             }],
             materials: vec![material],
-            lights: vec![Light::Environment { radiance: Rgb::ONE }],
+            lights: vec![Light::Environment {
+                radiance: Rgb::ONE.into(),
+            }],
             ..Default::default()
         };
         let pose = CameraPose::look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y);
@@ -90,6 +93,97 @@ fn white_furnace_sphere_disappears() {
             );
         }
         assert!(image.rgb.iter().all(|v| v.is_finite()));
+    }
+}
+
+/// Lights given as spectra render in their own colour: a white diffuse
+/// sphere under a sky that is a 2700 K black body, or a table peaked in the
+/// green, reads that spectrum's sRGB (its CIE integral), within 1%.
+#[test]
+fn spectral_skies_render_in_their_colour() {
+    use lenspath::spectrum::Emission;
+    let skies = [
+        Emission::blackbody(2700.0, 1.0).unwrap(),
+        Emission::tabulated(&[(480.0, 0.0), (530.0, 1.0), (580.0, 0.0)], 0.5).unwrap(),
+    ];
+    for sky in skies {
+        let expected = sky.to_rgb();
+        let scene = Scene {
+            spheres: vec![Sphere {
+                center: Vec3::ZERO,
+                radius: 1.0,
+                material: 0,
+                emission: None,
+            }],
+            materials: vec![Material::Diffuse { reflectance: Rgb::ONE }],
+            lights: vec![Light::Environment { radiance: sky.clone() }],
+            ..Default::default()
+        };
+        let pose = CameraPose::look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y);
+        let camera = PerspectiveCamera::pinhole(pose, 25.0, 24, 24);
+        let image = render_scene(scene, &camera, &settings(24, 24, 256, 1));
+        for channel in 0..3 {
+            let centre: Vec<f32> = (8..16)
+                .flat_map(|y| (8..16).map(move |x| (x, y)))
+                .map(|(x, y)| image.pixel(x, y)[channel])
+                .collect();
+            let (mean, err) = mean_and_error(&centre);
+            let want = f64::from(expected[channel]);
+            assert!(
+                (mean - want).abs() < 4.0 * err + 0.01 * want.abs().max(0.05),
+                "{sky:?}: channel {channel} reads {mean} ± {err}, its spectrum's sRGB is {want}"
+            );
+        }
+    }
+}
+
+/// A monochromatic render is the spectral radiance at its wavelength: in
+/// a coloured environment, a diffuse sphere of reflectance ρ seen at λ reads
+/// ρ(λ) L(λ) in every channel, ρ and L the upsampled spectra of their RGB.
+#[test]
+fn a_monochromatic_furnace_reads_the_spectra_at_its_wavelength() {
+    use lenspath::spectrum::Spectrum;
+    let (albedo, sky) = (Rgb::new(0.9, 0.4, 0.2), Rgb::new(0.3, 0.6, 1.2));
+    for wavelength_nm in [420.0f32, 550.0, 700.0] {
+        let scene = Scene {
+            spheres: vec![Sphere {
+                center: Vec3::ZERO,
+                radius: 1.0,
+                material: 0,
+                emission: None,
+            }],
+            materials: vec![Material::Diffuse { reflectance: albedo }],
+            lights: vec![Light::Environment { radiance: sky.into() }],
+            ..Default::default()
+        };
+        let pose = CameraPose::look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y);
+        let camera = PerspectiveCamera::pinhole(pose, 25.0, 24, 24);
+        let image = render_scene(
+            scene,
+            &camera,
+            &RenderSettings {
+                wavelength_nm: Some(wavelength_nm),
+                ..settings(24, 24, 64, 1)
+            },
+        );
+        // An unoccluded convex diffuse sphere in a uniform environment sees
+        // all of it once: one bounce, ρ L; the sky around it reads L.
+        let l = Spectrum::illuminant(sky).at(wavelength_nm);
+        let expected = Spectrum::reflectance(albedo).at(wavelength_nm) * l;
+        let centre: Vec<f32> = (10..14)
+            .flat_map(|y| (10..14).map(move |x| (x, y)))
+            .map(|(x, y)| image.pixel(x, y)[1])
+            .collect();
+        let (mean, err) = mean_and_error(&centre);
+        assert!(
+            (mean - f64::from(expected)).abs() < 4.0 * err + 1e-3 * f64::from(expected),
+            "{wavelength_nm} nm: sphere {mean} ± {err}, expected {expected}"
+        );
+        let corner = image.pixel(0, 0);
+        assert!(
+            corner.iter().all(|&c| (c - l).abs() <= 1e-5 * l),
+            "{wavelength_nm} nm: sky {corner:?}, expected {l} in every channel"
+        );
     }
 }
 
@@ -129,7 +223,7 @@ fn closed_emissive_box_reaches_the_geometric_series() {
             positions: corners.to_vec(),
             indices,
             material: 0,
-            emission: Some(Rgb::splat(le)),
+            emission: Some(Rgb::splat(le).into()),
             ..Default::default()
         }],
         materials: vec![Material::Diffuse {
@@ -354,11 +448,11 @@ fn delta_lights_match_the_closed_form() {
     let lights = [
         Light::Point {
             position: Vec3::new(0.0, h, 0.0),
-            intensity: Rgb::splat(intensity),
+            intensity: Rgb::splat(intensity).into(),
         },
         Light::Directional {
             direction: Vec3::new(theta.sin(), -theta.cos(), 0.0),
-            irradiance: Rgb::splat(3.0),
+            irradiance: Rgb::splat(3.0).into(),
         },
     ];
     for light in lights {
@@ -367,7 +461,7 @@ fn delta_lights_match_the_closed_form() {
             materials: vec![Material::Diffuse {
                 reflectance: Rgb::splat(albedo),
             }],
-            lights: vec![light],
+            lights: vec![light.clone()],
             ..Default::default()
         };
         let pose = CameraPose::look_at(Vec3::new(0.0, 1.0, 0.0), Vec3::ZERO, Vec3::Z);

@@ -275,9 +275,9 @@ fn gltf_nodes_cameras_lights_and_materials() {
             panic!("metallic base colour should give a conductor");
         };
         assert_eq!(alpha, 0.25);
-        assert_eq!(s.meshes[1].emission.map(|e| e.to_array()), Some([1.0; 3]));
-        assert!(matches!(s.lights[..], [Light::Point { intensity, position }]
-            if intensity.to_array() == [4.0, 2.0, 1.0] && position.to_array() == [0.0, 3.0, 0.0]));
+        assert_eq!(s.meshes[1].emission, Some(Rgb::ONE.into()));
+        assert!(matches!(&s.lights[..], [Light::Point { intensity, position }]
+            if *intensity == Rgb::new(4.0, 2.0, 1.0).into() && position.to_array() == [0.0, 3.0, 0.0]));
         let view = s.view.unwrap();
         assert!((view.fov_y_deg - 0.7f32.to_degrees()).abs() < 1e-4);
     }
@@ -338,9 +338,9 @@ aperture = "star:5:0.4"
     // (1,0,0) scaled by 2 → (2,0,0), turned 90° about z → (0,2,0), moved → (1,2,0).
     assert!((p[1] - glam::Vec3::new(1.0, 2.0, 0.0)).length() < 1e-5, "{p:?}");
     assert!(matches!(s.materials[s.meshes[0].material as usize], Material::Conductor { alpha, .. } if alpha == 0.1));
-    assert_eq!(s.spheres[0].emission.map(|e| e.x), Some(2.0));
-    let spot = Light::spot(Vec3::new(0.0, 0.0, 5.0), Vec3::NEG_Z, Rgb::splat(3.0), 30.0, 0.0).unwrap();
-    assert_eq!(s.lights, [spot]);
+    assert_eq!(s.spheres[0].emission.as_ref().map(|e| e.to_rgb().x), Some(2.0));
+    let spot = Light::spot(Vec3::new(0.0, 0.0, 5.0), Vec3::NEG_Z, Rgb::splat(3.0).into(), 30.0, 0.0).unwrap();
+    assert_eq!(s.lights, std::slice::from_ref(&spot));
     assert!(loaded.warnings.is_empty(), "{}", loaded.warnings);
     // The old key, the full angle, still means the same light, and says what replaces it.
     let old = toml.replace("cutoff_angle_deg = 30", "cone_angle_deg = 60");
@@ -454,6 +454,48 @@ fn settings_file_reads_back_exactly() {
         let e = load_scene(&path).unwrap_err().to_string();
         assert!(e.contains("both.toml") && e.contains(message), "{e}");
     }
+}
+
+/// Lights and emitters may be given as spectra: a black body or a table,
+/// scaled to a luminance (default 1), beside plain RGB.
+#[test]
+fn toml_lights_take_black_bodies_and_spectrum_tables() {
+    use lenspath::spectrum::Emission;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("lamps.toml");
+    std::fs::write(
+        &path,
+        r#"
+[[lights]]
+type = "point"
+position = [0, 2, 0]
+intensity = { blackbody_k = 2700, luminance = 5 }
+
+[[lights]]
+type = "environment"
+radiance = 0.1
+
+[[shapes]]
+type = "sphere"
+center = [0, 0, 0]
+radius = 0.5
+emission = { spectrum = [[585, 0], [589, 1], [593, 0]] }
+"#,
+    )
+    .unwrap();
+    let s = load_scene(&path).unwrap_or_else(|e| panic!("{e}")).scene;
+    let Light::Point { intensity, .. } = &s.lights[0] else {
+        panic!("{:?}", s.lights[0]);
+    };
+    assert_eq!(*intensity, Emission::blackbody(2700.0, 5.0).unwrap());
+    assert_eq!(
+        s.lights[1],
+        Light::Environment {
+            radiance: Rgb::splat(0.1).into()
+        }
+    );
+    let sodium = Emission::tabulated(&[(585.0, 0.0), (589.0, 1.0), (593.0, 0.0)], 1.0).unwrap();
+    assert_eq!(s.spheres[0].emission, Some(sodium));
 }
 
 /// Hand-made broken files under tests/data/broken, each with the message it must give:

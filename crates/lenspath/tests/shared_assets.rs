@@ -116,9 +116,16 @@ fn unscaled_lens_tables_match_their_scaled_twins() {
             (efl(&small) / unscaled_efl / factor - 1.0).abs() < 1e-6,
             "{unscaled}: focal lengths"
         );
+        // The built-in is pbrt's table, to which it may add its glasses' dispersion.
+        let geometry = |l: &LensPrescription| {
+            l.surfaces()
+                .iter()
+                .map(|s| (s.radius_mm, s.thickness_mm, s.ior_d(), s.aperture_diameter_mm))
+                .collect::<Vec<_>>()
+        };
         assert_eq!(
-            small.surfaces(),
-            LensPrescription::load(builtin).unwrap().surfaces(),
+            geometry(&small),
+            geometry(&LensPrescription::load(builtin).unwrap()),
             "{builtin}"
         );
     }

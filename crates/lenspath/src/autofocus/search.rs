@@ -426,6 +426,7 @@ impl<'a> Focuser<'a> {
             tile_size: 16,
             crop: Some(s.patch),
             depth: false,
+            wavelength_nm: None,
         };
         let output = render(
             self.scene,

@@ -3,6 +3,8 @@
 //! curve's peak (the best sample, or a least-squares parabola through the
 //! log-scores around it).
 
+use crate::color::luminance;
+
 /// The scale of detail a patch render is scored at: the band-pass applied
 /// before the focus measure, a Gaussian minus a Gaussian four times wider. It
 /// keeps detail a few pixels across (edges, texture) and drops both the
@@ -28,11 +30,21 @@ impl Detail {
         }
     }
 
-    /// `rgb` (`width` pixels wide) band-passed at this scale.
+    /// The luminance of `rgb` (`width` pixels wide) band-passed at this
+    /// scale, in all three channels. Focus is judged on luminance, as a
+    /// camera's contrast autofocus does: a lens with longitudinal colour
+    /// focuses each colour at its own depth, and the sharpest image is the
+    /// one whose luminance is sharpest; and a sample whose lens disperses
+    /// carries one wavelength, whose colour is noisy but whose luminance is
+    /// not (wavelengths are drawn about as the eye's sensitivity goes).
     pub(super) fn band_pass(self, rgb: &[f32], width: usize) -> Vec<f32> {
         let (narrow_sigma, wide_sigma) = self.band_pass_sigmas_px();
-        let narrow = gaussian_blur(rgb, width, narrow_sigma);
-        let wide = gaussian_blur(rgb, width, wide_sigma);
+        let grey: Vec<f32> = rgb
+            .chunks_exact(3)
+            .flat_map(|c| [luminance([c[0], c[1], c[2]]); 3])
+            .collect();
+        let narrow = gaussian_blur(&grey, width, narrow_sigma);
+        let wide = gaussian_blur(&grey, width, wide_sigma);
         narrow.iter().zip(&wide).map(|(n, w)| n - w).collect()
     }
 }

@@ -52,6 +52,7 @@ use crate::materials::Material;
 use crate::math::Rgb;
 use crate::scene::{Scene, SceneView};
 use crate::shapes::{Sphere, TriangleMesh};
+use crate::spectrum::Emission;
 
 /// Deepest node nesting followed (instancing included).
 const MAX_NODE_DEPTH: usize = 256;
@@ -483,7 +484,7 @@ impl<'a, 'input> Reader<'a, 'input> {
             }
             "point" => Light::Point {
                 position,
-                intensity: self.color_child(spec, "color")?,
+                intensity: self.color_child(spec, "color")?.into(),
             },
             "spot" => {
                 let falloff_deg = match child(spec, "falloff_angle") {
@@ -500,17 +501,17 @@ impl<'a, 'input> Reader<'a, 'input> {
                 Light::Spot {
                     position,
                     direction: axis_or_err(self)?,
-                    intensity: self.color_child(spec, "color")?,
+                    intensity: self.color_child(spec, "color")?.into(),
                     cos_cutoff: (0.5 * falloff_deg).min(180.0).to_radians().cos(),
                     exponent,
                 }
             }
             "directional" => Light::Directional {
                 direction: axis_or_err(self)?,
-                irradiance: self.color_child(spec, "color")?,
+                irradiance: self.color_child(spec, "color")?.into(),
             },
             "ambient" => Light::Environment {
-                radiance: self.color_child(spec, "color")?,
+                radiance: self.color_child(spec, "color")?.into(),
             },
             other => {
                 return Err(self.error(
@@ -575,7 +576,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                     center,
                     radius: radius * scale,
                     material,
-                    emission: surface.emission,
+                    emission: surface.emission.map(Emission::from),
                 });
             }
             Geometry::Meshes(meshes) => {
@@ -590,7 +591,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                     let surface = surface_for(self, symbol.as_deref())?;
                     transform_mesh(&mut mesh, world);
                     mesh.material = intern_material(&mut self.scene, surface.material);
-                    mesh.emission = surface.emission;
+                    mesh.emission = surface.emission.map(Emission::from);
                     self.scene.meshes.push(mesh);
                 }
             }
@@ -952,7 +953,7 @@ impl<'a, 'input> Reader<'a, 'input> {
             let center = 0.25 * light.corners.iter().copied().sum::<Vec3>();
             let size = (light.corners[2] - light.corners[0]).length();
             let drawn = self.scene.meshes.iter().any(|m| {
-                m.emission.is_some_and(|e| e.max_element() > 0.0)
+                m.emission.as_ref().is_some_and(|e| !e.is_black())
                     && m.triangles().any(|[a, b, c]| {
                         let n = (b - a).cross(c - a).normalize_or_zero();
                         n.dot(light.normal) > 0.99
@@ -980,7 +981,7 @@ impl<'a, 'input> Reader<'a, 'input> {
                 }
             }
             mesh.material = intern_material(&mut self.scene, EMITTER_MATERIAL);
-            mesh.emission = Some(light.radiance);
+            mesh.emission = Some(light.radiance.into());
             self.scene.meshes.push(mesh);
         }
         if let Some((toward, fov_y_deg)) = self.cs184_camera {
@@ -1071,7 +1072,9 @@ mod tests {
         assert!((position - Vec3::new(0.0, 3.0, -5.0)).length() < 1e-5);
         assert!((direction - Vec3::NEG_Y).length() < 1e-5, "{direction}");
         assert!((cos_cutoff - 30f32.to_radians().cos()).abs() < 1e-6 && exponent == 1.0);
-        assert!(matches!(s.lights[1], Light::Environment { radiance } if radiance == Rgb::new(0.1, 0.2, 0.3)));
+        assert!(
+            matches!(s.lights[1], Light::Environment { ref radiance } if *radiance == Rgb::new(0.1, 0.2, 0.3).into())
+        );
         let view = s.view.unwrap();
         assert_eq!(view.fov_y_deg, 30.0);
         let m = view.pose.render_from_camera;

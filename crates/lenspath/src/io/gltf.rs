@@ -34,6 +34,7 @@ use crate::materials::Material;
 use crate::math::Rgb;
 use crate::scene::{Scene, SceneView};
 use crate::shapes::TriangleMesh;
+use crate::spectrum::Emission;
 
 /// Deepest node nesting followed.
 const MAX_NODE_DEPTH: usize = 256;
@@ -361,7 +362,7 @@ impl Loader<'_> {
             transform_mesh(&mut tri_mesh, world);
             let (material, emission) = self.material(&prim.material());
             tri_mesh.material = intern_material(&mut self.scene, material);
-            tri_mesh.emission = emission;
+            tri_mesh.emission = emission.map(Emission::from);
             self.scene.meshes.push(tri_mesh);
         }
         Ok(())
@@ -457,16 +458,16 @@ impl Loader<'_> {
         self.scene.lights.push(match light.kind() {
             Kind::Point => Light::Point {
                 position,
-                intensity: color,
+                intensity: color.into(),
             },
             Kind::Directional => Light::Directional {
                 direction,
-                irradiance: color,
+                irradiance: color.into(),
             },
             Kind::Spot { outer_cone_angle, .. } => Light::Spot {
                 position,
                 direction,
-                intensity: color,
+                intensity: color.into(),
                 cos_cutoff: outer_cone_angle.clamp(0.0, std::f32::consts::FRAC_PI_2).cos(),
                 exponent: 0.0,
             },

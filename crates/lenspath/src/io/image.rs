@@ -81,7 +81,7 @@ pub fn read_image(path: &Path) -> Result<ReadImage> {
 /// full white, not linearised (a painted mask's gray is its transmission);
 /// EXR values as stored; colour becomes Rec. 709 luminance.
 pub fn read_gray(path: &Path) -> Result<(usize, usize, Vec<f32>)> {
-    let luminance = |rgb: &[f32]| 0.2126 * rgb[0] + 0.7152 * rgb[1] + 0.0722 * rgb[2];
+    let luminance = |rgb: &[f32]| crate::color::luminance([rgb[0], rgb[1], rgb[2]]);
     if is_exr(path) {
         let image = read_exr(path)?;
         let values = image.rgb.chunks_exact(3).map(luminance).collect();

@@ -235,13 +235,15 @@ pub fn complete_scene(scene: &mut Scene, warnings: &mut Warnings) {
     let emits = scene
         .meshes
         .iter()
-        .any(|m| m.emission.is_some_and(|e| e.max_element() > 0.0))
+        .any(|m| m.emission.as_ref().is_some_and(|e| !e.is_black()))
         || scene
             .spheres
             .iter()
-            .any(|s| s.emission.is_some_and(|e| e.max_element() > 0.0));
+            .any(|s| s.emission.as_ref().is_some_and(|e| !e.is_black()));
     if scene.lights.is_empty() && !emits {
-        scene.lights.push(Light::Environment { radiance: Rgb::ONE });
+        scene.lights.push(Light::Environment {
+            radiance: Rgb::ONE.into(),
+        });
         warnings.add("no lights: added a white environment light (radiance 1)");
     }
 }

@@ -29,6 +29,7 @@ use crate::materials::Material;
 use crate::math::Rgb;
 use crate::scene::Scene;
 use crate::shapes::TriangleMesh;
+use crate::spectrum::Emission;
 
 /// Reads an OBJ file and the MTL files it names (beside it).
 pub fn load_obj(path: &Path) -> Result<LoadedScene> {
@@ -112,7 +113,7 @@ pub fn parse_obj(text: &str, path: &Path, load_mtl: &dyn Fn(&Path) -> tobj::MTLL
             None => (DEFAULT_MATERIAL, None),
         };
         mesh.material = intern_material(&mut scene, material);
-        mesh.emission = emission;
+        mesh.emission = emission.map(Emission::from);
         scene.meshes.push(mesh);
     }
     if scene.meshes.is_empty() {
@@ -289,7 +290,7 @@ mod tests {
                 reflectance: Rgb::new(0.8, 0.1, 0.1)
             }
         );
-        assert_eq!(s.meshes[1].emission, Some(Rgb::new(5.0, 5.0, 4.0)));
+        assert_eq!(s.meshes[1].emission, Some(Rgb::new(5.0, 5.0, 4.0).into()));
         assert!(matches!(mat(2), Material::Dielectric { eta, .. } if (eta.n_d() - 1.33).abs() < 1e-6));
         let Material::Conductor { eta, k, alpha } = mat(3) else {
             panic!("{:?}", mat(3))

@@ -27,6 +27,7 @@ use crate::math::Rgb;
 use crate::sampling::SamplerKind;
 use crate::scene::{Scene, SceneView};
 use crate::shapes::{Sphere, TriangleMesh};
+use crate::spectrum::Emission;
 
 /// A colour: one grey value or `[r, g, b]`.
 #[derive(Clone, Copy, Debug, Deserialize, Serialize)]
@@ -41,6 +42,41 @@ impl Color {
         match self {
             Color::Grey(v) => Rgb::splat(v),
             Color::Rgb(c) => Rgb::from_array(c),
+        }
+    }
+}
+
+/// What a light or an emitting shape gives off: a [`Color`], a black body
+/// (`{ blackbody_k = 2700, luminance = 5 }`) or a table of
+/// `[wavelength_nm, value]` pairs (`{ spectrum = [[585, 0], [589, 1], [593, 0]],
+/// luminance = 2 }`); a spectrum's luminance defaults to 1, RGB white's.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(untagged)]
+enum EmissionSpec {
+    Color(Color),
+    Blackbody {
+        blackbody_k: f32,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        luminance: Option<f32>,
+    },
+    Table {
+        spectrum: Vec<[f32; 2]>,
+        #[serde(skip_serializing_if = "Option::is_none")]
+        luminance: Option<f32>,
+    },
+}
+
+impl EmissionSpec {
+    fn emission(&self) -> std::result::Result<Emission, String> {
+        match self {
+            EmissionSpec::Color(c) => Ok(c.rgb().into()),
+            EmissionSpec::Blackbody { blackbody_k, luminance } => {
+                Emission::blackbody(*blackbody_k, luminance.unwrap_or(1.0)).map_err(|e| e.to_string())
+            }
+            EmissionSpec::Table { spectrum, luminance } => {
+                let pairs: Vec<(f32, f32)> = spectrum.iter().map(|[l, v]| (*l, *v)).collect();
+                Emission::tabulated(&pairs, luminance.unwrap_or(1.0)).map_err(|e| e.to_string())
+            }
         }
     }
 }
@@ -148,12 +184,12 @@ enum MaterialSpec {
 enum LightSpec {
     Point {
         position: [f32; 3],
-        intensity: Color,
+        intensity: EmissionSpec,
     },
     Spot {
         position: [f32; 3],
         look_at: [f32; 3],
-        intensity: Color,
+        intensity: EmissionSpec,
         /// The cone's half angle (pbrt's `coneangle`, Mitsuba's `cutoff_angle`).
         cutoff_angle_deg: Option<f32>,
         /// Deprecated: the cone's full angle.
@@ -164,10 +200,10 @@ enum LightSpec {
     },
     Directional {
         direction: [f32; 3],
-        irradiance: Color,
+        irradiance: EmissionSpec,
     },
     Environment {
-        radiance: Color,
+        radiance: EmissionSpec,
     },
 }
 
@@ -194,19 +230,19 @@ enum ShapeSpec {
         center: [f32; 3],
         radius: f32,
         material: Option<String>,
-        emission: Option<Color>,
+        emission: Option<EmissionSpec>,
     },
     Quad {
         corner: [f32; 3],
         edge_u: [f32; 3],
         edge_v: [f32; 3],
         material: Option<String>,
-        emission: Option<Color>,
+        emission: Option<EmissionSpec>,
     },
     Mesh {
         file: PathBuf,
         material: Option<String>,
-        emission: Option<Color>,
+        emission: Option<EmissionSpec>,
         #[serde(default)]
         transform: TransformSpec,
     },
@@ -314,7 +350,7 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
         let m = material(spec).map_err(|e| fail(format!("[materials.{name}]: {e}")))?;
         material_ids.insert(name.as_str(), intern_material(&mut scene, m));
     }
-    let material_id = |scene: &mut Scene, what: &str, name: &Option<String>, emission: Option<Rgb>| match name {
+    let material_id = |scene: &mut Scene, what: &str, name: &Option<String>, emission: &Option<Emission>| match name {
         Some(n) => material_ids
             .get(n.as_str())
             .copied()
@@ -341,8 +377,8 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
                 material,
                 emission,
             } => {
-                let emission = emission.map(Color::rgb);
-                let material = material_id(&mut scene, &what, material, emission)?;
+                let emission = shape_emission(emission).map_err(|e| fail(format!("{what}: emission: {e}")))?;
+                let material = material_id(&mut scene, &what, material, &emission)?;
                 scene.spheres.push(Sphere {
                     center: Vec3::from_array(*center),
                     radius: *radius,
@@ -357,8 +393,8 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
                 material,
                 emission,
             } => {
-                let emission = emission.map(Color::rgb);
-                let material = material_id(&mut scene, &what, material, emission)?;
+                let emission = shape_emission(emission).map_err(|e| fail(format!("{what}: emission: {e}")))?;
+                let material = material_id(&mut scene, &what, material, &emission)?;
                 let (p, u, v) = (
                     Vec3::from_array(*corner),
                     Vec3::from_array(*edge_u),
@@ -389,9 +425,9 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
                         warnings.add_n(format!("{}: {w}", mesh_file.display()), n);
                     }
                 }
-                let emission = emission.map(Color::rgb);
+                let emission = shape_emission(emission).map_err(|e| fail(format!("{what}: emission: {e}")))?;
                 let forced = match material {
-                    Some(_) => Some(material_id(&mut scene, &what, material, emission)?),
+                    Some(_) => Some(material_id(&mut scene, &what, material, &emission)?),
                     None if emission.is_some() => Some(intern_material(&mut scene, EMITTER_MATERIAL)),
                     None => None,
                 };
@@ -403,7 +439,7 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
                         None => intern_material(&mut scene, sub_scene.materials[mesh.material as usize]),
                     };
                     if emission.is_some() {
-                        mesh.emission = emission;
+                        mesh.emission = emission.clone();
                     }
                     scene.meshes.push(mesh);
                 }
@@ -649,17 +685,25 @@ fn material(spec: &MaterialSpec) -> std::result::Result<Material, String> {
     })
 }
 
+/// What a shape's `emission` describes.
+fn shape_emission(spec: &Option<EmissionSpec>) -> std::result::Result<Option<Emission>, String> {
+    spec.as_ref().map(EmissionSpec::emission).transpose()
+}
+
 /// The light `spec` describes; `deprecated` is told of old spellings.
 fn light(spec: &LightSpec, deprecated: &mut dyn FnMut(String)) -> std::result::Result<Light, String> {
     Ok(match *spec {
-        LightSpec::Point { position, intensity } => Light::Point {
+        LightSpec::Point {
+            position,
+            ref intensity,
+        } => Light::Point {
             position: Vec3::from_array(position),
-            intensity: intensity.rgb(),
+            intensity: intensity.emission()?,
         },
         LightSpec::Spot {
             position,
             look_at,
-            intensity,
+            ref intensity,
             cutoff_angle_deg,
             cone_angle_deg,
             exponent,
@@ -685,20 +729,23 @@ fn light(spec: &LightSpec, deprecated: &mut dyn FnMut(String)) -> std::result::R
             Light::spot(
                 Vec3::from_array(position),
                 direction,
-                intensity.rgb(),
+                intensity.emission()?,
                 cutoff_angle_deg,
                 exponent,
             )
             .map_err(|e| e.to_string())?
         }
-        LightSpec::Directional { direction, irradiance } => Light::Directional {
+        LightSpec::Directional {
+            direction,
+            ref irradiance,
+        } => Light::Directional {
             direction: Vec3::from_array(direction)
                 .try_normalize()
                 .ok_or("direction must be non-zero")?,
-            irradiance: irradiance.rgb(),
+            irradiance: irradiance.emission()?,
         },
-        LightSpec::Environment { radiance } => Light::Environment {
-            radiance: radiance.rgb(),
+        LightSpec::Environment { ref radiance } => Light::Environment {
+            radiance: radiance.emission()?,
         },
     })
 }

@@ -1,18 +1,41 @@
 //! The lens layout as SVG, drawn to scale like an optical-design program's
 //! layout view: elements with their glass shaded, the stop, the sensor at
-//! infinity focus, and real ray fans from infinity at three field angles.
+//! infinity focus, and real ray fans from infinity at three field angles
+//! (for a lens whose glasses disperse, each fan at the F, d and C lines, in
+//! blue, green and red); and the chromatic focal shift plot.
 
 use std::fmt::Write as _;
 
 use glam::DVec3;
 
+use super::chromatic::focal_shift;
 use super::system::{Direction, LensRay, LensSystem};
 use super::LensAnalysis;
+use crate::error::Result;
+use crate::glass::{C_LINE_NM, D_LINE_NM, FRAUNHOFER_LINES, F_LINE_NM};
 
 /// Field angles drawn, as fractions of the half diagonal field.
 const FIELD_FRACTIONS: [f64; 3] = [0.0, 0.7, 1.0];
+/// Each field's colour, for a lens that does not disperse.
 const FAN_COLOURS: [&str; 3] = ["#1f77b4", "#2ca02c", "#d62728"];
+/// The lines a dispersive lens's fans are traced at, with their colours
+/// (blue F, green d, red C: the optical-design convention).
+const LINE_COLOURS: [(f64, &str); 3] = [(F_LINE_NM, "#1f4fd8"), (D_LINE_NM, "#2a9d3a"), (C_LINE_NM, "#d62728")];
 const RAYS_PER_FAN: usize = 7;
+
+/// One drawn ray of a fan.
+#[derive(Clone, Debug)]
+pub struct FanRay {
+    /// Its field, as a fraction of the half diagonal field.
+    pub field_fraction: f64,
+    /// The wavelength it is traced at, nm.
+    pub wavelength_nm: f64,
+    /// Its path, (z, height) in mm.
+    pub path: Polyline,
+    /// The colour it is drawn in (CSS): its wavelength's when the lens
+    /// disperses, else its field's.
+    pub colour: &'static str,
+}
 
 /// Sag of a spherical surface: its axial offset from the vertex at height `y`.
 fn sag(radius: f64, y: f64) -> f64 {
@@ -39,9 +62,9 @@ pub struct Layout {
     pub stop: [Polyline; 2],
     /// The sensor, at infinity focus.
     pub sensor: Polyline,
-    /// Real rays from infinity to the sensor: (field, as a fraction of the
-    /// half diagonal field, and the ray's path).
-    pub rays: Vec<(f64, Polyline)>,
+    /// Real rays from infinity to the sensor: at the d line, or at the F, d
+    /// and C lines when the lens disperses.
+    pub rays: Vec<FanRay>,
     /// The z range to show.
     pub z_range_mm: (f64, f64),
     /// Half the height to show.
@@ -79,17 +102,36 @@ pub fn layout_focused(system: &LensSystem, analysis: &LensAnalysis, sensor_diago
     let outer = system.stop_radius() + 0.25 * largest_aperture;
     let blade = |sign: f64| vec![(0.0, sign * system.stop_radius()), (0.0, sign * outer)];
     let max_field = (0.5 * analysis.diagonal_fov_deg).to_radians();
-    let rays = FIELD_FRACTIONS
-        .iter()
-        .flat_map(|&fraction| {
-            ray_fan(system, fraction * max_field, sensor_z)
-                .into_iter()
-                .map(move |path| (fraction, path.iter().map(|p| (p.z, p.x)).collect()))
-        })
-        .collect();
+    let wavelengths: Vec<f64> = if system.is_dispersive() {
+        LINE_COLOURS.iter().map(|&(nm, _)| nm).collect()
+    } else {
+        vec![system.wavelength_nm()]
+    };
+    let colour = |field_index: usize, wavelength_nm: f64| {
+        LINE_COLOURS
+            .iter()
+            .find(|(nm, _)| system.is_dispersive() && *nm == wavelength_nm)
+            .map_or(FAN_COLOURS[field_index], |(_, c)| c)
+    };
+    let mut rays = Vec::new();
+    for &wavelength_nm in &wavelengths {
+        let at_line = system.at_wavelength(wavelength_nm);
+        for (field_index, &field_fraction) in FIELD_FRACTIONS.iter().enumerate() {
+            rays.extend(
+                ray_fan(&at_line, field_fraction * max_field, sensor_z)
+                    .into_iter()
+                    .map(|path| FanRay {
+                        field_fraction,
+                        wavelength_nm,
+                        path: path.iter().map(|p| (p.z, p.x)).collect(),
+                        colour: colour(field_index, wavelength_nm),
+                    }),
+            );
+        }
+    }
     Layout {
         title: format!(
-            "{} — EFL {:.2} mm, f/{:.2}, {:.1}° diagonal field ({:.0} mm sensor diagonal), {}",
+            "{} — EFL {:.2} mm, f/{:.2}, {:.1}° diagonal field ({:.0} mm sensor diagonal), {}{}",
             system.prescription().name(),
             analysis.effective_focal_length_mm,
             analysis.f_number,
@@ -99,6 +141,11 @@ pub fn layout_focused(system: &LensSystem, analysis: &LensAnalysis, sensor_diago
                 "focused at infinity".to_string()
             } else {
                 format!("sensor {sensor_z:.3} mm behind the stop")
+            },
+            if system.is_dispersive() {
+                "; rays at F, d, C"
+            } else {
+                ""
             }
         ),
         elements,
@@ -168,15 +215,12 @@ pub fn layout_to_svg(l: &Layout) -> String {
         r##"<polyline points="{}" stroke="#444" stroke-width="4"/>"##,
         points(&l.sensor)
     );
-    for (fraction, path) in &l.rays {
-        let colour = FIELD_FRACTIONS
-            .iter()
-            .position(|f| f == fraction)
-            .map_or(FAN_COLOURS[0], |i| FAN_COLOURS[i]);
+    for ray in &l.rays {
         let _ = writeln!(
             svg,
-            r#"<polyline points="{}" fill="none" stroke="{colour}" stroke-width="0.9"/>"#,
-            points(path)
+            r#"<polyline points="{}" fill="none" stroke="{}" stroke-width="0.9" stroke-opacity="0.75"/>"#,
+            points(&ray.path),
+            ray.colour
         );
     }
     svg.push_str("</svg>\n");
@@ -215,4 +259,118 @@ fn ray_fan(system: &LensSystem, field: f64, sensor_z: f64) -> Vec<Vec<DVec3>> {
             Some(path)
         })
         .collect()
+}
+
+/// Wavelengths of the focal shift curve: 400 to 700 nm, every 5 nm (the
+/// range lens designers plot; a photographic lens is corrected over it).
+const FOCAL_SHIFT_RANGE_NM: (f64, f64, f64) = (400.0, 700.0, 5.0);
+
+/// The chromatic focal shift plot as SVG: the paraxial focus against
+/// wavelength, relative to the d line's (focal shift in µm across, wavelength
+/// up, as OpticStudio's "Chromatic Focal Shift"), with the F, d and C lines
+/// marked. A lens that does not disperse draws a vertical line at 0.
+pub fn focal_shift_svg(system: &LensSystem) -> Result<String> {
+    let (first, last, step) = FOCAL_SHIFT_RANGE_NM;
+    let count = ((last - first) / step).round() as usize + 1;
+    let wavelengths: Vec<f64> = (0..count).map(|k| first + step * k as f64).collect();
+    let curve: Vec<(f64, f64)> = focal_shift(system, &wavelengths)?
+        .into_iter()
+        .map(|(nm, shift_mm)| (nm, shift_mm * 1e3))
+        .collect();
+    // A symmetric shift axis in "nice" steps that holds the curve.
+    let widest = curve.iter().map(|c| c.1.abs()).fold(0.0, f64::max);
+    let tick = nice_step(widest.max(1.0) / 2.0);
+    let half_range = tick * (widest / tick).ceil().max(1.0);
+    let (width, height, margin) = (640.0, 480.0, 70.0);
+    let x = |shift_um: f64| margin + (shift_um + half_range) / (2.0 * half_range) * (width - 2.0 * margin);
+    let y = |nm: f64| height - margin - (nm - first) / (last - first) * (height - 2.0 * margin);
+    let mut svg = String::new();
+    let _ = writeln!(
+        svg,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" viewBox="0 0 {width} {height}" font-family="sans-serif" font-size="12">"#
+    );
+    let _ = writeln!(svg, r#"<rect width="100%" height="100%" fill="white"/>"#);
+    let _ = writeln!(
+        svg,
+        r#"<text x="{}" y="24" font-size="14" text-anchor="middle">{} — chromatic focal shift (paraxial, from the d line)</text>"#,
+        width / 2.0,
+        system.prescription().name()
+    );
+    // Axes, grid and ticks.
+    let ticks = (half_range / tick).round() as i64;
+    for k in -ticks..=ticks {
+        let shift = k as f64 * tick;
+        let _ = writeln!(
+            svg,
+            r##"<line x1="{0:.1}" y1="{1:.1}" x2="{0:.1}" y2="{2:.1}" stroke="{3}"/><text x="{0:.1}" y="{4:.1}" text-anchor="middle">{5}</text>"##,
+            x(shift),
+            y(first),
+            y(last),
+            if k == 0 { "#888" } else { "#e4e4e4" },
+            y(first) + 16.0,
+            format_number(shift)
+        );
+    }
+    for nm in (first as i64..=last as i64).step_by(50) {
+        let nm = nm as f64;
+        let _ = writeln!(
+            svg,
+            r##"<line x1="{0:.1}" y1="{1:.1}" x2="{2:.1}" y2="{1:.1}" stroke="#e4e4e4"/><text x="{3:.1}" y="{4:.1}" text-anchor="end">{nm}</text>"##,
+            x(-half_range),
+            y(nm),
+            x(half_range),
+            x(-half_range) - 6.0,
+            y(nm) + 4.0
+        );
+    }
+    let _ = writeln!(
+        svg,
+        r#"<text x="{}" y="{}" text-anchor="middle">focal shift (µm; + away from the lens)</text>"#,
+        width / 2.0,
+        height - margin + 36.0
+    );
+    let _ = writeln!(
+        svg,
+        r#"<text transform="translate(20 {}) rotate(-90)" text-anchor="middle">wavelength (nm)</text>"#,
+        height / 2.0
+    );
+    for (nm, colour) in LINE_COLOURS {
+        let name = FRAUNHOFER_LINES.iter().find(|l| l.1 == nm).map_or("", |l| l.0);
+        let _ = writeln!(
+            svg,
+            r#"<line x1="{0:.1}" y1="{1:.1}" x2="{2:.1}" y2="{1:.1}" stroke="{colour}" stroke-dasharray="4 3"/><text x="{3:.1}" y="{4:.1}" fill="{colour}">{name}</text>"#,
+            x(-half_range),
+            y(nm),
+            x(half_range),
+            x(half_range) + 4.0,
+            y(nm) + 4.0
+        );
+    }
+    let points: Vec<String> = curve
+        .iter()
+        .map(|&(nm, shift)| format!("{:.2},{:.2}", x(shift), y(nm)))
+        .collect();
+    let _ = writeln!(
+        svg,
+        r#"<polyline points="{}" fill="none" stroke="black" stroke-width="1.6"/>"#,
+        points.join(" ")
+    );
+    svg.push_str("</svg>\n");
+    Ok(svg)
+}
+
+/// 1, 2 or 5 times a power of ten, at least `x`.
+fn nice_step(x: f64) -> f64 {
+    let power = 10f64.powf(x.log10().floor());
+    [1.0, 2.0, 5.0, 10.0]
+        .iter()
+        .map(|m| m * power)
+        .find(|&s| s >= x)
+        .unwrap_or(10.0 * power)
+}
+
+/// A tick label without trailing zeros.
+fn format_number(v: f64) -> String {
+    let s = format!("{v:.3}");
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
 }

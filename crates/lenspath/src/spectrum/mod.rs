@@ -361,6 +361,94 @@ impl Spectrum {
     }
 }
 
+/// What an emitter gives off, as a scene describes it: an RGB colour, as
+/// every scene format writes it, or a spectrum of its own (pbrt-v4's
+/// `blackbody` and tabulated light spectra). A spectrum is scaled to a
+/// luminance: 1 is as bright as RGB white (1, 1, 1).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Emission {
+    /// Linear sRGB radiance, intensity or irradiance, emitted as its fitted
+    /// spectrum times D65 ([`Spectrum::illuminant`]).
+    Rgb(Rgb),
+    /// A spectrum of its own ([`Emission::blackbody`], [`Emission::tabulated`]).
+    Spectral(Spectrum),
+}
+
+impl From<Rgb> for Emission {
+    fn from(rgb: Rgb) -> Self {
+        Emission::Rgb(rgb)
+    }
+}
+
+impl Emission {
+    /// A black body at `temperature_k` with luminance `luminance`.
+    pub fn blackbody(temperature_k: f32, luminance: f32) -> Result<Self> {
+        let spectrum = Spectrum::blackbody(temperature_k, luminance)?;
+        match spectrum {
+            Spectrum::Blackbody { scale, .. } if !scale.is_finite() => Err(Error::InvalidArgument(format!(
+                "a black body at {temperature_k} K gives no visible light; give a temperature of 500 K or more"
+            ))),
+            _ => Ok(Emission::Spectral(spectrum)),
+        }
+    }
+
+    /// A spectrum given at wavelengths (`(wavelength_nm, value)` pairs,
+    /// linear between them, zero beyond the ends, as pbrt-v4's piecewise
+    /// linear spectra), scaled to luminance `luminance`: only its shape matters.
+    pub fn tabulated(pairs: &[(f32, f32)], luminance: f32) -> Result<Self> {
+        if !(luminance >= 0.0 && luminance.is_finite()) {
+            return Err(Error::InvalidArgument(format!(
+                "a spectrum's luminance must be 0 or more, got {luminance}"
+            )));
+        }
+        Tabulated::new(pairs)?;
+        // Zero beyond the ends: a step of a thousandth of a nanometre down to 0.
+        let (first, last) = (pairs[0].0, pairs[pairs.len() - 1].0);
+        let padded: Vec<(f32, f32)> = std::iter::once((first - 1e-3, 0.0))
+            .chain(pairs.iter().copied())
+            .chain(std::iter::once((last + 1e-3, 0.0)))
+            .collect();
+        let pairs = &padded[..];
+        let table = Tabulated::new(pairs)?;
+        let y = cie::tables().spectrum_to_xyz(|l| table.at(l)).y;
+        if y.is_nan() || y <= 0.0 {
+            return Err(Error::InvalidArgument(
+                "spectrum table: it has no visible light (its luminance is 0), so it cannot be scaled to a luminance"
+                    .into(),
+            ));
+        }
+        let scale = luminance / y;
+        let scaled: Vec<(f32, f32)> = pairs.iter().map(|&(l, v)| (l, v * scale)).collect();
+        Ok(Emission::Spectral(Spectrum::Tabulated(Arc::new(Tabulated::new(
+            &scaled,
+        )?))))
+    }
+
+    /// The spectrum emitted.
+    pub fn spectrum(&self) -> Spectrum {
+        match self {
+            Emission::Rgb(rgb) => Spectrum::illuminant(*rgb),
+            Emission::Spectral(spectrum) => spectrum.clone(),
+        }
+    }
+
+    /// True when nothing is emitted.
+    pub fn is_black(&self) -> bool {
+        match self {
+            Emission::Rgb(rgb) => rgb.max_element() <= 0.0,
+            Emission::Spectral(spectrum) => spectrum.is_black(),
+        }
+    }
+
+    /// Its colour as linear sRGB: the RGB given, or the spectrum's.
+    pub fn to_rgb(&self) -> Rgb {
+        match self {
+            Emission::Rgb(rgb) => *rgb,
+            Emission::Spectral(spectrum) => spectrum.to_rgb(),
+        }
+    }
+}
+
 /// Planck's law: spectral radiance of a black body at `temperature_k`, in
 /// W·m⁻²·sr⁻¹·nm⁻¹, at `lambda_nm` (CODATA 2018 constants).
 pub fn planck(lambda_nm: f32, temperature_k: f32) -> f32 {
@@ -465,6 +553,33 @@ mod tests {
         let warm = Spectrum::blackbody(2700.0, 2.0).unwrap().to_rgb();
         assert!(warm.x > 1.4 * warm.z, "{warm}");
         assert!(Spectrum::blackbody(-3.0, 1.0).is_err());
+    }
+
+    /// Emission spectra: a black body and a table take the luminance asked
+    /// for, whatever their own scale; RGB stays as given; dark ones are refused.
+    #[test]
+    fn emission_spectra_have_the_luminance_asked_for() {
+        let y = |e: &Emission| cie::tables().spectrum_to_xyz(|l| e.spectrum().at(l)).y;
+        let lamp = Emission::blackbody(2856.0, 3.0).unwrap();
+        assert!((y(&lamp) / 3.0 - 1.0).abs() < 1e-4, "{}", y(&lamp));
+        let sodium = Emission::tabulated(&[(585.0, 0.0), (589.0, 1000.0), (593.0, 0.0)], 2.0).unwrap();
+        assert!((y(&sodium) / 2.0 - 1.0).abs() < 1e-3, "{}", y(&sodium));
+        // A sodium lamp is orange-yellow: much more red than blue.
+        let rgb = sodium.to_rgb();
+        assert!(rgb.x > 5.0 * rgb.z.abs() && rgb.x > rgb.y, "{rgb}");
+        assert_eq!(Emission::from(Rgb::ONE).to_rgb(), Rgb::ONE);
+        assert!(Emission::blackbody(100.0, 1.0).is_err());
+        // Zero beyond its ends: a table in the infrared emits nothing visible.
+        assert!(Emission::tabulated(&[(900.0, 1.0), (1000.0, 1.0)], 1.0).is_err());
+        let green = Emission::tabulated(&[(500.0, 1.0), (560.0, 1.0)], 1.0)
+            .unwrap()
+            .spectrum();
+        assert_eq!(
+            (green.at(499.0), green.at(530.0) > 0.0, green.at(561.0)),
+            (0.0, true, 0.0)
+        );
+        assert!(Emission::tabulated(&[(400.0, 0.0), (500.0, 0.0)], 1.0).is_err());
+        assert!(Emission::tabulated(&[(400.0, 1.0), (500.0, 1.0)], -1.0).is_err());
     }
 
     #[test]

@@ -160,11 +160,12 @@ impl RealisticCamera {
                 band(near(x).hypot(near(y)))..band(far(x).hypot(far(y))) + 1
             }
         };
+        let bounding = bounding_systems(&system);
         let pupils = (0..PUPIL_BANDS)
             .into_par_iter()
             .map(|band| {
                 if band == 0 || bands.contains(&band) {
-                    bound_pupil(&system, sensor_z_mm, band as f64 * band_width_mm, band_width_mm)
+                    bound_pupil(&bounding, sensor_z_mm, band as f64 * band_width_mm, band_width_mm)
                 } else {
                     PupilGrid::EMPTY
                 }
@@ -211,7 +212,7 @@ impl RealisticCamera {
         // with this lens as set, or wide open for physical exposure.
         let centre_irradiance = match (settings.radiometry, settings.f_number) {
             (Radiometry::Physical, Some(_)) => {
-                let pupil = bound_pupil(&wide_open, sensor_z_mm, 0.0, band_width_mm);
+                let pupil = bound_pupil(&bounding_systems(&wide_open), sensor_z_mm, 0.0, band_width_mm);
                 RealisticCamera {
                     system: wide_open,
                     pupils: vec![pupil],

@@ -6,6 +6,7 @@
 use glam::{DMat2, DMat3, DVec2, DVec3, Vec2};
 
 use crate::lens::{Direction, LensRay, LensSystem};
+use crate::spectrum::{D_LINE_NM, LAMBDA_MAX_NM, LAMBDA_MIN_NM};
 
 /// Radial bands of the sensor, each with its own pupil grid.
 pub(super) const PUPIL_BANDS: usize = 16;
@@ -80,19 +81,39 @@ impl PupilGrid {
     }
 }
 
-/// The pupil grid for sensor points at radii `r0 ..= r0 + width` on +x.
-pub(super) fn bound_pupil(system: &LensSystem, sensor_z: f64, r0: f64, width: f64) -> PupilGrid {
+/// Wavelengths, nm, at which a dispersive lens's pupil is bounded: the
+/// transported range's ends and the d line. A glass's index is monotone in
+/// wavelength over the range, so where a ray meets each surface moves
+/// monotonically too, and the union of the pupils at the ends and the middle
+/// covers the pupil at every wavelength between (the cells are kept when any
+/// corner passes, which pads the union by a cell besides).
+pub(super) const PUPIL_BOUND_WAVELENGTHS_NM: [f64; 3] = [LAMBDA_MIN_NM as f64, D_LINE_NM as f64, LAMBDA_MAX_NM as f64];
+
+/// The lens at each wavelength its pupil is bounded at: the lens itself when
+/// nothing disperses, else at [`PUPIL_BOUND_WAVELENGTHS_NM`].
+pub(super) fn bounding_systems(system: &LensSystem) -> Vec<LensSystem> {
+    if system.is_dispersive() {
+        PUPIL_BOUND_WAVELENGTHS_NM
+            .iter()
+            .map(|&nm| system.at_wavelength(nm))
+            .collect()
+    } else {
+        vec![system.clone()]
+    }
+}
+
+/// The pupil grid for sensor points at radii `r0 ..= r0 + width` on +x: the
+/// cells a ray gets through at any of `systems` (one lens at several
+/// wavelengths, [`bounding_systems`]).
+pub(super) fn bound_pupil(systems: &[LensSystem], sensor_z: f64, r0: f64, width: f64) -> PupilGrid {
     let films: Vec<f64> = (0..FILM_POSITIONS_PER_BAND)
         .map(|k| r0 + width * k as f64 / (FILM_POSITIONS_PER_BAND - 1) as f64)
         .collect();
+    let system = &systems[0];
     let rear_z = system.rear_z();
     let passes_from = |r: f64, q: DVec2| {
-        system
-            .trace(
-                &LensRay::between(DVec3::new(r, 0.0, sensor_z), DVec3::new(q.x, q.y, rear_z)),
-                Direction::ToScene,
-            )
-            .is_some()
+        let ray = LensRay::between(DVec3::new(r, 0.0, sensor_z), DVec3::new(q.x, q.y, rear_z));
+        systems.iter().any(|s| s.trace(&ray, Direction::ToScene).is_some())
     };
     // 1. Where each film position's pupil lies, on a coarse grid over 1.5×
     // the rear aperture (pbrt's margin): the centroids of passing points.
