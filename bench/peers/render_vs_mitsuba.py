@@ -4,7 +4,7 @@ run: wall time at equal samples per pixel, and whether the images agree.
 
     python3 bench/peers/render_vs_mitsuba.py [--res 480 360] [--spp 16] [--max-depth 16]
                                              [--check-spp 1024] [--check-res 120 90]
-                                             [--scene cornell-spheres|cornell-dragon]
+                                             [--scene cornell-spheres|cornell-dragon] [--spectral]
 
 The scene is lenspath's built-in `cornell-spheres` (white, red and blue diffuse
 walls, two diffuse spheres, a one-sided square light under the ceiling), built
@@ -19,6 +19,9 @@ with 14 or 15 it aborts, "cannot select fminimum"); lenspath on all
 threads with one light sample and, like Mitsuba's default, the `independent`
 sampler (uniform random numbers; lenspath's default scrambled Sobol is timed too).
 Mitsuba's `max_depth` counts the camera segment, so it is lenspath's plus one.
+lenspath's transport is always spectral; with `--spectral` Mitsuba renders in
+`scalar_spectral` and `llvm_ad_spectral` instead (its RGB colours upsampled by the
+same Jakob & Hanika method, emitters times D65, as lenspath does).
 
 Agreement: both rendered with `--check-spp` samples at `--check-res`, averaged
 over 6 x 6-pixel blocks (so Monte Carlo noise is well below 1%); the mean absolute
@@ -245,16 +248,21 @@ def main() -> int:
     parser.add_argument("--rounds", type=int, default=3, help="best of this many timings")
     parser.add_argument("--check-spp", type=int, default=1024)
     parser.add_argument("--check-res", type=int, nargs=2, default=(120, 90), metavar=("W", "H"))
+    parser.add_argument("--spectral", action="store_true", help="Mitsuba's spectral variants instead of RGB")
     parser.add_argument("--json", type=Path, help="also write the figures here")
     args = parser.parse_args()
     in_venv(["numpy", "mitsuba"], install_lenspath=True)
-    variants = ["scalar_rgb"]
+    colour = "spectral" if args.spectral else "rgb"
+    variants = [f"scalar_{colour}"]
     if "DRJIT_LIBLLVM_PATH" not in os.environ and (libllvm := newest_libllvm()):
         os.environ["DRJIT_LIBLLVM_PATH"] = libllvm
-    if variant_runs("llvm_ad_rgb"):
-        variants.append("llvm_ad_rgb")
+    if variant_runs(f"llvm_ad_{colour}"):
+        variants.append(f"llvm_ad_{colour}")
     else:
-        print("llvm_ad_rgb does not run here (it needs libLLVM 16 or newer); scalar_rgb only", file=sys.stderr)
+        print(
+            f"llvm_ad_{colour} does not run here (it needs libLLVM 16 or newer); scalar_{colour} only",
+            file=sys.stderr,
+        )
     extra = [(*dragon(), SPHERE_WHITE)] if args.scene == "cornell-dragon" else []
     job = Job(args.scene, extra, *args.res, args.spp, args.max_depth)
     print(

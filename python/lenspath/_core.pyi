@@ -16,6 +16,7 @@ import numpy.typing as npt
 
 __version__: str
 __all__ = [
+    "Emission",
     "LenspathError",
     "SceneError",
     "LensError",
@@ -231,10 +232,14 @@ class Lens:
     def stopped_down(self, f_number: float) -> Lens:
         """This lens with its stop closed to paraxial f-number ``f_number``."""
     def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
-        """Pickles as its name, table and stop."""
+        """Pickles as its name, table text (glass column included) and stop."""
     @staticmethod
-    def _from_state(name: str, table: npt.ArrayLike, stopped_to: float | None) -> Lens:
+    def _from_state(name: str, table_text: str, stopped_to: float | None) -> Lens:
         """The lens ``__reduce__`` describes."""
+    @property
+    def table_text(self) -> str:
+        """The prescription as table text (radius, thickness to the next surface, index,
+        aperture, and the glass column where the lens has one; mm), as ``Lens.load`` reads."""
     @property
     def name(self) -> str:
         """The built-in name or the table file's."""

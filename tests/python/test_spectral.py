@@ -149,3 +149,18 @@ def test_lens_colour_figures_from_python_match_the_cli(cli) -> None:
     _, red, _ = lens.trace(origin, direction, wavelength_nm=650.0)
     assert not np.allclose(blue, red, rtol=0, atol=1e-9)
     assert "<svg" in lens.focal_shift_plot()
+
+
+def test_a_dispersive_lens_keeps_its_glasses_through_pickle_and_its_table_text(tmp_path) -> None:
+    """dgauss50's glass column survives pickling (what ``lenspath.distributed`` sends to
+    workers) and ``table_text`` (a file ``Lens.load`` reads back)."""
+    import pickle
+
+    lens = lenspath.Lens.builtin("dgauss50").stopped_down(4.0)
+    copy = pickle.loads(pickle.dumps(lens))
+    assert copy.chromatic() == lens.chromatic() and copy.f_number == lens.f_number
+    assert lens.chromatic()["longitudinal_color_mm"] < -0.05
+    assert "47.1" in lens.table_text.splitlines()[0]
+    path = tmp_path / "dgauss50.dat"
+    path.write_text(lens.table_text)
+    assert lenspath.Lens.load(path).chromatic() == lenspath.Lens.builtin("dgauss50").chromatic()

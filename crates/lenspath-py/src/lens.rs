@@ -120,26 +120,31 @@ impl Lens {
         })
     }
 
-    /// Pickles as its name, table and stop (`Lens._from_state`).
+    /// Pickles as its name, table text (glass column included) and stop (`Lens._from_state`).
     pub(crate) fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
         Ok((
             py.get_type::<Lens>().getattr("_from_state")?,
-            (self.name().to_string(), self.table(py), self.stopped_to).into_pyobject(py)?,
+            (self.name().to_string(), self.table_text(), self.stopped_to).into_pyobject(py)?,
         ))
     }
 
     /// The lens `__reduce__` describes.
     #[staticmethod]
-    pub(crate) fn _from_state(
-        name: &str,
-        table: PyArrayLike2<'_, f64, AllowTypeChange>,
-        stopped_to: Option<f64>,
-    ) -> PyResult<Lens> {
-        let lens = Lens::from_table(table, name)?;
+    pub(crate) fn _from_state(name: &str, table_text: &str, stopped_to: Option<f64>) -> PyResult<Lens> {
+        let prescription =
+            LensPrescription::parse(table_text, name, TableConvention::ThicknessToNext).map_err(to_py)?;
+        let lens = Lens::from_prescription(prescription)?;
         match stopped_to {
             Some(f_number) => lens.stopped_down(f_number),
             None => Ok(lens),
         }
+    }
+
+    /// The prescription as table text (pbrt / CS184 columns, thickness to the
+    /// next surface, and the glass column where the lens has one).
+    #[getter]
+    pub(crate) fn table_text(&self) -> String {
+        self.prescription.table_text()
     }
 
     #[getter]

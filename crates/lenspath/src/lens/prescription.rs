@@ -69,6 +69,9 @@ pub struct LensPrescription {
     pub(crate) name: String,
     /// Surfaces from the scene side to the sensor side.
     pub(crate) surfaces: Vec<LensSurface>,
+    /// Each surface's index column and glass column as the table gave them
+    /// (what [`LensPrescription::table_text`] writes back).
+    pub(crate) columns: Vec<(f64, Option<String>)>,
 }
 
 /// Built-in lenses: name, table (the published prescriptions scaled as pbrt ships them).
@@ -157,6 +160,7 @@ impl LensPrescription {
         }
 
         let mut surfaces = Vec::with_capacity(rows.len());
+        let columns = rows.iter().map(|r| (r.1[2], r.2.map(str::to_string))).collect();
         let mut stop_line: Option<usize> = None;
         for &(line, [radius_mm, thickness_mm, ior, aperture_diameter_mm], glass_column) in &rows {
             if aperture_diameter_mm <= 0.0 {
@@ -236,7 +240,27 @@ impl LensPrescription {
         Ok(LensPrescription {
             name: source.to_string(),
             surfaces,
+            columns,
         })
+    }
+
+    /// The table in the pbrt / CS184 convention (thickness to the next
+    /// surface), one row per surface with the glass column where one was
+    /// given: [`LensPrescription::parse`] with
+    /// [`TableConvention::ThicknessToNext`] reads it back to this lens, bit
+    /// for bit (numbers are written in their shortest exact form).
+    pub fn table_text(&self) -> String {
+        self.surfaces
+            .iter()
+            .zip(&self.columns)
+            .map(|(s, (index, glass))| {
+                let glass = glass.as_deref().map_or(String::new(), |g| format!(" {g}"));
+                format!(
+                    "{} {} {} {}{glass}\n",
+                    s.radius_mm, s.thickness_mm, index, s.aperture_diameter_mm
+                )
+            })
+            .collect()
     }
 
     /// The same lens with every length multiplied by `factor`.
@@ -253,6 +277,7 @@ impl LensPrescription {
                     aperture_diameter_mm: s.aperture_diameter_mm * factor,
                 })
                 .collect(),
+            columns: self.columns.clone(),
         }
     }
 
@@ -409,5 +434,27 @@ mod tests {
     fn unknown_lens_name_lists_the_builtins() {
         let err = LensPrescription::load("no-such-lens").unwrap_err().to_string();
         assert!(err.contains("dgauss50") && err.contains("fisheye10"), "{err}");
+    }
+
+    /// A table written back by `table_text` reads as the same lens, glass
+    /// columns, older conventions and built-ins included.
+    #[test]
+    fn table_text_reads_back_to_the_same_lens() {
+        let older = "# r axpos n ap\n20 0 1.5 10\n-20 3 1 10\n0 2 0 6\n";
+        let tables = [
+            LensPrescription::load("dgauss50").unwrap(),
+            LensPrescription::parse(older, "older", TableConvention::Auto).unwrap(),
+            LensPrescription::parse(
+                "61.07 4 1.5168 25 N-BK7\n-44.17 2.5 1.6727 25 schott:SF5\n-128.89 1 1 25\n0 5 0 20\n",
+                "achromat",
+                TableConvention::ThicknessToNext,
+            )
+            .unwrap(),
+        ];
+        for lens in tables {
+            let text = lens.table_text();
+            let again = LensPrescription::parse(&text, lens.name(), TableConvention::ThicknessToNext).unwrap();
+            assert_eq!(again, lens, "{text}");
+        }
     }
 }

@@ -899,6 +899,7 @@ mod tests {
         for surfaces in lenses {
             let lens = LensSystem::new(&LensPrescription {
                 name: "extreme".into(),
+                columns: surfaces.iter().map(|s| (s.ior_d(), None)).collect(),
                 surfaces,
             });
             let _ = crate::lens::LensAnalysis::new(&lens, &crate::lens::AnalysisSettings::default());
