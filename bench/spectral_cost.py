@@ -68,7 +68,9 @@ def compare(commands: dict[str, list[str]], res: str, reference_spp: int, out: p
 def plain_dgauss50(out: pathlib.Path) -> str:
     """dgauss50's table without its fifth (glass) column."""
     table = (REPOSITORY / "crates/lenspath/lenses/dgauss50.dat").read_text()
-    rows = [" ".join(line.split()[:4]) if line.strip() and not line.startswith("#") else line for line in table.splitlines()]
+    rows = [
+        " ".join(line.split()[:4]) if line.strip() and not line.startswith("#") else line for line in table.splitlines()
+    ]
     path = out / "dgauss50-plain.dat"
     path.write_text("\n".join(rows) + "\n")
     return str(path)

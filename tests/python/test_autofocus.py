@@ -42,9 +42,7 @@ def test_the_focused_camera_renders_the_patch_sharper_than_either_side_of_it() -
     # depth strategy's contrast refinement needs more of them than the default 16 to stay
     # within a depth of focus of the contrast peak (see docs/autofocus.md).
     camera = lenspath.Camera.realistic("dgauss50")
-    result = lenspath.autofocus(
-        "cornell-spheres", NEAR_SPHERE, camera, strategy="depth", resolution=(320, 240), spp=64
-    )
+    result = lenspath.autofocus("cornell-spheres", NEAR_SPHERE, camera, strategy="depth", resolution=(320, 240), spp=64)
     assert result.focus_distance is not None
     assert "sensor_depth_mm" in repr(result)
     patch = (166, 168, 32, 29)  # the patch in pixels at 320 x 240
