@@ -17,6 +17,7 @@ use lenspath::render::{render, RenderSettings};
 use lenspath::sampling::SamplerKind;
 use lenspath::scene::Scene;
 use lenspath::shapes::{Sphere, TriangleMesh};
+use lenspath::spectrum::{Emission, Spectrum};
 
 fn settings(width: u32, height: u32, spp: u32, seed: u32) -> RenderSettings {
     RenderSettings {
@@ -54,6 +55,35 @@ fn mean_and_error(values: &[f32]) -> (f64, f64) {
 /// Energy-conserving surfaces must vanish: every pixel converges to 1. This
 /// checks light sampling of the environment, MIS, the BSDFs and the
 /// dielectric's refraction and internal reflection together.
+/// A unit sphere of `material` at the origin under a uniform `sky`, seen
+/// by a 24 × 24 pinhole from 4 units away (the sphere fills the middle of
+/// the frame, the sky shows in the corners).
+fn sphere_in_sky(material: Material, sky: Emission, settings: &RenderSettings) -> Image {
+    let scene = Scene {
+        spheres: vec![Sphere {
+            center: Vec3::ZERO,
+            radius: 1.0,
+            material: 0,
+            emission: None,
+        }],
+        materials: vec![material],
+        lights: vec![Light::Environment { radiance: sky }],
+        ..Default::default()
+    };
+    let pose = CameraPose::look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y);
+    render_scene(scene, &PerspectiveCamera::pinhole(pose, 25.0, 24, 24), settings)
+}
+
+/// Mean and standard error of `channel` over the pixels `rows` × `rows`.
+fn block_mean_and_error(image: &Image, channel: usize, rows: std::ops::Range<u32>) -> (f64, f64) {
+    let values: Vec<f32> = rows
+        .clone()
+        .flat_map(|y| rows.clone().map(move |x| (x, y)))
+        .map(|(x, y)| image.pixel(x, y)[channel])
+        .collect();
+    mean_and_error(&values)
+}
+
 #[test]
 fn white_furnace_sphere_disappears() {
     let materials = [
@@ -62,31 +92,11 @@ fn white_furnace_sphere_disappears() {
         Material::clear_dielectric(1.5),
     ];
     for material in materials {
-        let scene = Scene {
-            spheres: vec![Sphere {
-                center: Vec3::ZERO,
-                radius: 1.0,
-                material: 0,
-                emission: None,
-            }],
-            materials: vec![material],
-            lights: vec![Light::Environment {
-                radiance: Rgb::ONE.into(),
-            }],
-            ..Default::default()
-        };
-        let pose = CameraPose::look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y);
-        // The sphere fills the middle of the frame.
-        let camera = PerspectiveCamera::pinhole(pose, 25.0, 24, 24);
-        let image = render_scene(scene, &camera, &settings(24, 24, 128, 1));
+        let image = sphere_in_sky(material, Rgb::ONE.into(), &settings(24, 24, 128, 1));
         // Every channel: the environment is RGB white, D65 once upsampled,
         // and a white surface reflects all of it at every wavelength.
         for channel in 0..3 {
-            let centre: Vec<f32> = (8..16)
-                .flat_map(|y| (8..16).map(move |x| (x, y)))
-                .map(|(x, y)| image.pixel(x, y)[channel])
-                .collect();
-            let (mean, err) = mean_and_error(&centre);
+            let (mean, err) = block_mean_and_error(&image, channel, 8..16);
             assert!(
                 (mean - 1.0).abs() < 4.0 * err + 2e-3,
                 "{material:?}: furnace mean {mean} ± {err} in channel {channel}, expected 1"
@@ -101,33 +111,16 @@ fn white_furnace_sphere_disappears() {
 /// green, reads that spectrum's sRGB (its CIE integral), within 1%.
 #[test]
 fn spectral_skies_render_in_their_colour() {
-    use lenspath::spectrum::Emission;
     let skies = [
         Emission::blackbody(2700.0, 1.0).unwrap(),
         Emission::tabulated(&[(480.0, 0.0), (530.0, 1.0), (580.0, 0.0)], 0.5).unwrap(),
     ];
     for sky in skies {
         let expected = sky.to_rgb();
-        let scene = Scene {
-            spheres: vec![Sphere {
-                center: Vec3::ZERO,
-                radius: 1.0,
-                material: 0,
-                emission: None,
-            }],
-            materials: vec![Material::Diffuse { reflectance: Rgb::ONE }],
-            lights: vec![Light::Environment { radiance: sky.clone() }],
-            ..Default::default()
-        };
-        let pose = CameraPose::look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y);
-        let camera = PerspectiveCamera::pinhole(pose, 25.0, 24, 24);
-        let image = render_scene(scene, &camera, &settings(24, 24, 256, 1));
+        let white = Material::Diffuse { reflectance: Rgb::ONE };
+        let image = sphere_in_sky(white, sky.clone(), &settings(24, 24, 256, 1));
         for channel in 0..3 {
-            let centre: Vec<f32> = (8..16)
-                .flat_map(|y| (8..16).map(move |x| (x, y)))
-                .map(|(x, y)| image.pixel(x, y)[channel])
-                .collect();
-            let (mean, err) = mean_and_error(&centre);
+            let (mean, err) = block_mean_and_error(&image, channel, 8..16);
             let want = f64::from(expected[channel]);
             assert!(
                 (mean - want).abs() < 4.0 * err + 0.01 * want.abs().max(0.05),
@@ -142,25 +135,11 @@ fn spectral_skies_render_in_their_colour() {
 /// ρ(λ) L(λ) in every channel, ρ and L the upsampled spectra of their RGB.
 #[test]
 fn a_monochromatic_furnace_reads_the_spectra_at_its_wavelength() {
-    use lenspath::spectrum::Spectrum;
     let (albedo, sky) = (Rgb::new(0.9, 0.4, 0.2), Rgb::new(0.3, 0.6, 1.2));
     for wavelength_nm in [420.0f32, 550.0, 700.0] {
-        let scene = Scene {
-            spheres: vec![Sphere {
-                center: Vec3::ZERO,
-                radius: 1.0,
-                material: 0,
-                emission: None,
-            }],
-            materials: vec![Material::Diffuse { reflectance: albedo }],
-            lights: vec![Light::Environment { radiance: sky.into() }],
-            ..Default::default()
-        };
-        let pose = CameraPose::look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y);
-        let camera = PerspectiveCamera::pinhole(pose, 25.0, 24, 24);
-        let image = render_scene(
-            scene,
-            &camera,
+        let image = sphere_in_sky(
+            Material::Diffuse { reflectance: albedo },
+            sky.into(),
             &RenderSettings {
                 wavelength_nm: Some(wavelength_nm),
                 ..settings(24, 24, 64, 1)
@@ -170,11 +149,7 @@ fn a_monochromatic_furnace_reads_the_spectra_at_its_wavelength() {
         // all of it once: one bounce, ρ L; the sky around it reads L.
         let l = Spectrum::illuminant(sky).at(wavelength_nm);
         let expected = Spectrum::reflectance(albedo).at(wavelength_nm) * l;
-        let centre: Vec<f32> = (10..14)
-            .flat_map(|y| (10..14).map(move |x| (x, y)))
-            .map(|(x, y)| image.pixel(x, y)[1])
-            .collect();
-        let (mean, err) = mean_and_error(&centre);
+        let (mean, err) = block_mean_and_error(&image, 1, 10..14);
         assert!(
             (mean - f64::from(expected)).abs() < 4.0 * err + 1e-3 * f64::from(expected),
             "{wavelength_nm} nm: sphere {mean} ± {err}, expected {expected}"
