@@ -340,12 +340,15 @@ class Camera:
         sensor_width_mm: float | None = None,
         aperture: str | npt.ArrayLike | None = None,
         scene_unit_m: float | None = None,
+        dispersion: bool | None = None,
     ) -> Camera:
         """A real lens (default: the scene file's, else dgauss50) focused at ``focus_distance``
         (scene units from the sensor) or with the sensor ``sensor_depth_mm`` behind the stop
         (not both; ``sensor_mm`` is its deprecated old name), stopped down to ``f_number``, a
         ``sensor_width_mm`` wide sensor (default 36; its height follows the image), an
-        ``aperture`` shape, ``scene_unit_m`` metres per unit."""
+        ``aperture`` shape, ``scene_unit_m`` metres per unit; ``dispersion=False`` gives every
+        glass its d-line index (no colour, less colour noise; default: the scene file's, else
+        glasses disperse)."""
 
 @overload
 def render(

@@ -204,6 +204,10 @@ pub struct LensFlags {
     /// Realistic camera: exposure normalisation.
     #[arg(long, value_enum)]
     pub radiometry: Option<RadiometryKind>,
+    /// Realistic camera: every glass at its d-line index, so the lens shows no colour and camera
+    /// rays keep all their wavelengths (less colour noise; default: glasses disperse).
+    #[arg(long)]
+    pub no_dispersion: bool,
 }
 
 impl LensFlags {
@@ -219,6 +223,7 @@ impl LensFlags {
                 RadiometryKind::Normalized => Radiometry::Normalized,
                 RadiometryKind::Physical => Radiometry::Physical,
             }),
+            dispersion: self.no_dispersion.then_some(false),
             ..RealisticDescription::default()
         })
     }

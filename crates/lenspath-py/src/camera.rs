@@ -162,8 +162,9 @@ impl Camera {
                 r.sensor_width_mm,
                 r.f_number,
                 r.scene_unit_m,
+                r.dispersion,
             ),
-            _ => (None, None, None, None),
+            _ => (None, None, None, None, None),
         };
         Ok((
             py.get_type::<Camera>().getattr("_from_state")?,
@@ -184,11 +185,11 @@ impl Camera {
             Option<Bound<'_, PyAny>>,
             Option<Bound<'_, PyAny>>,
         ),
-        realistic: (Option<f64>, Option<f64>, Option<f64>, Option<f64>),
+        realistic: (Option<f64>, Option<f64>, Option<f64>, Option<f64>, Option<bool>),
     ) -> PyResult<Camera> {
         let (kind, fov_deg, aperture_radius, focus_distance, aperture, lens) = state;
         let (aperture, lens) = (aperture.filter(|a| !a.is_none()), lens.filter(|l| !l.is_none()));
-        let (sensor_depth_mm, sensor_width_mm, f_number, scene_unit_m) = realistic;
+        let (sensor_depth_mm, sensor_width_mm, f_number, scene_unit_m, dispersion) = realistic;
         match kind.as_str() {
             "pinhole" => Ok(Camera::pinhole(fov_deg)),
             "thin_lens" => Camera::thin_lens(
@@ -207,6 +208,7 @@ impl Camera {
                 sensor_width_mm,
                 aperture.as_ref(),
                 scene_unit_m,
+                dispersion,
             ),
         }
     }
@@ -246,10 +248,12 @@ impl Camera {
     /// else dgauss50), focused at `focus_distance` (scene units from the
     /// sensor) or with the sensor `sensor_depth_mm` behind the stop (formerly
     /// `sensor_mm`), stopped down to `f_number`, with a `sensor_width_mm` wide
-    /// sensor and an `aperture` shape.
+    /// sensor and an `aperture` shape; `dispersion=False` gives every glass
+    /// its d-line index (default: the scene file's, else glasses disperse).
     #[staticmethod]
     #[pyo3(signature = (lens = None, *, focus_distance = None, sensor_depth_mm = None, sensor_mm = None,
-                        f_number = None, sensor_width_mm = None, aperture = None, scene_unit_m = None))]
+                        f_number = None, sensor_width_mm = None, aperture = None, scene_unit_m = None,
+                        dispersion = None))]
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn realistic(
         py: Python<'_>,
@@ -261,6 +265,7 @@ impl Camera {
         sensor_width_mm: Option<f64>,
         aperture: Option<&Bound<'_, PyAny>>,
         scene_unit_m: Option<f64>,
+        dispersion: Option<bool>,
     ) -> PyResult<Camera> {
         let sensor_depth_mm = renamed(
             py,
@@ -284,6 +289,7 @@ impl Camera {
             aperture: parse_aperture(aperture)?,
             scene_unit_m,
             radiometry: None,
+            dispersion,
         })))
     }
 }

@@ -28,6 +28,10 @@ pub const TILE_SIZE: u32 = 16;
 pub const SCENE_UNIT_M: f64 = 1.0;
 /// The realistic camera's lens: a 50 mm f/2 Double-Gauss.
 pub const LENS: &str = "dgauss50";
+
+/// Whether a lens's glasses disperse (the realistic camera traces each ray
+/// at its own wavelength) unless the caller or the scene file says not.
+pub const LENS_DISPERSION: bool = true;
 /// The realistic camera's sensor width (a full-frame 35 mm sensor), mm; its
 /// height follows the image's aspect.
 pub const SENSOR_WIDTH_MM: f64 = 36.0;

@@ -42,4 +42,6 @@ pub struct LensOptions {
     pub sensor_depth_mm: Option<f64>,
     /// Shape of the aperture (`None`: the circle).
     pub aperture: Option<ApertureShape>,
+    /// Whether the lens's glasses disperse (`None`: they do).
+    pub dispersion: Option<bool>,
 }

@@ -112,6 +112,9 @@ pub struct RealisticDescription {
     pub radiometry: Option<Radiometry>,
     /// The aperture's shape (default: the scene file's, else the circle).
     pub aperture: Option<ApertureShape>,
+    /// Whether the lens's glasses disperse (default: the scene file's, else
+    /// [`defaults::LENS_DISPERSION`]).
+    pub dispersion: Option<bool>,
 }
 
 // ---------------------------------------------------------------------------
@@ -340,6 +343,7 @@ pub fn realistic_settings(
         scene_unit_m,
         radiometry: description.radiometry.unwrap_or(library.radiometry),
         aperture: description.aperture.clone().unwrap_or_else(|| file_aperture(options)),
+        dispersion: description.dispersion.or(file.dispersion).unwrap_or(library.dispersion),
         ..library
     })
 }
@@ -505,6 +509,33 @@ mod tests {
             camera.sensor_mm,
             (defaults::SENSOR_WIDTH_MM, defaults::SENSOR_WIDTH_MM * 30.0 / 40.0)
         );
+        assert_eq!(camera.dispersion, defaults::LENS_DISPERSION);
+
+        // The lens's dispersion: the caller's, else the file's, else on.
+        let dispersion = |file_says: Option<bool>, caller_says: Option<bool>| {
+            let file = SceneOptions {
+                lens: Some(LensOptions {
+                    dispersion: file_says,
+                    ..LensOptions::default()
+                }),
+                ..SceneOptions::default()
+            };
+            let asked = RenderOverrides {
+                camera: CameraDescription::Realistic(RealisticDescription {
+                    dispersion: caller_says,
+                    ..RealisticDescription::default()
+                }),
+                ..RenderOverrides::default()
+            };
+            match resolve(&file, &view, &asked).unwrap().camera {
+                CameraSettings::Realistic(camera) => camera.dispersion,
+                _ => unreachable!(),
+            }
+        };
+        assert!(dispersion(None, None));
+        assert!(!dispersion(Some(false), None));
+        assert!(dispersion(Some(false), Some(true)));
+        assert!(!dispersion(None, Some(false)));
 
         // Nothing asked, nothing in the file: the defaults.
         let bare = resolve(&SceneOptions::default(), &view, &RenderOverrides::default()).unwrap();

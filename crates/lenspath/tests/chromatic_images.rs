@@ -57,6 +57,8 @@ struct Shot {
     pixels: u32,
     /// The rectangle of pixels rendered (`None`: all).
     crop: Option<PixelRect>,
+    /// Whether the lens's glasses disperse.
+    dispersion: bool,
 }
 
 /// The on-axis shots: the sensor crop ([`SENSOR_MM`], [`PIXELS`]) whole.
@@ -64,16 +66,20 @@ const AXIAL: Shot = Shot {
     sensor_mm: SENSOR_MM,
     pixels: PIXELS,
     crop: None,
+    dispersion: true,
 };
 
 /// The image at `wavelength_nm` with the sensor `sensor_z_mm` behind the stop.
 fn shoot(scene: &CompiledScene, lens: &LensPrescription, sensor_z_mm: f64, wavelength_nm: f64, shot: &Shot) -> Image {
     let pose = CameraPose::look_at(Vec3::ZERO, Vec3::Z, Vec3::Y);
-    let camera_settings = RealisticCameraSettings::new(
-        lens.clone(),
-        (shot.sensor_mm, shot.sensor_mm),
-        LensFocus::SensorPositionMm(sensor_z_mm),
-    );
+    let camera_settings = RealisticCameraSettings {
+        dispersion: shot.dispersion,
+        ..RealisticCameraSettings::new(
+            lens.clone(),
+            (shot.sensor_mm, shot.sensor_mm),
+            LensFocus::SensorPositionMm(sensor_z_mm),
+        )
+    };
     let camera = match shot.crop {
         None => RealisticCamera::new(pose, shot.pixels, shot.pixels, &camera_settings),
         Some(region) => RealisticCamera::for_region(pose, shot.pixels, shot.pixels, &camera_settings, region),
@@ -189,7 +195,8 @@ fn rendered_longitudinal_colour_matches_the_analysis() {
 
 /// A monochromatic render through a lens without dispersion has the same
 /// shape at any wavelength (only the source's brightness depends on it);
-/// through the dispersive singlet, the F and C spots differ in size.
+/// through the dispersive singlet, the F and C spots differ in size, unless
+/// the camera's dispersion is switched off.
 #[test]
 fn monochromatic_renders_depend_on_the_wavelength_through_the_glass() {
     let scene = distant_disc(0.0, 0.5);
@@ -204,7 +211,14 @@ fn monochromatic_renders_depend_on_the_wavelength_through_the_glass() {
     assert!(
         blue > 1.5 * red,
         "behind focus the F spot is the larger: {blue} vs {red} mm²"
-    );
+    ); // With dispersion off the same lens has every glass at its d-line index: no colour.
+    let off = Shot {
+        dispersion: false,
+        ..AXIAL
+    };
+    let size_off = |nm: f64| second_moment_mm2(&shoot(&scene, &dispersive, z, nm, &off));
+    let (blue, red) = (size_off(F_LINE_NM), size_off(C_LINE_NM));
+    assert!((blue / red - 1.0).abs() < 1e-4, "dispersion off: {blue} vs {red} mm²");
 }
 
 /// The singlet with its stop 20 mm in front: off the axis the chief ray
@@ -243,6 +257,7 @@ fn rendered_lateral_colour_matches_the_analysis() {
         sensor_mm,
         pixels,
         crop: Some(crop),
+        dispersion: true,
     };
     // Distance from the axis of each line's centroid, mm.
     let radius_mm = |nm: f64| {

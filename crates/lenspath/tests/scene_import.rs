@@ -395,6 +395,7 @@ fn settings_file_reads_back_exactly() {
         sensor_width_mm: 36.0 / 7.0,
         sensor_depth_mm: 51.234_567_890_123_45,
         aperture: ApertureShape::parse("blades:7:12.345678901:0.3").unwrap(),
+        dispersion: false,
         resolution: (123, 45),
         spp: 37,
         max_depth: 9,
@@ -433,6 +434,7 @@ fn settings_file_reads_back_exactly() {
         assert_eq!(camera.sensor_mm.0, written.sensor_width_mm);
         assert_eq!(camera.aperture, written.aperture);
         assert_eq!(camera.lens.name(), "wide22");
+        assert!(!camera.dispersion);
     }
     // A mask cannot be spelt; a file with both bases, or both focus keys, is an error.
     written.aperture = ApertureShape::mask(2, 2, vec![1.0; 4]).unwrap();

@@ -55,6 +55,8 @@ pub struct ViewSettings {
     pub focus: Focus,
     /// Aperture shape: circle, blades:N[:ROTATION_DEG[:CURVATURE]], star:N[:INNER_RATIO[:ROTATION_DEG]].
     pub aperture: String,
+    /// Whether the lens's glasses disperse (off: every glass at its d-line index).
+    pub dispersion: bool,
     /// Camera position, scene units.
     pub eye: [f32; 3],
     /// The point it looks at (what orbiting turns about).
@@ -122,6 +124,8 @@ pub struct View {
     pub focal_length_mm: f64,
     /// Wide-open f-number.
     pub wide_open_f_number: f64,
+    /// The lens's paraxial longitudinal colour, BFD(F) − BFD(C), mm (0 without a glass column).
+    pub longitudinal_color_mm: f64,
     /// The lens layout with the sensor where it is, as SVG.
     pub layout_svg: String,
 }
@@ -371,6 +375,7 @@ impl Session {
             sensor_width_mm: view.lens_settings.sensor_mm.0,
             sensor_depth_mm: view.sensor_depth_mm,
             aperture: view.lens_settings.aperture.clone(),
+            dispersion: view.lens_settings.dispersion,
             resolution: self.config.resolution,
             spp: frame.image.spp_min,
             max_depth: s.max_depth,
@@ -407,6 +412,8 @@ impl Session {
             "focus_range_mm": [v.focus_range_mm.0, v.focus_range_mm.1],
             "focal_length_mm": v.focal_length_mm,
             "wide_open_f_number": v.wide_open_f_number,
+            "longitudinal_color_mm": v.longitudinal_color_mm,
+            "lens_disperses": v.lens_settings.lens.is_dispersive(),
             "sensor_mm": [v.lens_settings.sensor_mm.0, v.lens_settings.sensor_mm.1],
         })
     }
@@ -561,7 +568,8 @@ impl Config {
         // The same optics (a move, or render settings): the camera moves, nothing is built again.
         if let Some(p) = previous.filter(|p| {
             let (a, b) = (&p.settings, &settings);
-            (&a.lens, a.f_number, a.focus, &a.aperture) == (&b.lens, b.f_number, b.focus, &b.aperture)
+            (&a.lens, a.f_number, a.focus, &a.aperture, a.dispersion)
+                == (&b.lens, b.f_number, b.focus, &b.aperture, b.dispersion)
                 && p.lens_settings.lens == lens
         }) {
             return Ok(View {
@@ -577,6 +585,7 @@ impl Config {
             f_number: settings.f_number,
             aperture: Some(aperture),
             focus: Some(focus),
+            dispersion: Some(settings.dispersion),
             ..RealisticDescription::default()
         };
         let mut lens_settings = realistic_settings(&self.options, &self.view, &description, width, height)?;
@@ -597,6 +606,7 @@ impl Config {
         let diagonal_mm = lens_settings.sensor_mm.0.hypot(lens_settings.sensor_mm.1);
         let layout = lenspath::lens::plot::layout_focused(system, &analysis, diagonal_mm, sensor_depth_mm);
         let wide_open = lenspath::lens::LensSystem::new(&lens_settings.lens).paraxial()?;
+        let colour = lenspath::lens::chromatic::ChromaticAnalysis::new(system, 0.5 * diagonal_mm)?;
         Ok(View {
             focus_distance_m: system
                 .focus_distance_mm(sensor_depth_mm, analysis.ray_height_mm)
@@ -604,6 +614,7 @@ impl Config {
             focus_range_mm: (analysis.infinity_focus_mm, analysis.close_focus_mm),
             focal_length_mm: analysis.effective_focal_length_mm,
             wide_open_f_number: wide_open.f_number,
+            longitudinal_color_mm: colour.longitudinal_color_mm,
             layout_svg: lenspath::lens::plot::layout_to_svg(&layout),
             settings,
             lens_settings,
@@ -653,6 +664,7 @@ fn initial_settings(options: &SceneOptions, view: &SceneView, resolution: (u32, 
         f_number: camera.f_number,
         focus,
         aperture: camera.aperture.spelling().unwrap_or_else(|| "circle".into()),
+        dispersion: camera.dispersion,
         eye: eye.to_array(),
         target: target.to_array(),
         up: Vec3::from(m.y_axis).to_array(),

@@ -118,6 +118,9 @@ struct CameraSpec {
     f_number: Option<f64>,
     sensor_mm: Option<[f64; 2]>,
     aperture: Option<String>,
+    /// Whether the lens's glasses disperse (default: they do).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    dispersion: Option<bool>,
 }
 
 fn y_up() -> [f32; 3] {
@@ -515,6 +518,7 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
             || cam.focus_distance.is_some()
             || sensor_depth_mm.is_some()
             || aperture.is_some()
+            || cam.dispersion.is_some()
         {
             options.lens = Some(LensOptions {
                 lens: cam.lens.clone(),
@@ -523,6 +527,7 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
                 focus_distance: cam.focus_distance.map(f64::from),
                 sensor_depth_mm,
                 aperture,
+                dispersion: cam.dispersion,
             });
         }
     }
@@ -576,6 +581,8 @@ pub struct SceneSettingsFile {
     pub sensor_depth_mm: f64,
     /// The aperture's shape (a mask cannot be written: it is an image).
     pub aperture: ApertureShape,
+    /// Whether the lens's glasses disperse (written only when they do not).
+    pub dispersion: bool,
     /// Image width and height in pixels.
     pub resolution: (u32, u32),
     /// Samples per pixel.
@@ -624,6 +631,7 @@ impl SceneSettingsFile {
                     self.sensor_width_mm * f64::from(self.resolution.1) / f64::from(self.resolution.0),
                 ]),
                 aperture: Some(aperture),
+                dispersion: (!self.dispersion).then_some(false),
             }),
             film: Some(FilmSpec {
                 width: self.resolution.0,

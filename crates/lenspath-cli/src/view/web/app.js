@@ -116,7 +116,12 @@ function showState(s) {
   fillSelect($("af-strategy"), s.strategies, $("af-strategy").value || "fast");
   $("lens-facts").textContent =
     `${s.focal_length_mm.toFixed(1)} mm, f/${s.wide_open_f_number.toFixed(2)} wide open, ` +
-    `sensor ${s.sensor_mm[0].toFixed(1)}×${s.sensor_mm[1].toFixed(1)} mm`;
+    `sensor ${s.sensor_mm[0].toFixed(1)}×${s.sensor_mm[1].toFixed(1)} mm` +
+    (s.lens_disperses
+      ? `; longitudinal colour ${(1000 * s.longitudinal_color_mm).toFixed(0)} µm (F − C)`
+      : "; no glass data: no colour");
+  $("dispersion").checked = settings.dispersion;
+  $("dispersion").disabled = !s.lens_disperses;
 
   const fstop = $("fstop");
   const steps = Math.max(0, Math.floor(2 * F_STOP_STEPS_PER_STOP * Math.log2(F_STOP_MAX / s.wide_open_f_number)));
@@ -413,6 +418,7 @@ function sendAperture() {
   change({ aperture: kind === "circle" ? "circle" : `${kind}:${$("aperture-count").value}` });
 }
 $("aperture-kind").addEventListener("change", sendAperture);
+$("dispersion").addEventListener("change", (e) => change({ dispersion: e.target.checked }));
 $("aperture-count").addEventListener("change", sendAperture);
 
 $("sensor-depth").addEventListener("input", (e) => {

@@ -160,7 +160,8 @@ impl RealisticCamera {
                 band(near(x).hypot(near(y)))..band(far(x).hypot(far(y))) + 1
             }
         };
-        let bounding = bounding_systems(&system);
+        let disperses = settings.dispersion && system.is_dispersive();
+        let bounding = bounding_systems(&system, disperses);
         let pupils = (0..PUPIL_BANDS)
             .into_par_iter()
             .map(|band| {
@@ -189,7 +190,7 @@ impl RealisticCamera {
                 .collect();
             (Arc::new(aperture), maps)
         });
-        let spectral = system.is_dispersive().then(|| {
+        let spectral = disperses.then(|| {
             let (first, last) = (LAMBDA_MIN_NM as u32, LAMBDA_MAX_NM as u32);
             (first..=last).map(|nm| system.at_wavelength(f64::from(nm))).collect()
         });
@@ -212,7 +213,12 @@ impl RealisticCamera {
         // with this lens as set, or wide open for physical exposure.
         let centre_irradiance = match (settings.radiometry, settings.f_number) {
             (Radiometry::Physical, Some(_)) => {
-                let pupil = bound_pupil(&bounding_systems(&wide_open), sensor_z_mm, 0.0, band_width_mm);
+                let pupil = bound_pupil(
+                    &bounding_systems(&wide_open, disperses),
+                    sensor_z_mm,
+                    0.0,
+                    band_width_mm,
+                );
                 RealisticCamera {
                     system: wide_open,
                     pupils: vec![pupil],

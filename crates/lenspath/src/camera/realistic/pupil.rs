@@ -89,10 +89,10 @@ impl PupilGrid {
 /// corner passes, which pads the union by a cell besides).
 pub(super) const PUPIL_BOUND_WAVELENGTHS_NM: [f64; 3] = [LAMBDA_MIN_NM as f64, D_LINE_NM as f64, LAMBDA_MAX_NM as f64];
 
-/// The lens at each wavelength its pupil is bounded at: the lens itself when
-/// nothing disperses, else at [`PUPIL_BOUND_WAVELENGTHS_NM`].
-pub(super) fn bounding_systems(system: &LensSystem) -> Vec<LensSystem> {
-    if system.is_dispersive() {
+/// The lens at each wavelength its pupil is bounded at: at
+/// [`PUPIL_BOUND_WAVELENGTHS_NM`] when it `disperses`, else the lens itself.
+pub(super) fn bounding_systems(system: &LensSystem, disperses: bool) -> Vec<LensSystem> {
+    if disperses {
         PUPIL_BOUND_WAVELENGTHS_NM
             .iter()
             .map(|&nm| system.at_wavelength(nm))

@@ -41,6 +41,11 @@ pub struct RealisticCameraSettings {
     pub radiometry: Radiometry,
     /// Shape of the opening at the aperture stop.
     pub aperture: ApertureShape,
+    /// Whether glasses that disperse do (default): each ray is traced at its
+    /// own wavelength and keeps only it. Off, every glass has its d-line
+    /// index: the lens shows no colour, and a camera ray keeps all the
+    /// wavelengths its sample carries (much less colour noise).
+    pub dispersion: bool,
 }
 
 impl RealisticCameraSettings {
@@ -55,6 +60,7 @@ impl RealisticCameraSettings {
             scene_unit_m: defaults::SCENE_UNIT_M,
             radiometry: Radiometry::Normalized,
             aperture: ApertureShape::Circle,
+            dispersion: defaults::LENS_DISPERSION,
         }
     }
 }
