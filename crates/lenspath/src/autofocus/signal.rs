@@ -39,13 +39,11 @@ impl Detail {
     /// not (wavelengths are drawn about as the eye's sensitivity goes).
     pub(super) fn band_pass(self, rgb: &[f32], width: usize) -> Vec<f32> {
         let (narrow_sigma, wide_sigma) = self.band_pass_sigmas_px();
-        let grey: Vec<f32> = rgb
-            .chunks_exact(3)
-            .flat_map(|c| [luminance([c[0], c[1], c[2]]); 3])
-            .collect();
+        let grey: Vec<f32> = rgb.chunks_exact(3).map(|c| luminance([c[0], c[1], c[2]])).collect();
         let narrow = gaussian_blur(&grey, width, narrow_sigma);
         let wide = gaussian_blur(&grey, width, wide_sigma);
-        narrow.iter().zip(&wide).map(|(n, w)| n - w).collect()
+        // The focus measures take three channels: each is the luminance's.
+        narrow.iter().zip(&wide).flat_map(|(n, w)| [n - w; 3]).collect()
     }
 }
 
@@ -56,10 +54,10 @@ pub(super) fn stream_seed(seed: u32, stream: usize) -> u32 {
     seed.wrapping_add(0x9E37_79B9u32.wrapping_mul(stream as u32))
 }
 
-/// `rgb` (`width` pixels wide, three floats each) blurred by a separable
+/// `grey` (`width` pixels wide, one float each) blurred by a separable
 /// Gaussian of standard deviation `sigma` pixels, renormalised at the borders.
-pub(super) fn gaussian_blur(rgb: &[f32], width: usize, sigma: f64) -> Vec<f32> {
-    let height = rgb.len() / (3 * width.max(1));
+pub(super) fn gaussian_blur(grey: &[f32], width: usize, sigma: f64) -> Vec<f32> {
+    let height = grey.len() / width.max(1);
     let radius = (3.0 * sigma).ceil() as isize;
     let weights: Vec<f64> = (-radius..=radius)
         .map(|k| (-((k * k) as f64) / (2.0 * sigma * sigma)).exp())
@@ -68,30 +66,25 @@ pub(super) fn gaussian_blur(rgb: &[f32], width: usize, sigma: f64) -> Vec<f32> {
     // valid taps of a pixel are a contiguous range, summed in order.
     let pass = |src: &[f32], horizontal: bool| -> Vec<f32> {
         let mut out = vec![0.0f32; src.len()];
-        let (along, stride) = if horizontal { (width, 3) } else { (height, 3 * width) };
+        let (along, stride) = if horizontal { (width, 1) } else { (height, width) };
         for y in 0..height {
             for x in 0..width {
                 let at = if horizontal { x } else { y } as isize;
                 let first = (-radius).max(-at);
                 let last = radius.min(along as isize - 1 - at);
-                let pixel = 3 * (y * width + x);
-                let (mut sum, mut total) = ([0.0f64; 3], 0.0f64);
+                let pixel = y * width + x;
+                let (mut sum, mut total) = (0.0f64, 0.0f64);
                 for k in first..=last {
                     let w = weights[(k + radius) as usize];
-                    let src_pixel = (pixel as isize + k * stride as isize) as usize;
-                    for (c, s) in sum.iter_mut().enumerate() {
-                        *s += w * f64::from(src[src_pixel + c]);
-                    }
+                    sum += w * f64::from(src[(pixel as isize + k * stride as isize) as usize]);
                     total += w;
                 }
-                for (c, s) in sum.iter().enumerate() {
-                    out[pixel + c] = (s / total) as f32;
-                }
+                out[pixel] = (sum / total) as f32;
             }
         }
         out
     };
-    pass(&pass(rgb, true), false)
+    pass(&pass(grey, true), false)
 }
 
 /// The index of the highest-scoring `(z, score)` point (the last of equal
