@@ -313,10 +313,13 @@ impl Spectrum {
             )));
         }
         let planck_luminance = cie::tables().spectrum_to_xyz(|l| planck(l, temperature_k)).y;
-        Ok(Spectrum::Blackbody {
-            temperature_k,
-            scale: luminance / planck_luminance,
-        })
+        let scale = luminance / planck_luminance;
+        if !scale.is_finite() {
+            return Err(Error::InvalidArgument(format!(
+                "a black body at {temperature_k} K gives no visible light; give a temperature of 500 K or more"
+            )));
+        }
+        Ok(Spectrum::Blackbody { temperature_k, scale })
     }
 
     /// The spectrum's values at `lambda`.
@@ -383,13 +386,7 @@ impl From<Rgb> for Emission {
 impl Emission {
     /// A black body at `temperature_k` with luminance `luminance`.
     pub fn blackbody(temperature_k: f32, luminance: f32) -> Result<Self> {
-        let spectrum = Spectrum::blackbody(temperature_k, luminance)?;
-        match spectrum {
-            Spectrum::Blackbody { scale, .. } if !scale.is_finite() => Err(Error::InvalidArgument(format!(
-                "a black body at {temperature_k} K gives no visible light; give a temperature of 500 K or more"
-            ))),
-            _ => Ok(Emission::Spectral(spectrum)),
-        }
+        Spectrum::blackbody(temperature_k, luminance).map(Emission::Spectral)
     }
 
     /// A spectrum given at wavelengths (`(wavelength_nm, value)` pairs,
@@ -401,6 +398,7 @@ impl Emission {
                 "a spectrum's luminance must be 0 or more, got {luminance}"
             )));
         }
+        // Checked as given, so a refusal names the caller's pairs.
         Tabulated::new(pairs)?;
         // Zero beyond the ends: a step of a thousandth of a nanometre down to 0.
         let (first, last) = (pairs[0].0, pairs[pairs.len() - 1].0);
@@ -408,8 +406,7 @@ impl Emission {
             .chain(pairs.iter().copied())
             .chain(std::iter::once((last + 1e-3, 0.0)))
             .collect();
-        let pairs = &padded[..];
-        let table = Tabulated::new(pairs)?;
+        let mut table = Tabulated::new(&padded)?;
         let y = cie::tables().spectrum_to_xyz(|l| table.at(l)).y;
         if y.is_nan() || y <= 0.0 {
             return Err(Error::InvalidArgument(
@@ -418,10 +415,8 @@ impl Emission {
             ));
         }
         let scale = luminance / y;
-        let scaled: Vec<(f32, f32)> = pairs.iter().map(|&(l, v)| (l, v * scale)).collect();
-        Ok(Emission::Spectral(Spectrum::Tabulated(Arc::new(Tabulated::new(
-            &scaled,
-        )?))))
+        table.values.iter_mut().for_each(|v| *v *= scale);
+        Ok(Emission::Spectral(Spectrum::Tabulated(Arc::new(table))))
     }
 
     /// The spectrum emitted.
@@ -553,6 +548,7 @@ mod tests {
         let warm = Spectrum::blackbody(2700.0, 2.0).unwrap().to_rgb();
         assert!(warm.x > 1.4 * warm.z, "{warm}");
         assert!(Spectrum::blackbody(-3.0, 1.0).is_err());
+        assert!(Spectrum::blackbody(100.0, 1.0).is_err());
     }
 
     /// Emission spectra: a black body and a table take the luminance asked
