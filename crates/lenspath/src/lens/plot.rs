@@ -12,15 +12,19 @@ use super::chromatic::focal_shift;
 use super::system::{Direction, LensRay, LensSystem};
 use super::LensAnalysis;
 use crate::error::Result;
-use crate::glass::{C_LINE_NM, D_LINE_NM, FRAUNHOFER_LINES, F_LINE_NM};
+use crate::glass::{C_LINE_NM, D_LINE_NM, F_LINE_NM};
 
 /// Field angles drawn, as fractions of the half diagonal field.
 const FIELD_FRACTIONS: [f64; 3] = [0.0, 0.7, 1.0];
 /// Each field's colour, for a lens that does not disperse.
 const FAN_COLOURS: [&str; 3] = ["#1f77b4", "#2ca02c", "#d62728"];
-/// The lines a dispersive lens's fans are traced at, with their colours
-/// (blue F, green d, red C: the optical-design convention).
-const LINE_COLOURS: [(f64, &str); 3] = [(F_LINE_NM, "#1f4fd8"), (D_LINE_NM, "#2a9d3a"), (C_LINE_NM, "#d62728")];
+/// The lines a dispersive lens's fans are traced at: name, wavelength (nm)
+/// and colour (blue F, green d, red C: the optical-design convention).
+const LINE_COLOURS: [(&str, f64, &str); 3] = [
+    ("F", F_LINE_NM, "#1f4fd8"),
+    ("d", D_LINE_NM, "#2a9d3a"),
+    ("C", C_LINE_NM, "#d62728"),
+];
 const RAYS_PER_FAN: usize = 7;
 
 /// One drawn ray of a fan.
@@ -102,19 +106,14 @@ pub fn layout_focused(system: &LensSystem, analysis: &LensAnalysis, sensor_diago
     let outer = system.stop_radius() + 0.25 * largest_aperture;
     let blade = |sign: f64| vec![(0.0, sign * system.stop_radius()), (0.0, sign * outer)];
     let max_field = (0.5 * analysis.diagonal_fov_deg).to_radians();
-    let wavelengths: Vec<f64> = if system.is_dispersive() {
-        LINE_COLOURS.iter().map(|&(nm, _)| nm).collect()
+    // Each wavelength with its colour (`None`: colour the fans by field).
+    let lines: Vec<(f64, Option<&'static str>)> = if system.is_dispersive() {
+        LINE_COLOURS.iter().map(|&(_, nm, colour)| (nm, Some(colour))).collect()
     } else {
-        vec![system.wavelength_nm()]
-    };
-    let colour = |field_index: usize, wavelength_nm: f64| {
-        LINE_COLOURS
-            .iter()
-            .find(|(nm, _)| system.is_dispersive() && *nm == wavelength_nm)
-            .map_or(FAN_COLOURS[field_index], |(_, c)| c)
+        vec![(system.wavelength_nm(), None)]
     };
     let mut rays = Vec::new();
-    for &wavelength_nm in &wavelengths {
+    for &(wavelength_nm, line_colour) in &lines {
         let at_line = system.at_wavelength(wavelength_nm);
         for (field_index, &field_fraction) in FIELD_FRACTIONS.iter().enumerate() {
             rays.extend(
@@ -124,7 +123,7 @@ pub fn layout_focused(system: &LensSystem, analysis: &LensAnalysis, sensor_diago
                         field_fraction,
                         wavelength_nm,
                         path: path.iter().map(|p| (p.z, p.x)).collect(),
-                        colour: colour(field_index, wavelength_nm),
+                        colour: line_colour.unwrap_or(FAN_COLOURS[field_index]),
                     }),
             );
         }
@@ -334,8 +333,7 @@ pub fn focal_shift_svg(system: &LensSystem) -> Result<String> {
         r#"<text transform="translate(20 {}) rotate(-90)" text-anchor="middle">wavelength (nm)</text>"#,
         height / 2.0
     );
-    for (nm, colour) in LINE_COLOURS {
-        let name = FRAUNHOFER_LINES.iter().find(|l| l.1 == nm).map_or("", |l| l.0);
+    for (name, nm, colour) in LINE_COLOURS {
         let _ = writeln!(
             svg,
             r#"<line x1="{0:.1}" y1="{1:.1}" x2="{2:.1}" y2="{1:.1}" stroke="{colour}" stroke-dasharray="4 3"/><text x="{3:.1}" y="{4:.1}" fill="{colour}">{name}</text>"#,
