@@ -373,14 +373,14 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
 
     for (i, spec) in file.shapes.iter().enumerate() {
         let what = format!("shapes[{i}]");
+        let emission = spec.emission().map_err(|e| fail(format!("{what}: emission: {e}")))?;
         match spec {
             ShapeSpec::Sphere {
                 center,
                 radius,
                 material,
-                emission,
+                ..
             } => {
-                let emission = shape_emission(emission).map_err(|e| fail(format!("{what}: emission: {e}")))?;
                 let material = material_id(&mut scene, &what, material, &emission)?;
                 scene.spheres.push(Sphere {
                     center: Vec3::from_array(*center),
@@ -394,9 +394,8 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
                 edge_u,
                 edge_v,
                 material,
-                emission,
+                ..
             } => {
-                let emission = shape_emission(emission).map_err(|e| fail(format!("{what}: emission: {e}")))?;
                 let material = material_id(&mut scene, &what, material, &emission)?;
                 let (p, u, v) = (
                     Vec3::from_array(*corner),
@@ -417,8 +416,8 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
             ShapeSpec::Mesh {
                 file: mesh_file,
                 material,
-                emission,
                 transform,
+                ..
             } => {
                 let m = matrix(transform).map_err(|e| fail(format!("{what}: {e}")))?;
                 let sub = load(mesh_file).map_err(|e| fail(format!("{what}: {e}")))?;
@@ -428,7 +427,6 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
                         warnings.add_n(format!("{}: {w}", mesh_file.display()), n);
                     }
                 }
-                let emission = shape_emission(emission).map_err(|e| fail(format!("{what}: emission: {e}")))?;
                 let forced = match material {
                     Some(_) => Some(material_id(&mut scene, &what, material, &emission)?),
                     None if emission.is_some() => Some(intern_material(&mut scene, EMITTER_MATERIAL)),
@@ -693,9 +691,13 @@ fn material(spec: &MaterialSpec) -> std::result::Result<Material, String> {
     })
 }
 
-/// What a shape's `emission` describes.
-fn shape_emission(spec: &Option<EmissionSpec>) -> std::result::Result<Option<Emission>, String> {
-    spec.as_ref().map(EmissionSpec::emission).transpose()
+impl ShapeSpec {
+    /// What the shape's `emission` describes (`None`: it does not emit).
+    fn emission(&self) -> std::result::Result<Option<Emission>, String> {
+        let (ShapeSpec::Sphere { emission, .. } | ShapeSpec::Quad { emission, .. } | ShapeSpec::Mesh { emission, .. }) =
+            self;
+        emission.as_ref().map(EmissionSpec::emission).transpose()
+    }
 }
 
 /// The light `spec` describes; `deprecated` is told of old spellings.
