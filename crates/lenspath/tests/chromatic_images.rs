@@ -6,7 +6,7 @@
 
 use std::sync::atomic::AtomicBool;
 
-use glam::Vec3;
+use glam::{DMat3, DVec3, Vec3};
 use lenspath::accel::BvhSettings;
 use lenspath::camera::{CameraPose, LensFocus, RealisticCamera, RealisticCameraSettings};
 use lenspath::film::{Filter, Image, PixelRect};
@@ -137,39 +137,16 @@ fn second_moment_mm2(image: &Image) -> f64 {
 fn sharpest_focus_mm(scene: &CompiledScene, lens: &LensPrescription, around_mm: f64, wavelength_nm: f64) -> f64 {
     let offsets: Vec<f64> = (-4..=4).map(|k| f64::from(k) * 0.35).collect();
     // Normal equations for m(z) = a + b t + c t², t = z − around.
-    let mut normal = [[0.0f64; 3]; 3];
-    let mut rhs = [0.0f64; 3];
+    let (mut normal, mut rhs) = (DMat3::ZERO, DVec3::ZERO);
     for &t in &offsets {
         let m = second_moment_mm2(&shoot(scene, lens, around_mm + t, wavelength_nm, &AXIAL));
-        let basis = [1.0, t, t * t];
-        for i in 0..3 {
-            for j in 0..3 {
-                normal[i][j] += basis[i] * basis[j];
-            }
-            rhs[i] += basis[i] * m;
-        }
+        let basis = DVec3::new(1.0, t, t * t);
+        normal += DMat3::from_cols(basis * basis.x, basis * basis.y, basis * basis.z);
+        rhs += basis * m;
     }
-    let [_, b, c] = solve3(normal, rhs);
+    let DVec3 { y: b, z: c, .. } = normal.inverse() * rhs;
     assert!(c > 0.0, "the spot does not shrink toward a focus at {wavelength_nm} nm");
     around_mm - b / (2.0 * c)
-}
-
-/// Solves a 3 × 3 linear system by Cramer's rule.
-fn solve3(m: [[f64; 3]; 3], r: [f64; 3]) -> [f64; 3] {
-    let det = |m: [[f64; 3]; 3]| {
-        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
-    };
-    let d = det(m);
-    let mut x = [0.0; 3];
-    for (k, xk) in x.iter_mut().enumerate() {
-        let mut mk = m;
-        for i in 0..3 {
-            mk[i][k] = r[i];
-        }
-        *xk = det(mk) / d;
-    }
-    x
 }
 
 /// Longitudinal colour, rendered: the F and C images of a distant point
