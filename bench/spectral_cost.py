@@ -3,15 +3,15 @@ mean squared error against each configuration's own converged reference at
 equal spp and at equal time. One thread, interleaved runs, two seeds.
 
 Spectral transport against the RGB renderer it replaced (through dgauss50
-without its glass column, so nothing disperses):
+with --no-dispersion, so nothing disperses):
 
     target/python-venv/bin/python bench/spectral_cost.py transport RGB_BINARY SPECTRAL_BINARY
 
 RGB_BINARY is a lenspath built from commit 6b3116f (before spectral transport).
 
 dgauss50's dispersion (its patent's Abbe numbers, one wavelength per camera
-ray after the lens) against the same lens without its glass column (four
-wavelengths per path), with one binary:
+ray after the lens) against the same lens with --no-dispersion (every glass
+at its d-line index, four wavelengths per path), with one binary:
 
     target/python-venv/bin/python bench/spectral_cost.py dispersion BINARY"""
 
@@ -26,8 +26,6 @@ import time
 import numpy as np
 
 import lenspath
-
-REPOSITORY = pathlib.Path(__file__).resolve().parent.parent
 
 
 def image(path: pathlib.Path) -> np.ndarray:
@@ -65,17 +63,6 @@ def compare(commands: dict[str, list[str]], res: str, reference_spp: int, out: p
         )
 
 
-def plain_dgauss50(out: pathlib.Path) -> str:
-    """dgauss50's table without its fifth (glass) column."""
-    table = (REPOSITORY / "crates/lenspath/lenses/dgauss50.dat").read_text()
-    rows = [
-        " ".join(line.split()[:4]) if line.strip() and not line.startswith("#") else line for line in table.splitlines()
-    ]
-    path = out / "dgauss50-plain.dat"
-    path.write_text("\n".join(rows) + "\n")
-    return str(path)
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("mode", choices=["transport", "dispersion"])
@@ -85,16 +72,12 @@ def main() -> None:
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         out = pathlib.Path(tmp)
-        plain = plain_dgauss50(out)
         if args.mode == "transport":
             rgb, spectral = args.binaries
-            commands = {"rgb": [rgb, "render"], "spectral": [spectral, "render", "--lens", plain]}
+            commands = {"rgb": [rgb, "render"], "spectral": [spectral, "render", "--no-dispersion"]}
         else:
             (binary,) = args.binaries
-            commands = {
-                "plain": [binary, "render", "--lens", plain],
-                "dispersive": [binary, "render", "--lens", "dgauss50"],
-            }
+            commands = {"plain": [binary, "render", "--no-dispersion"], "dispersive": [binary, "render"]}
         compare(commands, args.res, args.reference_spp, out)
 
 
