@@ -45,6 +45,28 @@ impl Filter {
             }
         }
     }
+
+    /// Density, per pixel², of [`Filter::sample_offset`] at `offset`: the
+    /// filter normalised to integrate to 1, which is also a sample's weight
+    /// toward the pixel at that offset.
+    #[inline]
+    pub fn pdf(&self, offset: Vec2) -> f32 {
+        match *self {
+            Filter::Box => {
+                let inside = offset.x.abs() <= 0.5 && offset.y.abs() <= 0.5;
+                f32::from(u8::from(inside))
+            }
+            Filter::Gaussian { sigma, radius } => {
+                if offset.x.abs() > radius || offset.y.abs() > radius {
+                    return 0.0;
+                }
+                // A normal density per axis, renormalised to its truncation.
+                let s = sigma * std::f32::consts::SQRT_2;
+                let axis_mass = erf(radius / s) * sigma * (2.0 * std::f32::consts::PI).sqrt();
+                (-offset.length_squared() / (2.0 * sigma * sigma)).exp() / (axis_mass * axis_mass)
+            }
+        }
+    }
 }
 
 /// A rendered image: linear RGB, the camera depth of each pixel, and the
@@ -108,6 +130,48 @@ mod tests {
         assert!((var / n as f64 - 0.25).abs() < 0.005, "variance {}", var / n as f64);
         let b = Filter::Box.sample_offset(Vec2::new(0.0, 0.999));
         assert!(b.x == -0.5 && b.y < 0.5);
+    }
+
+    /// Each filter's density integrates to 1 and matches a histogram of its
+    /// sampled offsets.
+    #[test]
+    fn filter_pdf_is_the_density_of_its_offsets() {
+        for filter in [Filter::Box, Filter::GAUSSIAN] {
+            let (lo, step) = (-1.6f32, 0.02f32);
+            let n = (-2.0 * lo / step) as usize;
+            let cell = |i: usize| lo + (i as f32 + 0.5) * step;
+            let integral: f32 = (0..n * n)
+                .map(|k| filter.pdf(Vec2::new(cell(k % n), cell(k / n))) * step * step)
+                .sum();
+            assert!((integral - 1.0).abs() < 2e-3, "{filter:?} integrates to {integral}");
+            // The share of offsets within 0.25 pixel of the centre.
+            let mut rng = Rng::new(5);
+            let samples = 200_000;
+            let near = (0..samples)
+                .filter(|_| {
+                    filter
+                        .sample_offset(Vec2::new(rng.uniform(), rng.uniform()))
+                        .abs()
+                        .max_element()
+                        < 0.25
+                })
+                .count() as f32
+                / samples as f32;
+            let m = (0.5 / step) as usize;
+            let predicted: f32 = (0..m * m)
+                .map(|k| {
+                    filter.pdf(Vec2::new(
+                        -0.25 + (k % m) as f32 * step + 0.5 * step,
+                        -0.25 + (k / m) as f32 * step + 0.5 * step,
+                    )) * step
+                        * step
+                })
+                .sum();
+            assert!(
+                (near - predicted).abs() < 5e-3,
+                "{filter:?}: {near} sampled, {predicted} from the pdf"
+            );
+        }
     }
 }
 

@@ -115,9 +115,7 @@ fn record(
     LightField::record(scene, camera, region, &recording).unwrap()
 }
 
-/// Mean absolute difference of two images' luminance. Luminance, as
-/// autofocus scores them: dgauss50 disperses, so each of its camera samples
-/// carries one wavelength, and its colour noise would swamp the comparison.
+/// Mean absolute difference of two images' luminance, as autofocus scores them.
 fn difference(a: &[f32], b: &[f32]) -> f64 {
     let y = |c: &[f32]| f64::from(lenspath::color::luminance([c[0], c[1], c[2]]));
     a.chunks_exact(3)
@@ -154,18 +152,18 @@ fn refocused_where_it_was_recorded_a_light_field_is_the_render() {
 
 /// Refocused 3 DoF from where it was recorded, the light field's patch is
 /// as close to a render there as an independent render is: within 1.4× the
-/// renders' own difference through dgauss50 without dispersion, 1.6× with
-/// it. A dispersive lens's samples carry one wavelength each; a render
-/// stratifies each pixel's wavelengths over its samples, a refocused pixel
-/// gathers samples of many recorded pixels and loses that stratification.
-/// Either way it is much closer than the patch where it was recorded.
+/// renders' own difference through dgauss50, with or without dispersion
+/// (measured 1.05–1.22 without, 1.04–1.15 with). A dispersive lens's
+/// records weigh their wavelengths for the pixel recorded and follow the
+/// hero's line when refocused. Either way it is much closer than the patch
+/// where it was recorded.
 #[test]
 fn refocused_elsewhere_a_light_field_sees_what_a_render_there_sees() {
     let scene = plane(1.5);
     let (focused, dof) = focus(1.5);
     // Recorded 3 DoF behind focus, refocused onto the plane and 3 DoF in front.
     let recorded_at = focused + 3.0 * dof;
-    for (dispersion, noise_factor) in [(false, 1.4), (true, 1.6)] {
+    for dispersion in [false, true] {
         for patch in [PATCH, EDGE_PATCH] {
             let field = record(
                 &scene,
@@ -184,7 +182,7 @@ fn refocused_elsewhere_a_light_field_sees_what_a_render_there_sees() {
                 // Much closer than the image where it was recorded (6 pixels of blur apart).
                 let unmoved = difference(&field.refocus(recorded_at, patch, Splat::Box).unwrap(), &rendered);
                 assert!(
-                    error < noise_factor * noise && error < 0.5 * unmoved,
+                    error < 1.4 * noise && error < 0.5 * unmoved,
                     "dispersion {dispersion}, {patch:?} at {:+.1} DoF: {error:.4} from a render there, renders differ by {noise:.4}, the recording by {unmoved:.4}",
                     (target - focused) / dof
                 );

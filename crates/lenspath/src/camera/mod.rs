@@ -30,18 +30,33 @@ pub struct CameraSample {
     pub lens: Vec2,
     /// The wavelengths the sample carries (a dispersive lens traces its hero).
     pub wavelengths: SampledWavelengths,
+    /// Centre of the pixel the sample is for, raster coordinates.
+    pub pixel_centre: Vec2,
+    /// The filter `film` was drawn from around `pixel_centre`.
+    pub filter: Filter,
 }
 
 impl CameraSample {
     /// A sample at `film` and `lens` carrying only the d line (587.6 nm), the
     /// wavelength lens prescriptions give their indices at: for questions of
     /// geometry (where a ray goes, what it hits), not radiometry.
+    /// Its pixel is the one `film` lies in, with the box filter.
     pub fn new(film: Vec2, lens: Vec2) -> Self {
         CameraSample {
             film,
             lens,
             wavelengths: SampledWavelengths::single(crate::spectrum::D_LINE_NM),
+            pixel_centre: film.floor() + Vec2::splat(0.5),
+            filter: Filter::Box,
         }
+    }
+
+    /// The density, per pixel², with which film position `raster` would have
+    /// been drawn for this sample's pixel: also that position's weight
+    /// toward the pixel.
+    #[inline(always)]
+    pub fn film_density(&self, raster: Vec2) -> f32 {
+        self.filter.pdf(raster - self.pixel_centre)
     }
 }
 
@@ -234,6 +249,8 @@ pub fn pixel_sample(
             film,
             lens,
             wavelengths,
+            pixel_centre: centre,
+            filter,
         },
     )
 }

@@ -257,12 +257,15 @@ impl LensSystem {
         Some(ray)
     }
 
-    /// [`LensSystem::trace`] toward the scene, also returning where the ray
-    /// crossed the aperture stop (what a shaped aperture's transmission is read at).
-    pub fn trace_to_scene_via_stop(&self, ray: &LensRay) -> Option<(LensRay, DVec3)> {
-        let stop_in_travel = self.surfaces.len() - 1 - self.stop;
+    /// [`LensSystem::trace`], also returning where the ray crossed the
+    /// aperture stop (what a shaped aperture's transmission is read at).
+    pub fn trace_via_stop(&self, ray: &LensRay, direction: Direction) -> Option<(LensRay, DVec3)> {
+        let stop_in_travel = match direction {
+            Direction::ToSensor => self.stop,
+            Direction::ToScene => self.surfaces.len() - 1 - self.stop,
+        };
         let (mut crossed, mut at_stop) = (0, DVec3::ZERO);
-        let out = self.trace_visiting(ray, Direction::ToScene, |p| {
+        let out = self.trace_visiting(ray, direction, |p| {
             if crossed == stop_in_travel {
                 at_stop = p;
             }
@@ -271,16 +274,23 @@ impl LensSystem {
         Some((out, at_stop))
     }
 
-    /// [`LensSystem::trace`] for `N` rays at once. Their arithmetic chains
-    /// are independent, so the processor overlaps them: tracing is bound by
-    /// the latency of square roots, not by their throughput.
-    pub fn trace_many<const N: usize>(&self, rays: &[LensRay; N], direction: Direction) -> [Option<LensRay>; N] {
+    /// One ray through each of `systems` (one lens, or the same lens at
+    /// different wavelengths as [`LensSystem::at_wavelength`] makes them),
+    /// all at once. Their arithmetic chains are independent, so the
+    /// processor overlaps them: tracing is bound by the latency of square
+    /// roots, not by their throughput.
+    pub fn trace_each<const N: usize>(
+        systems: [&LensSystem; N],
+        rays: &[LensRay; N],
+        direction: Direction,
+    ) -> [Option<LensRay>; N] {
+        let surfaces = systems[0].surfaces.len();
+        debug_assert!(systems.iter().all(|s| s.surfaces.len() == surfaces));
         let mut out = rays.map(Some);
-        for k in 0..self.surfaces.len() {
-            let surface = self.surface_in_travel_order(k, direction);
-            for ray in &mut out {
+        for k in 0..surfaces {
+            for (ray, system) in out.iter_mut().zip(systems) {
                 if let Some(r) = ray {
-                    *ray = self.cross(surface, r, direction, &mut |_| {});
+                    *ray = system.cross(system.surface_in_travel_order(k, direction), r, direction, &mut |_| {});
                 }
             }
         }
@@ -758,7 +768,7 @@ mod tests {
                     continue;
                 };
                 // The same ray, with the point where it crossed the stop (at z = 0).
-                let (via, at_stop) = lens.trace_to_scene_via_stop(&ray).unwrap();
+                let (via, at_stop) = lens.trace_via_stop(&ray, Direction::ToScene).unwrap();
                 assert_eq!((via.origin, via.direction), (out.origin, out.direction));
                 assert!(at_stop.z.abs() < 1e-12 && at_stop.truncate().length() <= lens.stop_radius());
                 let back = LensRay {
@@ -772,6 +782,12 @@ mod tests {
                     "{name}: returned to {hit:?}, not {film:?}"
                 );
                 assert!((returned.direction + ray.direction).length() < 1e-12);
+                // Going back, it crosses the stop where it crossed it going out.
+                let (_, back_at_stop) = lens.trace_via_stop(&back, Direction::ToSensor).unwrap();
+                assert!(
+                    (back_at_stop - at_stop).length() < 1e-9,
+                    "{name}: {back_at_stop:?} vs {at_stop:?}"
+                );
                 checked += 1;
             }
             assert!(checked > 10, "{name}: only {checked} rays passed");
@@ -791,15 +807,34 @@ mod tests {
             })
             .collect();
         let (mut passed, mut blocked) = (0, 0);
+        let mut count = |out: Option<LensRay>| {
+            if out.is_some() {
+                passed += 1
+            } else {
+                blocked += 1
+            }
+        };
         for pair in rays.chunks_exact(2) {
-            let together = lens.trace_many(&[pair[0], pair[1]], Direction::ToScene);
+            let together = LensSystem::trace_each([&lens, &lens], &[pair[0], pair[1]], Direction::ToScene);
             for (ray, out) in pair.iter().zip(together) {
                 assert_eq!(out, lens.trace(ray, Direction::ToScene));
-                if out.is_some() {
-                    passed += 1
-                } else {
-                    blocked += 1
-                }
+                count(out);
+            }
+        }
+        // Through the lens at three wavelengths at once (a dispersive one).
+        let dgauss = builtin("dgauss50");
+        let systems = [400.0, 550.0, 700.0].map(|nm| dgauss.at_wavelength(nm));
+        let sensor_z = dgauss.real_focus_at_infinity(0.1).unwrap().0;
+        for k in 0..32 {
+            let film = DVec3::new(0.5 * k as f64, 0.2 * k as f64, sensor_z);
+            let rays = [0.0, 2.1, 4.2].map(|a: f64| {
+                let target = DVec3::new(9.0 * (a + k as f64).cos(), 9.0 * (a + k as f64).sin(), dgauss.rear_z());
+                LensRay::between(film, target)
+            });
+            let together = LensSystem::trace_each([&systems[0], &systems[1], &systems[2]], &rays, Direction::ToScene);
+            for ((system, ray), out) in systems.iter().zip(&rays).zip(together) {
+                assert_eq!(out, system.trace(ray, Direction::ToScene));
+                count(out);
             }
         }
         assert!(

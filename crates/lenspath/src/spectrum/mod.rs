@@ -48,8 +48,14 @@ pub type SampledSpectrum = Vec4;
 pub struct SampledWavelengths {
     /// Wavelengths, nm.
     pub lambda_nm: Vec4,
-    /// Density of each, per nm (zero for a terminated wavelength).
+    /// Density of each, per nm (zero for a terminated wavelength), divided
+    /// by any weight the camera gave its lane
+    /// ([`SampledWavelengths::weight_lanes`]).
     pub pdf: Vec4,
+    /// The hero's density once it is left alone
+    /// ([`SampledWavelengths::terminate_secondary`]): its own density over
+    /// the number of wavelengths it was drawn with.
+    hero_alone_pdf: f32,
 }
 
 impl SampledWavelengths {
@@ -68,23 +74,33 @@ impl SampledWavelengths {
         // that one four lanes at once.
         let t = Vec4::splat(0.856_910_6) - ui * 1.827_502;
         let atanh = ln4((Vec4::ONE + t) / (Vec4::ONE - t)) * 0.5;
+        let pdf = (Vec4::ONE - t * t) * VISIBLE_PDF_PEAK;
         SampledWavelengths {
             lambda_nm: Vec4::splat(538.0) - atanh * 138.888_89,
-            pdf: (Vec4::ONE - t * t) * VISIBLE_PDF_PEAK,
+            pdf,
+            hero_alone_pdf: pdf.x / WAVELENGTHS_PER_SAMPLE as f32,
         }
     }
 
-    /// Wavelengths `lambda_nm` with density `pdf` each (tests, analysis tools).
+    /// Wavelengths `lambda_nm` with density `pdf` each, those of density 0
+    /// absent (tests, analysis tools).
     pub fn new(lambda_nm: Vec4, pdf: Vec4) -> Self {
-        SampledWavelengths { lambda_nm, pdf }
+        let present = pdf.cmpgt(Vec4::ZERO).bitmask().count_ones().max(1);
+        SampledWavelengths {
+            lambda_nm,
+            pdf,
+            hero_alone_pdf: pdf.x / present as f32,
+        }
     }
 
     /// One wavelength alone, density 1 (geometric questions and analysis).
     pub fn single(lambda_nm: f32) -> Self {
-        SampledWavelengths {
-            lambda_nm: Vec4::splat(lambda_nm),
-            pdf: Vec4::new(1.0, 0.0, 0.0, 0.0),
-        }
+        Self::new(Vec4::splat(lambda_nm), Vec4::new(1.0, 0.0, 0.0, 0.0))
+    }
+
+    /// How many wavelengths are still carried (density above 0).
+    pub fn live_count(&self) -> u32 {
+        self.pdf.cmpgt(Vec4::ZERO).bitmask().count_ones()
     }
 
     /// The hero wavelength, nm: the one a dispersive interface follows.
@@ -95,12 +111,20 @@ impl SampledWavelengths {
     /// Keeps only the hero wavelength (a path that just split by wavelength):
     /// the others get density 0, so they add nothing, and the hero's density
     /// is divided by their count, so the estimate stays unbiased (pbrt-v4
-    /// `TerminateSecondary`).
+    /// `TerminateSecondary`). Any lane weights are dropped with them: the
+    /// hero alone is the estimate of the one wavelength that chose the path.
     pub fn terminate_secondary(&mut self) {
-        if self.secondary_terminated() {
-            return;
-        }
-        self.pdf = Vec4::new(self.pdf.x / WAVELENGTHS_PER_SAMPLE as f32, 0.0, 0.0, 0.0);
+        self.pdf = Vec4::new(self.hero_alone_pdf, 0.0, 0.0, 0.0);
+    }
+
+    /// Scales each wavelength's contribution by its `weights` entry by
+    /// dividing its density; a weight of 0 drops the wavelength. A
+    /// dispersive lens's camera weighs the lanes so (see
+    /// `camera::RealisticCamera`'s lane weights); terminating the
+    /// secondaries later returns the hero to its own density.
+    #[inline(always)]
+    pub fn weight_lanes(&mut self, weights: Vec4) {
+        self.pdf = Vec4::select(weights.cmpgt(Vec4::ZERO), self.pdf / weights, Vec4::ZERO);
     }
 
     /// True once only the hero wavelength is left.

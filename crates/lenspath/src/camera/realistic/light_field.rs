@@ -32,7 +32,7 @@ impl RealisticCamera {
     /// open pupil.
     pub(super) fn traced_sample(&self, sample: CameraSample) -> Option<TracedSample> {
         let p_film = self.film_point(sample.film);
-        let system = self.system_at(&sample.wavelengths);
+        let system = self.system_at(sample.wavelengths.hero_nm());
         if let Some((aperture, maps)) = &self.shaped {
             return self.shaped_ray(system, aperture, maps, p_film, sample.lens);
         }
@@ -52,13 +52,16 @@ impl RealisticCamera {
         };
         let t = (self.rear_z_mm - start.origin.z) / start.direction.z;
         let rear = start.origin + start.direction * t;
-        let (w, h) = self.resolution;
-        let (sw, sh) = self.sensor_mm;
-        // The inverse of film_point, for a point on the rear plane.
-        let rear_raster = Vec2::new(((0.5 - rear.x / sw) * w) as f32, ((0.5 + rear.y / sh) * h) as f32);
+        let rear_raster = self.raster_point(rear);
+        // Through a dispersive lens the wavelengths are weighted for the
+        // pixel recorded; refocused, the record follows the hero's line
+        // (another wavelength's line moves by up to a pixel more).
         LensSample {
             rear_raster,
-            ray: out.map(|(out, weight)| self.scene_ray(&out, weight, sample.wavelengths)),
+            ray: out.map(|(out, weight)| {
+                let wavelengths = self.weighted_wavelengths(&sample, &start, &out);
+                self.scene_ray(&out, weight, wavelengths)
+            }),
         }
     }
 
@@ -91,13 +94,8 @@ impl RealisticCamera {
         (centre - half, centre + half)
     }
 
-    /// The scene ray of a ray leaving the lens, with its weight and
-    /// wavelengths: only the hero when the lens disperses (it was traced at
-    /// the hero's wavelength; the others would have left elsewhere).
-    pub(super) fn scene_ray(&self, out: &LensRay, weight: f64, mut wavelengths: SampledWavelengths) -> CameraRay {
-        if self.spectral.is_some() {
-            wavelengths.terminate_secondary();
-        }
+    /// The scene ray of a ray leaving the lens, with its weight and wavelengths.
+    pub(super) fn scene_ray(&self, out: &LensRay, weight: f64, wavelengths: SampledWavelengths) -> CameraRay {
         // Lens coordinates → camera space: the sensor centre is the origin,
         // +z looks into the scene (lens z runs the other way), mm → scene units.
         let origin = Vec3::new(

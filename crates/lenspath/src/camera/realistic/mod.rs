@@ -22,6 +22,7 @@
 
 use std::sync::Arc;
 
+mod lanes;
 mod light_field;
 mod pupil;
 mod settings;
@@ -40,7 +41,7 @@ use crate::film::PixelRect;
 use crate::lens::{Direction, LensRay, LensSystem};
 use crate::ray::Ray;
 use crate::sampling::Rng;
-use crate::spectrum::{SampledWavelengths, LAMBDA_MAX_NM, LAMBDA_MIN_NM};
+use crate::spectrum::{LAMBDA_MAX_NM, LAMBDA_MIN_NM};
 
 /// Real-ray height used when focusing, in mm (the CS184 lens simulator's).
 const FOCUS_RAY_HEIGHT_MM: f64 = 0.1;
@@ -262,14 +263,14 @@ impl RealisticCamera {
         &self.system
     }
 
-    /// The lens at the hero wavelength of `wavelengths` (the d-line lens
-    /// when nothing disperses).
+    /// The lens at `wavelength_nm`, rounded to the nanometre (the d-line
+    /// lens when nothing disperses).
     #[inline(always)]
-    pub(super) fn system_at(&self, wavelengths: &SampledWavelengths) -> &LensSystem {
+    pub(super) fn system_at(&self, wavelength_nm: f32) -> &LensSystem {
         match &self.spectral {
             None => &self.system,
             Some(systems) => {
-                let nm = (wavelengths.hero_nm() - LAMBDA_MIN_NM).round().max(0.0) as usize;
+                let nm = (wavelength_nm - LAMBDA_MIN_NM).round().max(0.0) as usize;
                 &systems[nm.min(systems.len() - 1)]
             }
         }
@@ -290,23 +291,34 @@ impl RealisticCamera {
         DVec3::new(-x, -y, self.sensor_z_mm)
     }
 
+    /// The sensor band of a film point (lens coordinates), its radius and
+    /// its azimuth as a unit vector: the band's pupil grid and stop map are
+    /// for film points on +x, and turn by the azimuth.
+    #[inline(always)]
+    fn film_band(&self, p_film: DVec3) -> (usize, f64, DVec2) {
+        let r = p_film.truncate().length();
+        let band = ((r / self.band_width_mm) as usize).min(self.pupils.len() - 1);
+        let azimuth = if r > 0.0 { p_film.truncate() / r } else { DVec2::X };
+        (band, r, azimuth)
+    }
+
+    /// The raster position of a point on the sensor plane (lens
+    /// coordinates, mm): the inverse of [`RealisticCamera::film_point`].
+    fn raster_point(&self, p: DVec3) -> Vec2 {
+        let (w, h) = self.resolution;
+        let (sw, sh) = self.sensor_mm;
+        Vec2::new(((0.5 - p.x / sw) * w) as f32, ((0.5 + p.y / sh) * h) as f32)
+    }
+
     /// The lens ray for a film point and a pupil sample, with its unnormalised weight.
     fn lens_ray(&self, p_film: DVec3, u: Vec2) -> Option<(LensRay, f64)> {
-        let r = (p_film.x * p_film.x + p_film.y * p_film.y).sqrt();
-        let band = ((r / self.band_width_mm) as usize).min(self.pupils.len() - 1);
+        let (band, r, azimuth) = self.film_band(p_film);
         let grid = &self.pupils[band];
         if grid.cells.is_empty() {
             return None;
         }
-        let q = grid.sample(u, r);
-        // The grid was made for film points on +x: rotate to this point's azimuth.
-        let (sin, cos) = if r > 0.0 {
-            (p_film.y / r, p_film.x / r)
-        } else {
-            (0.0, 1.0)
-        };
-        let target = DVec3::new(cos * q.x - sin * q.y, sin * q.x + cos * q.y, self.rear_z_mm);
-        let ray = LensRay::between(p_film, target);
+        let q = azimuth.rotate(grid.sample(u, r));
+        let ray = LensRay::between(p_film, DVec3::new(q.x, q.y, self.rear_z_mm));
         let cos_theta = -ray.direction.z;
         let d = self.sensor_z_mm - self.rear_z_mm;
         let weight = cos_theta.powi(4) * grid.area() / (d * d);
@@ -326,18 +338,11 @@ impl RealisticCamera {
         p_film: DVec3,
         u: Vec2,
     ) -> Option<TracedSample> {
-        let r = p_film.truncate().length();
-        let band = ((r / self.band_width_mm) as usize).min(self.pupils.len() - 1);
+        let (band, r, azimuth) = self.film_band(p_film);
         let (grid, map) = (&self.pupils[band], maps[band].as_ref()?);
         if grid.cells.is_empty() {
             return None;
         }
-        // The band's grid and map are for film points on +x: rotate by the azimuth.
-        let azimuth = if r > 0.0 {
-            DVec2::new(p_film.x / r, p_film.y / r)
-        } else {
-            DVec2::X
-        };
         let to_band = DVec2::new(azimuth.x, -azimuth.y);
         let (a, b) = map.at(r);
         let stop_radius = self.system.stop_radius();
@@ -348,23 +353,41 @@ impl RealisticCamera {
             let (s, _) = aperture.sample(Vec2::new(((ux - GRID_SHARE) / (1.0 - GRID_SHARE)) as f32, u.y));
             a.inverse() * (to_band.rotate(s * stop_radius) - b)
         };
-        // The mixture's density at q, per mm² of the rear plane.
-        let predicted_stop = azimuth.rotate(a * q + b) / stop_radius;
-        let from_shape = aperture.pdf(predicted_stop) * a.determinant().abs() / (stop_radius * stop_radius);
-        let from_grid = if grid.contains(q, r) { 1.0 / grid.area() } else { 0.0 };
-        let pdf = GRID_SHARE * from_grid + (1.0 - GRID_SHARE) * from_shape;
+        let pdf = self.shaped_density(aperture, grid, map, r, azimuth, q);
         if pdf <= 0.0 {
             return None;
         }
         let target = azimuth.rotate(q);
         let ray = LensRay::between(p_film, DVec3::new(target.x, target.y, self.rear_z_mm));
-        let out = system.trace_to_scene_via_stop(&ray).and_then(|(out, at_stop)| {
-            let transmission = aperture.transmission(at_stop.truncate() / stop_radius);
-            let cos_theta = -ray.direction.z;
-            let d = self.sensor_z_mm - self.rear_z_mm;
-            (transmission > 0.0).then(|| (out, transmission * cos_theta.powi(4) / (d * d * pdf)))
-        });
+        let out = system
+            .trace_via_stop(&ray, Direction::ToScene)
+            .and_then(|(out, at_stop)| {
+                let transmission = aperture.transmission(at_stop.truncate() / stop_radius);
+                let cos_theta = -ray.direction.z;
+                let d = self.sensor_z_mm - self.rear_z_mm;
+                (transmission > 0.0).then(|| (out, transmission * cos_theta.powi(4) / (d * d * pdf)))
+            });
         Some((ray, out))
+    }
+
+    /// The density of [`RealisticCamera::shaped_ray`]'s mixture at `q` (rear
+    /// plane, in the band's frame), per mm², for a film point at radius `r`
+    /// and `azimuth`.
+    fn shaped_density(
+        &self,
+        aperture: &Aperture,
+        grid: &PupilGrid,
+        map: &StopMap,
+        r: f64,
+        azimuth: DVec2,
+        q: DVec2,
+    ) -> f64 {
+        let (a, b) = map.at(r);
+        let stop_radius = self.system.stop_radius();
+        let predicted_stop = azimuth.rotate(a * q + b) / stop_radius;
+        let from_shape = aperture.pdf(predicted_stop) * a.determinant().abs() / (stop_radius * stop_radius);
+        let from_grid = if grid.contains(q, r) { 1.0 / grid.area() } else { 0.0 };
+        GRID_SHARE * from_grid + (1.0 - GRID_SHARE) * from_shape
     }
 
     /// ∫ cos⁴θ / d² dA over the open pupil from the sensor centre (16 points per cell).
@@ -405,31 +428,30 @@ impl RealisticCamera {
 
 impl Camera for RealisticCamera {
     fn generate_ray(&self, sample: CameraSample) -> Option<CameraRay> {
-        let (_, out) = self.traced_sample(sample)?;
+        let (start, out) = self.traced_sample(sample)?;
         let (out, weight) = out?;
-        Some(self.scene_ray(&out, weight, sample.wavelengths))
+        let wavelengths = self.weighted_wavelengths(&sample, &start, &out);
+        Some(self.scene_ray(&out, weight, wavelengths))
     }
 
     fn generate_ray_pair(&self, samples: [CameraSample; 2]) -> [Option<CameraRay>; 2] {
-        // Paired tracing needs one lens for both rays: not so when it disperses.
-        if self.shaped.is_some() || self.spectral.is_some() {
+        // A shaped aperture's rays are traced through the stop one at a time.
+        if self.shaped.is_some() {
             return samples.map(|s| self.generate_ray(s));
         }
         let starts = samples.map(|s| self.lens_ray(self.film_point(s.film), s.lens));
-        let [Some((a, weight_a)), Some((b, weight_b))] = starts else {
+        // Each through the lens at its hero wavelength (the same lens when nothing disperses).
+        let systems = samples.map(|s| self.system_at(s.wavelengths.hero_nm()));
+        let outs = match starts {
+            [Some((a, _)), Some((b, _))] => LensSystem::trace_each(systems, &[a, b], Direction::ToScene),
             // A film point with no open pupil: trace whichever ray there is on its own.
-            let mut rays = starts.into_iter().zip(samples).map(|(start, sample)| {
-                let (ray, weight) = start?;
-                let out = self.system.trace(&ray, Direction::ToScene)?;
-                Some(self.scene_ray(&out, weight, sample.wavelengths))
-            });
-            return [rays.next().flatten(), rays.next().flatten()];
+            _ => [0, 1].map(|i| starts[i].and_then(|(ray, _)| systems[i].trace(&ray, Direction::ToScene))),
         };
-        let [out_a, out_b] = self.system.trace_many(&[a, b], Direction::ToScene);
-        [
-            out_a.map(|o| self.scene_ray(&o, weight_a, samples[0].wavelengths)),
-            out_b.map(|o| self.scene_ray(&o, weight_b, samples[1].wavelengths)),
-        ]
+        [0, 1].map(|i| {
+            let ((start, weight), out) = (starts[i]?, outs[i]?);
+            let wavelengths = self.weighted_wavelengths(&samples[i], &start, &out);
+            Some(self.scene_ray(&out, weight, wavelengths))
+        })
     }
 
     fn view_axis(&self) -> (Vec3, Vec3) {

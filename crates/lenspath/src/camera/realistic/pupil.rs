@@ -242,7 +242,7 @@ pub(super) fn fit_stop_map(
                 + grid.min
                 + (DVec2::new(column, row) + 0.5) * grid.cell;
             let ray = LensRay::between(DVec3::new(r, 0.0, sensor_z), DVec3::new(q.x, q.y, system.rear_z()));
-            if let Some((_, s)) = system.trace_to_scene_via_stop(&ray) {
+            if let Some((_, s)) = system.trace_via_stop(&ray, Direction::ToScene) {
                 let v = DVec3::new(q.x, q.y, 1.0);
                 m += DMat3::from_cols(v * v.x, v * v.y, v);
                 rhs_x += v * s.x;
