@@ -347,8 +347,8 @@ class Camera:
         (not both; ``sensor_mm`` is its deprecated old name), stopped down to ``f_number``, a
         ``sensor_width_mm`` wide sensor (default 36; its height follows the image), an
         ``aperture`` shape, ``scene_unit_m`` metres per unit; ``dispersion=False`` gives every
-        glass its d-line index (no colour, less colour noise; default: the scene file's, else
-        glasses disperse)."""
+        glass its d-line index (no colour, a little less colour noise; default: the scene file's,
+        else glasses disperse)."""
 
 @overload
 def render(

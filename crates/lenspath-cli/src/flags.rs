@@ -204,8 +204,8 @@ pub struct LensFlags {
     /// Realistic camera: exposure normalisation.
     #[arg(long, value_enum)]
     pub radiometry: Option<RadiometryKind>,
-    /// Realistic camera: every glass at its d-line index, so the lens shows no colour and camera
-    /// rays keep all their wavelengths (less colour noise; default: glasses disperse).
+    /// Realistic camera: every glass at its d-line index, so the lens shows no colour (and a
+    /// little less colour noise, no tracing back per wavelength; default: glasses disperse).
     #[arg(long)]
     pub no_dispersion: bool,
 }

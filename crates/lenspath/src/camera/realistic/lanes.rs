@@ -80,7 +80,7 @@ impl RealisticCamera {
             if let Some(side) = side.filter(|_| wavelengths.pdf[lane] > 0.0) {
                 let film_density = f64::from(sample.film_density(side.raster));
                 weight[lane] = film_density * side.transmission;
-                density[lane] = film_density * self.pupil_density(&side) / side.cos_theta.powi(4);
+                density[lane] = film_density * self.pupil_density(&side, lane == 0) / side.cos_theta.powi(4);
             }
         }
         let mean_density = density.iter().sum::<f64>() / f64::from(live);
@@ -168,8 +168,10 @@ impl RealisticCamera {
     }
 
     /// The density, per mm² of the rear plane, with which the camera draws
-    /// `side`'s rear-plane point for its film point.
-    fn pupil_density(&self, side: &FilmSide) -> f64 {
+    /// `side`'s rear-plane point for its film point. `drawn`: the camera
+    /// drew it (the hero's), so it lies in its grid, which testing it again
+    /// could miss by a rounding at a cell's edge.
+    fn pupil_density(&self, side: &FilmSide, drawn: bool) -> f64 {
         let (band, r, azimuth) = self.film_band(side.film);
         let grid = &self.pupils[band];
         if grid.cells.is_empty() {
@@ -178,7 +180,7 @@ impl RealisticCamera {
         let q = DVec2::new(azimuth.x, -azimuth.y).rotate(side.rear);
         match &self.shaped {
             None => {
-                if grid.contains(q, r) {
+                if drawn || grid.contains(q, r) {
                     1.0 / grid.area()
                 } else {
                     0.0

@@ -42,9 +42,11 @@ pub struct RealisticCameraSettings {
     /// Shape of the opening at the aperture stop.
     pub aperture: ApertureShape,
     /// Whether glasses that disperse do (default): each ray is traced at its
-    /// own wavelength and keeps only it. Off, every glass has its d-line
-    /// index: the lens shows no colour, and a camera ray keeps all the
-    /// wavelengths its sample carries (much less colour noise).
+    /// sample's hero wavelength and the others are weighted by where the
+    /// lens takes them (`camera/realistic/lanes.rs`). Off, every glass has
+    /// its d-line index: the lens shows no colour, and every wavelength of
+    /// a camera ray weighs the same (a little less colour noise, no tracing
+    /// back).
     pub dispersion: bool,
 }
 
