@@ -38,9 +38,9 @@ def test_same_settings_give_the_clis_answer(cli, strategy: str) -> None:
 
 
 def test_the_focused_camera_renders_the_patch_sharper_than_either_side_of_it() -> None:
-    # 64 samples: dgauss50 disperses, so each patch sample carries one wavelength and the
-    # depth strategy's contrast refinement needs more of them than the default 16 to stay
-    # within a depth of focus of the contrast peak (see docs/autofocus.md).
+    # 64 samples: through the dispersive dgauss50 the depth strategy's contrast refinement
+    # needed more than the default 16 to stay within a depth of focus of the contrast peak
+    # (measured before the lens's wavelengths were weighted; see docs/autofocus.md).
     camera = lenspath.Camera.realistic("dgauss50")
     result = lenspath.autofocus("cornell-spheres", NEAR_SPHERE, camera, strategy="depth", resolution=(320, 240), spp=64)
     assert result.focus_distance is not None

@@ -34,9 +34,9 @@ impl Detail {
     /// scale, in all three channels. Focus is judged on luminance, as a
     /// camera's contrast autofocus does: a lens with longitudinal colour
     /// focuses each colour at its own depth, and the sharpest image is the
-    /// one whose luminance is sharpest; and a sample whose lens disperses
-    /// carries one wavelength, whose colour is noisy but whose luminance is
-    /// not (wavelengths are drawn about as the eye's sensitivity goes).
+    /// one whose luminance is sharpest; and a sample's few wavelengths give
+    /// a noisier colour than luminance (wavelengths are drawn about as the
+    /// eye's sensitivity goes).
     pub(super) fn band_pass(self, rgb: &[f32], width: usize) -> Vec<f32> {
         let (narrow_sigma, wide_sigma) = self.band_pass_sigmas_px();
         let grey: Vec<f32> = rgb.chunks_exact(3).map(|c| luminance([c[0], c[1], c[2]])).collect();
