@@ -13,7 +13,9 @@ use crate::error::{Error, Result};
 
 /// The Fraunhofer lines lens designers quote, `(name, wavelength_nm)`:
 /// g (mercury), F (hydrogen), d (helium), C (hydrogen).
-pub const FRAUNHOFER_LINES: [(&str, f64); 4] = [("g", 435.8343), ("F", 486.1327), ("d", 587.5618), ("C", 656.2725)];
+pub const FRAUNHOFER_LINES: [(&str, f64); 4] = [("g", G_LINE_NM), ("F", F_LINE_NM), ("d", D_LINE_NM), ("C", C_LINE_NM)];
+/// The g line, nm.
+pub const G_LINE_NM: f64 = 435.8343;
 /// The d line, nm, where n_d is given.
 pub const D_LINE_NM: f64 = 587.5618;
 /// The F line, nm.

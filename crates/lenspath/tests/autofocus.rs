@@ -31,13 +31,19 @@ const CENTRE_WIDE: PixelRect = PixelRect {
 };
 
 fn focuser(scene: &CompiledScene, f_number: Option<f64>, patch: PixelRect, spp: u32) -> Focuser<'_> {
+    focuser_with(scene, LensPrescription::load("dgauss50").unwrap(), f_number, patch, spp)
+}
+
+fn focuser_with(
+    scene: &CompiledScene,
+    lens: LensPrescription,
+    f_number: Option<f64>,
+    patch: PixelRect,
+    spp: u32,
+) -> Focuser<'_> {
     let pose = CameraPose::look_at(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y);
     let (width, height) = (320, 240);
-    let mut camera = RealisticCameraSettings::new(
-        LensPrescription::load("dgauss50").unwrap(),
-        (36.0, 27.0),
-        LensFocus::SensorPositionMm(0.0),
-    );
+    let mut camera = RealisticCameraSettings::new(lens, (36.0, 27.0), LensFocus::SensorPositionMm(0.0));
     camera.f_number = f_number;
     let settings = AutofocusSettings {
         camera,
@@ -107,6 +113,46 @@ fn every_strategy_focuses_a_plane_at_its_conjugate() {
     let (near, far) = f.sweep_range_mm();
     let steps = ((far - near) / f.pixel_pitch_mm()).floor() as usize + 1;
     assert_eq!(sweep.evaluations.len(), steps);
+}
+
+/// On a lens with strong longitudinal colour (a plain N-BK7 singlet wide open at f/2.8, its
+/// F and C foci 0.77 mm apart) every strategy lands where the polychromatic
+/// image is sharpest: within a depth of focus of the fine sweep's peak
+/// (the sweep steps the sensor by a pixel pitch and judges each render's
+/// luminance).
+#[test]
+fn on_a_lens_with_strong_colour_every_strategy_lands_on_the_sweeps_peak() {
+    let distance = 1.5;
+    let mut scene = checker_scene();
+    add_checkerboard(&mut scene, (-0.8, 0.8), (-0.6, 0.6), distance, 0.02);
+    let scene = scene.compile(&BvhSettings::default()).unwrap();
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/lenses/bk7-singlet-50.dat");
+    let singlet = LensPrescription::load(path.to_str().unwrap()).unwrap();
+    let mut f = focuser_with(&scene, singlet, None, CENTRE, 4);
+    let sweep = f.run(Strategy::Sweep).unwrap();
+    let dof = f.depth_of_focus_mm(sweep.sensor_z_mm);
+    let conjugate = f.sensor_z_for_distance(f64::from(distance)).unwrap();
+    eprintln!(
+        "sweep peak {:.4} mm, the d line's conjugate {conjugate:.4} mm, depth of focus {dof:.4} mm",
+        sweep.sensor_z_mm
+    );
+    for strategy in [
+        Strategy::EarlyExit { patience: 12 },
+        Strategy::Fast,
+        Strategy::Rangefinder,
+        Strategy::Depth,
+    ] {
+        let r = f.run(strategy).unwrap();
+        let error = (r.sensor_z_mm - sweep.sensor_z_mm) / dof;
+        eprintln!(
+            "{strategy:?}: {:.4} mm, {error:+.2} DoF from the sweep's peak",
+            r.sensor_z_mm
+        );
+        assert!(
+            error.abs() <= 1.0,
+            "{strategy:?}: {error:+.2} DoF from the sweep's peak"
+        );
+    }
 }
 
 /// The observer sees every evaluation as it is made, in order, run after run

@@ -2,7 +2,9 @@
 //! whose glass disperses: a distant point rendered at the F and C lines
 //! comes to its sharpest focus at sensor positions as far apart as the
 //! paraxial longitudinal colour `BFD(F) − BFD(C)` says, and off the axis its
-//! F and C images lie as far apart as the lateral colour says.
+//! F and C images lie as far apart as the lateral colour says; an achromat
+//! of the same focal length blurs colour less by the factor the analysis
+//! gives.
 
 use std::sync::atomic::AtomicBool;
 
@@ -10,7 +12,7 @@ use glam::{DMat3, DVec3, Vec3};
 use lenspath::accel::BvhSettings;
 use lenspath::camera::{CameraPose, LensFocus, RealisticCamera, RealisticCameraSettings};
 use lenspath::film::{Filter, Image, PixelRect};
-use lenspath::glass::{C_LINE_NM, F_LINE_NM};
+use lenspath::glass::{C_LINE_NM, D_LINE_NM, F_LINE_NM, G_LINE_NM};
 use lenspath::integrator::Integrator;
 use lenspath::lens::chromatic::ChromaticAnalysis;
 use lenspath::lens::{LensPrescription, LensSystem, TableConvention};
@@ -131,10 +133,11 @@ fn second_moment_mm2(image: &Image) -> f64 {
     second / sum * pitch * pitch
 }
 
-/// The sensor position of the sharpest image: every ray's place on the
-/// sensor moves linearly with the sensor's position, so the spot's second
-/// moment is a parabola in it; fitted by least squares, its vertex.
-fn sharpest_focus_mm(scene: &CompiledScene, lens: &LensPrescription, around_mm: f64, wavelength_nm: f64) -> f64 {
+/// The sensor position of the sharpest image and how fast the spot grows
+/// away from it: every ray's place on the sensor moves linearly with the
+/// sensor's position, so the spot's second moment is a parabola
+/// `a + c (z − vertex)²` in it; fitted by least squares, `(vertex, c)`.
+fn sharpest_focus_mm(scene: &CompiledScene, lens: &LensPrescription, around_mm: f64, wavelength_nm: f64) -> (f64, f64) {
     let offsets: Vec<f64> = (-4..=4).map(|k| f64::from(k) * 0.35).collect();
     // Normal equations for m(z) = a + b t + c t², t = z − around.
     let (mut normal, mut rhs) = (DMat3::ZERO, DVec3::ZERO);
@@ -146,7 +149,7 @@ fn sharpest_focus_mm(scene: &CompiledScene, lens: &LensPrescription, around_mm: 
     }
     let DVec3 { y: b, z: c, .. } = normal.inverse() * rhs;
     assert!(c > 0.0, "the spot does not shrink toward a focus at {wavelength_nm} nm");
-    around_mm - b / (2.0 * c)
+    (around_mm - b / (2.0 * c), c)
 }
 
 /// Longitudinal colour, rendered: the F and C images of a distant point
@@ -160,13 +163,61 @@ fn rendered_longitudinal_colour_matches_the_analysis() {
     assert!(predicted < -1.0, "an uncorrected singlet: {predicted} mm");
     let around = system.real_focus_at_infinity(0.1).unwrap().0;
     let scene = distant_disc(0.0, 0.5);
-    let f = sharpest_focus_mm(&scene, &lens, around, F_LINE_NM);
-    let c = sharpest_focus_mm(&scene, &lens, around, C_LINE_NM);
+    let (f, _) = sharpest_focus_mm(&scene, &lens, around, F_LINE_NM);
+    let (c, _) = sharpest_focus_mm(&scene, &lens, around, C_LINE_NM);
     let measured = f - c;
     eprintln!("longitudinal colour: rendered {measured:.4} mm, analysis {predicted:.4} mm");
     assert!(
         (measured / predicted - 1.0).abs() < 0.1,
         "sharpest F image at {f:.4} mm, C at {c:.4} mm: {measured:.4} mm apart; analysis {predicted:.4} mm"
+    );
+}
+
+/// A cemented N-BK7/SF5 achromat (the doublet `lens::chromatic`'s tests
+/// check against rayoptics, scaled to f = 100 mm) behind the singlet's
+/// f/16 stop: its F and C lines focus together, and what is left is the
+/// secondary spectrum, largest at the blue end.
+const ACHROMAT: &str = "0 2 0 6.25\n61.53 4.030 1.5168 25 N-BK7\n-44.503 2.519 1.6727 25 SF5\n-129.86 95 1 25\n";
+
+/// Colour blur, rendered: with the sensor where the d line focuses, the g
+/// line's (blue) image is blurred by its focus shift; its RMS radius grows
+/// by `√c · |z_g − z_d|` (the parabola's curvature `c` times the measured
+/// shift). The singlet's colour blur is larger than the achromat's by the
+/// ratio of their paraxial shifts `BFD(g) − BFD(d)` (same focal length and
+/// f-number, so the same cone of rays), within 10%.
+#[test]
+fn an_achromat_blurs_colour_less_than_a_singlet_by_the_analysis_factor() {
+    let scene = distant_disc(0.0, 0.5);
+    let colour_blur = |table: &str| {
+        let lens = LensPrescription::parse(table, "lens", TableConvention::ThicknessToNext).unwrap();
+        let system = LensSystem::new(&lens);
+        let chromatic = ChromaticAnalysis::new(&system, 1.0).unwrap();
+        let line = |name: &str| chromatic.lines.iter().find(|l| l.line == name).unwrap();
+        assert!(
+            (line("d").effective_focal_length_mm / 100.0 - 1.0).abs() < 0.01,
+            "{chromatic:?}"
+        );
+        let predicted_shift = line("g").back_focal_distance_mm - line("d").back_focal_distance_mm;
+        let focus = |nm: f64| {
+            let around = system.at_wavelength(nm).real_focus_at_infinity(0.1).unwrap().0;
+            sharpest_focus_mm(&scene, &lens, around, nm)
+        };
+        let ((g, curvature), (d, _)) = (focus(G_LINE_NM), focus(D_LINE_NM));
+        (curvature.sqrt() * (g - d).abs(), g - d, predicted_shift)
+    };
+    let (singlet, singlet_shift, singlet_predicted) = colour_blur(SINGLET);
+    let (achromat, achromat_shift, achromat_predicted) = colour_blur(ACHROMAT);
+    let (measured, predicted) = (singlet / achromat, singlet_predicted / achromat_predicted);
+    eprintln!(
+        "g-line blur at the d focus: singlet {:.2} µm (shift {singlet_shift:.4} mm, paraxial {singlet_predicted:.4}), \
+         achromat {:.2} µm (shift {achromat_shift:.4} mm, paraxial {achromat_predicted:.4}); ratio {measured:.3}, analysis {predicted:.3}",
+        singlet * 1e3,
+        achromat * 1e3
+    );
+    assert!(predicted.abs() > 5.0, "the achromat corrects colour: {predicted}");
+    assert!(
+        (measured / predicted.abs() - 1.0).abs() < 0.1,
+        "colour blur ratio {measured:.3}, analysis {predicted:.3}"
     );
 }
 
