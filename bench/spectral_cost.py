@@ -9,9 +9,9 @@ with --no-dispersion, so nothing disperses):
 
 RGB_BINARY is a lenspath built from commit 6b3116f (before spectral transport).
 
-dgauss50's dispersion (its patent's Abbe numbers, one wavelength per camera
-ray after the lens) against the same lens with --no-dispersion (every glass
-at its d-line index, four wavelengths per path), with one binary:
+dgauss50's dispersion (its patent's Abbe numbers; each sample's four
+wavelengths weighted through the lens, docs/spectral.md) against the same
+lens with --no-dispersion (every glass at its d-line index), with one binary:
 
     target/python-venv/bin/python bench/spectral_cost.py dispersion BINARY"""
 
