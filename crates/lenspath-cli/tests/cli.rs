@@ -157,10 +157,59 @@ fn bad_input_gives_one_error_line_and_exit_code_2() {
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(2), "{args:?} → {err}");
         assert!(err.contains(expected), "{args:?}: expected '{expected}' in: {err}");
-        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: one line, got: {err}");
-        assert!(!err.contains("panicked"));
+        assert_one_error(&args, &err);
     }
     assert!(!ok_out.exists(), "a failed command must not write output");
+}
+
+/// One error, never a panic: lenspath's own errors are one line; a usage
+/// error clap finds is clap's whole block (the problem, its tips, and the
+/// pointer to --help).
+fn assert_one_error(args: &[&str], err: &str) {
+    assert!(err.starts_with("error: "), "{args:?}: {err}");
+    assert_eq!(err.matches("error:").count(), 1, "{args:?}: one error, got: {err}");
+    assert!(!err.contains("panicked"), "{args:?}: {err}");
+    if !err.trim_end().ends_with("For more information, try '--help'.") {
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: one line, got: {err}");
+    }
+}
+
+/// A usage error says what is missing or what was meant: the missing
+/// argument by name, clap's "a similar argument exists" and the valid
+/// values, with exit code 2.
+#[test]
+fn usage_errors_name_the_argument_and_what_was_meant() {
+    let cases: Vec<(Vec<&str>, Vec<&str>)> = vec![
+        (vec!["lens"], vec!["required arguments were not provided", "<LENS>"]),
+        (
+            vec!["autofocus", "--res", "64x48"],
+            vec!["required arguments were not provided", "--patch <X,Y,W,H>"],
+        ),
+        (
+            vec!["bokeh", "x.png"],
+            vec!["required arguments were not provided", "--mask <MASK>"],
+        ),
+        (
+            vec!["render", "--sp", "2"],
+            vec!["unexpected argument '--sp'", "similar argument exists: '--spp'"],
+        ),
+        (
+            vec!["render", "--camera", "thinlens"],
+            vec![
+                "invalid value 'thinlens'",
+                "possible values: pinhole, thin-lens, realistic",
+            ],
+        ),
+    ];
+    for (args, expected) in cases {
+        let o = lenspath(&args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?} → {err}");
+        for e in expected {
+            assert!(err.contains(e), "{args:?}: expected '{e}' in: {err}");
+        }
+        assert_one_error(&args, &err);
+    }
 }
 
 #[test]
@@ -487,7 +536,7 @@ fn bokeh_spreads_light_into_the_mask_and_refuses_bad_input() {
         let err = stderr(&o);
         assert_eq!(o.status.code(), Some(2), "{args:?} → {err}");
         assert!(err.contains(expected), "{args:?}: expected '{expected}' in: {err}");
-        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+        assert_one_error(&args, &err);
     }
     // Depth-aware blur's own mistakes ({in} and {out} stand for the paths).
     for (line, expected) in [

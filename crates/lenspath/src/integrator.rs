@@ -14,6 +14,7 @@ use crate::math::{Frame, Rgb};
 use crate::ray::{offset_origin, Ray};
 use crate::sampling::{power_heuristic, Sampler};
 use crate::scene::{CompiledScene, SurfaceHit};
+use crate::shapes::MaterialId;
 use crate::spectrum::{SampledSpectrum, SampledWavelengths, Spectrum};
 
 /// How far and how carefully paths are traced.
@@ -130,17 +131,20 @@ fn trace_path(
     let mut bsdf_pdf = 0.0f32;
     let mut ray = camera_ray;
     let mut depth = 0;
+    let mut emitted = EmissionCache::default();
+    let mut bsdfs = BsdfCache::default();
+    let area_lights = scene.area_lights().len();
     loop {
         *rays += 1;
         let Some(hit) = scene.intersect(&ray) else {
-            for (light, emission) in scene.lights_with_emission() {
+            for (i, (light, emission)) in scene.lights_with_emission().enumerate() {
                 if let Some(light_pdf) = light.escaped_pdf() {
                     let w = if specular_bounce {
                         1.0
                     } else {
                         power_heuristic(1.0, bsdf_pdf, n_light, light_pdf)
                     };
-                    l += beta * emission.sample(lambda) * w;
+                    l += beta * emitted.get(area_lights + i, emission, lambda) * w;
                 }
             }
             break;
@@ -156,7 +160,7 @@ fn trace_path(
                 } else {
                     power_heuristic(1.0, bsdf_pdf, n_light, light.pdf(hit.t, cos_light))
                 };
-                l += beta * light.emission.sample(lambda) * w;
+                l += beta * emitted.get(index as usize, &light.emission, lambda) * w;
             }
         }
         if depth == settings.max_depth {
@@ -164,11 +168,23 @@ fn trace_path(
         }
         depth += 1;
 
-        let bsdf = scene.spectral_material(hit.material).bsdf(lambda);
+        let bsdf = bsdfs.get(scene, hit.material, lambda);
         let frame = Frame::from_normal(hit.shading_normal);
         let wo = frame.to_local(-ray.direction);
         if !bsdf.is_specular() && settings.light_samples > 0 {
-            l += beta * direct_lighting(scene, &hit, &bsdf, &frame, wo, lambda, sampler, settings, rays);
+            l += beta
+                * direct_lighting(
+                    scene,
+                    &hit,
+                    &bsdf,
+                    &frame,
+                    wo,
+                    lambda,
+                    &mut emitted,
+                    sampler,
+                    settings,
+                    rays,
+                );
         }
 
         // Continue the path by sampling the BSDF.
@@ -212,6 +228,7 @@ fn direct_lighting(
     frame: &Frame,
     wo: Vec3,
     lambda: &SampledWavelengths,
+    emitted: &mut EmissionCache,
     sampler: &mut Sampler,
     settings: &PathSettings,
     rays: &mut u64,
@@ -223,19 +240,79 @@ fn direct_lighting(
         frame,
         wo,
         lambda,
+        emitted,
         sampler,
         settings,
         rays,
     };
     // Two loops, not one over `dyn` lights: each light's sampling inlines.
     let mut sum = SampledSpectrum::ZERO;
-    for light in scene.area_lights() {
-        sum += shading.light_sum(&light.emission, |p, u| light.sample(p, u));
+    for (i, light) in scene.area_lights().iter().enumerate() {
+        sum += shading.light_sum(i, &light.emission, |p, u| light.sample(p, u));
     }
-    for (light, emission) in scene.lights_with_emission() {
-        sum += shading.light_sum(emission, |p, u| light.sample(p, u));
+    let area_lights = scene.area_lights().len();
+    for (i, (light, emission)) in scene.lights_with_emission().enumerate() {
+        sum += shading.light_sum(area_lights + i, emission, |p, u| light.sample(p, u));
     }
     sum
+}
+
+/// Each material's BSDF at the path's wavelengths, made once per path
+/// (materials have no textures, so a BSDF depends on the wavelengths
+/// alone), for the first [`BsdfCache::MATERIALS`] materials. A dispersive
+/// glass is made at every hit: making it keeps the hero wavelength alone.
+#[derive(Default)]
+struct BsdfCache {
+    bsdfs: [Option<Bsdf>; BsdfCache::MATERIALS],
+}
+
+impl BsdfCache {
+    const MATERIALS: usize = 8;
+
+    /// Material `id`'s BSDF at `lambda`.
+    #[inline(always)]
+    fn get(&mut self, scene: &CompiledScene, id: MaterialId, lambda: &mut SampledWavelengths) -> Bsdf {
+        let Some(slot) = self.bsdfs.get_mut(id as usize) else {
+            return scene.spectral_material(id).bsdf(lambda);
+        };
+        if let Some(bsdf) = slot {
+            return *bsdf;
+        }
+        let material = scene.spectral_material(id);
+        let bsdf = material.bsdf(lambda);
+        if !material.disperses() {
+            *slot = Some(bsdf);
+        }
+        bsdf
+    }
+}
+
+/// Each light's emission at the path's wavelengths, evaluated once per
+/// path: the wavelengths never change along a path (a dispersive surface
+/// changes only their densities). Lights are numbered area lights first,
+/// then [`CompiledScene::lights`]; the first [`EmissionCache::LIGHTS`] are kept.
+#[derive(Default)]
+struct EmissionCache {
+    values: [SampledSpectrum; EmissionCache::LIGHTS],
+    /// Bit `i` set: `values[i]` holds light `i`'s emission.
+    known: u8,
+}
+
+impl EmissionCache {
+    const LIGHTS: usize = 8;
+
+    /// Light `light`'s `emission` at `lambda`.
+    #[inline(always)]
+    fn get(&mut self, light: usize, emission: &Spectrum, lambda: &SampledWavelengths) -> SampledSpectrum {
+        if light >= Self::LIGHTS {
+            return emission.sample(lambda);
+        }
+        if self.known & (1 << light) == 0 {
+            self.values[light] = emission.sample(lambda);
+            self.known |= 1 << light;
+        }
+        self.values[light]
+    }
 }
 
 /// What direct lighting at one hit reads and advances.
@@ -246,24 +323,25 @@ struct Shading<'a> {
     frame: &'a Frame,
     wo: Vec3,
     lambda: &'a SampledWavelengths,
+    emitted: &'a mut EmissionCache,
     sampler: &'a mut Sampler,
     settings: &'a PathSettings,
     rays: &'a mut u64,
 }
 
 impl Shading<'_> {
-    /// One light's `light_samples` shadow rays, its samples drawn by
-    /// `sample_light`, what it emits `emission`.
+    /// Light number `light`'s `light_samples` shadow rays, its samples
+    /// drawn by `sample_light`, what it emits `emission`.
     #[inline(always)]
     fn light_sum(
         &mut self,
+        light: usize,
         emission: &Spectrum,
         sample_light: impl Fn(Vec3, Vec2) -> Option<LightSample>,
     ) -> SampledSpectrum {
         let (hit, bsdf, wo) = (self.hit, self.bsdf, self.wo);
         let n_light = self.settings.light_samples as f32;
         let mut sum = SampledSpectrum::ZERO;
-        let mut emitted = None;
         for _ in 0..self.settings.light_samples {
             let u = self.sampler.get_2d();
             let Some(ls) = sample_light(hit.p, u) else {
@@ -294,7 +372,7 @@ impl Shading<'_> {
             } else {
                 power_heuristic(n_light, ls.pdf, 1.0, bsdf.pdf(wo, wi))
             };
-            let emitted = *emitted.get_or_insert_with(|| emission.sample(self.lambda));
+            let emitted = self.emitted.get(light, emission, self.lambda);
             sum += f * emitted * (ls.scale * w / (ls.pdf * n_light));
         }
         sum

@@ -178,6 +178,12 @@ impl SpectralMaterial {
         }
     }
 
+    /// True for a glass whose index depends on the wavelength (its BSDF
+    /// keeps only the hero wavelength).
+    pub fn disperses(&self) -> bool {
+        matches!(self, SpectralMaterial::Dielectric { eta, .. } if !eta.is_constant())
+    }
+
     /// The BSDF at the wavelengths `lambda`. A dispersive dielectric bends
     /// each wavelength its own way, so it keeps only the hero wavelength
     /// (pbrt-v4's rule, unbiased: see [`SampledWavelengths::terminate_secondary`]).

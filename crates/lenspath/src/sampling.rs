@@ -328,6 +328,7 @@ impl Distribution1D {
 
     /// Picks an item for `u` in [0, 1): returns it, its probability, and `u`
     /// remapped to [0, 1) within the item (so it can be reused).
+    #[inline]
     pub fn sample(&self, u: f32) -> (usize, f32, f32) {
         let n = self.cdf.len() - 1;
         let i = self.cdf.partition_point(|&c| c <= u).clamp(1, n) - 1;

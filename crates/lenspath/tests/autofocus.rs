@@ -59,13 +59,18 @@ fn focuser_with(
     Focuser::new(scene, pose, settings).unwrap()
 }
 
-#[test]
-fn every_strategy_focuses_a_plane_at_its_conjugate() {
-    // A plane 1.5 m away, squares of 2 cm (about 5 pixels here).
-    let distance = 1.5;
+/// A checkerboard filling the view `distance` metres away, squares of 2 cm
+/// (about 5 pixels at 1.5 m).
+fn board_at(distance: f32) -> CompiledScene {
     let mut scene = checker_scene();
     add_checkerboard(&mut scene, (-0.8, 0.8), (-0.6, 0.6), distance, 0.02);
-    let scene = scene.compile(&BvhSettings::default()).unwrap();
+    scene.compile(&BvhSettings::default()).unwrap()
+}
+
+#[test]
+fn every_strategy_focuses_a_plane_at_its_conjugate() {
+    let distance = 1.5;
+    let scene = board_at(distance);
     // At f/5.6 the lens's spherical aberration moves its best focus by well under a DoF.
     let mut f = focuser(&scene, Some(5.6), CENTRE, 4);
     let conjugate = f.sensor_z_for_distance(f64::from(distance)).unwrap();
@@ -123,9 +128,7 @@ fn every_strategy_focuses_a_plane_at_its_conjugate() {
 #[test]
 fn on_a_lens_with_strong_colour_every_strategy_lands_on_the_sweeps_peak() {
     let distance = 1.5;
-    let mut scene = checker_scene();
-    add_checkerboard(&mut scene, (-0.8, 0.8), (-0.6, 0.6), distance, 0.02);
-    let scene = scene.compile(&BvhSettings::default()).unwrap();
+    let scene = board_at(distance);
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/lenses/bk7-singlet-50.dat");
     let singlet = LensPrescription::load(path.to_str().unwrap()).unwrap();
     let mut f = focuser_with(&scene, singlet, None, CENTRE, 4);
@@ -159,9 +162,7 @@ fn on_a_lens_with_strong_colour_every_strategy_lands_on_the_sweeps_peak() {
 /// (what `lenspath view` draws as the search goes).
 #[test]
 fn the_observer_sees_every_evaluation_in_order() {
-    let mut scene = checker_scene();
-    add_checkerboard(&mut scene, (-0.8, 0.8), (-0.6, 0.6), 1.5, 0.02);
-    let scene = scene.compile(&BvhSettings::default()).unwrap();
+    let scene = board_at(1.5);
     let seen = std::sync::Mutex::new(Vec::new());
     let mut f = focuser(&scene, Some(5.6), CENTRE, 2);
     f.on_evaluation(|e| seen.lock().unwrap().push(*e));
