@@ -5,8 +5,6 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-cargo test --workspace
-
 # The viewer's browser tests drive Debian's Chromium through Playwright (whose
 # own browser download is not used). Installed here when we may (root, apt);
 # elsewhere they skip, saying so, unless CI is set.
@@ -20,5 +18,21 @@ if [ ! -x "$venv/bin/python" ]; then
     python3 -m venv "$venv"
 fi
 "$venv/bin/python" -m pip install --quiet --upgrade pip
-"$venv/bin/python" -m pip install --quiet ".[test]"
+
+# The package's wheel is a release build (fat LTO, one codegen unit: minutes
+# with long single-threaded stretches), so it builds in its own target
+# directory while the Rust tests build and run, not after them.
+pip_log=target/pip-install.log
+CARGO_TARGET_DIR=target/wheel "$venv/bin/python" -m pip install --quiet ".[test]" >"$pip_log" 2>&1 &
+pip_pid=$!
+trap 'kill "$pip_pid" 2>/dev/null || true' EXIT
+
+cargo test --workspace
+
+if ! wait "$pip_pid"; then
+    cat "$pip_log" >&2
+    echo "pip install .[test] failed (log above, also in $pip_log)" >&2
+    exit 1
+fi
+trap - EXIT
 "$venv/bin/python" -m pytest -q tests/python

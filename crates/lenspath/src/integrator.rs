@@ -131,9 +131,8 @@ fn trace_path(
     let mut bsdf_pdf = 0.0f32;
     let mut ray = camera_ray;
     let mut depth = 0;
-    let mut emitted = EmissionCache::default();
+    let mut emitted = EmissionCache::new(scene);
     let mut bsdfs = BsdfCache::default();
-    let area_lights = scene.area_lights().len();
     loop {
         *rays += 1;
         let Some(hit) = scene.intersect(&ray) else {
@@ -144,7 +143,7 @@ fn trace_path(
                     } else {
                         power_heuristic(1.0, bsdf_pdf, n_light, light_pdf)
                     };
-                    l += beta * emitted.get(area_lights + i, emission, lambda) * w;
+                    l += beta * emitted.get(LightRef::Other(i), emission, lambda) * w;
                 }
             }
             break;
@@ -160,7 +159,7 @@ fn trace_path(
                 } else {
                     power_heuristic(1.0, bsdf_pdf, n_light, light.pdf(hit.t, cos_light))
                 };
-                l += beta * emitted.get(index as usize, &light.emission, lambda) * w;
+                l += beta * emitted.get(LightRef::Area(index as usize), &light.emission, lambda) * w;
             }
         }
         if depth == settings.max_depth {
@@ -248,11 +247,10 @@ fn direct_lighting(
     // Two loops, not one over `dyn` lights: each light's sampling inlines.
     let mut sum = SampledSpectrum::ZERO;
     for (i, light) in scene.area_lights().iter().enumerate() {
-        sum += shading.light_sum(i, &light.emission, |p, u| light.sample(p, u));
+        sum += shading.light_sum(LightRef::Area(i), &light.emission, |p, u| light.sample(p, u));
     }
-    let area_lights = scene.area_lights().len();
     for (i, (light, emission)) in scene.lights_with_emission().enumerate() {
-        sum += shading.light_sum(area_lights + i, emission, |p, u| light.sample(p, u));
+        sum += shading.light_sum(LightRef::Other(i), emission, |p, u| light.sample(p, u));
     }
     sum
 }
@@ -287,31 +285,56 @@ impl BsdfCache {
     }
 }
 
+/// One of a scene's lights: an emissive shape's or one of
+/// [`CompiledScene::lights`], by its index in that list.
+#[derive(Clone, Copy)]
+enum LightRef {
+    /// `scene.area_lights()[i]`.
+    Area(usize),
+    /// The `i`-th of `scene.lights_with_emission()`.
+    Other(usize),
+}
+
 /// Each light's emission at the path's wavelengths, evaluated once per
 /// path: the wavelengths never change along a path (a dispersive surface
-/// changes only their densities). Lights are numbered area lights first,
-/// then [`CompiledScene::lights`]; the first [`EmissionCache::LIGHTS`] are kept.
-#[derive(Default)]
+/// changes only their densities). The first [`EmissionCache::LIGHTS`]
+/// lights are kept, area lights first.
 struct EmissionCache {
     values: [SampledSpectrum; EmissionCache::LIGHTS],
     /// Bit `i` set: `values[i]` holds light `i`'s emission.
     known: u8,
+    /// The scene's area-light count: its other lights are numbered after them.
+    area_lights: usize,
 }
 
 impl EmissionCache {
     const LIGHTS: usize = 8;
 
-    /// Light `light`'s `emission` at `lambda`.
+    /// An empty cache for paths through `scene`.
     #[inline(always)]
-    fn get(&mut self, light: usize, emission: &Spectrum, lambda: &SampledWavelengths) -> SampledSpectrum {
-        if light >= Self::LIGHTS {
+    fn new(scene: &CompiledScene) -> Self {
+        EmissionCache {
+            values: [SampledSpectrum::ZERO; Self::LIGHTS],
+            known: 0,
+            area_lights: scene.area_lights().len(),
+        }
+    }
+
+    /// What `light` emits (`emission`) at `lambda`.
+    #[inline(always)]
+    fn get(&mut self, light: LightRef, emission: &Spectrum, lambda: &SampledWavelengths) -> SampledSpectrum {
+        let slot = match light {
+            LightRef::Area(i) => i,
+            LightRef::Other(i) => self.area_lights + i,
+        };
+        if slot >= Self::LIGHTS {
             return emission.sample(lambda);
         }
-        if self.known & (1 << light) == 0 {
-            self.values[light] = emission.sample(lambda);
-            self.known |= 1 << light;
+        if self.known & (1 << slot) == 0 {
+            self.values[slot] = emission.sample(lambda);
+            self.known |= 1 << slot;
         }
-        self.values[light]
+        self.values[slot]
     }
 }
 
@@ -330,12 +353,12 @@ struct Shading<'a> {
 }
 
 impl Shading<'_> {
-    /// Light number `light`'s `light_samples` shadow rays, its samples
-    /// drawn by `sample_light`, what it emits `emission`.
+    /// `light`'s `light_samples` shadow rays, its samples drawn by
+    /// `sample_light`, what it emits `emission`.
     #[inline(always)]
     fn light_sum(
         &mut self,
-        light: usize,
+        light: LightRef,
         emission: &Spectrum,
         sample_light: impl Fn(Vec3, Vec2) -> Option<LightSample>,
     ) -> SampledSpectrum {
