@@ -1,14 +1,29 @@
-"""Reference numbers for `lens::chromatic::tests::lines_agree_with_rayoptics`:
-the paraxial effective focal length and back focal length (last glass surface
-to focus) at the g, F, d and C lines of a thin N-BK7 singlet, an N-BK7/SF5
-cemented achromat and rayoptics' documented Cooke triplet, by rayoptics with
-its own Schott catalogue (opticalglass). Run in a virtual environment with
-`pip install rayoptics`:
+"""Reference numbers from rayoptics (an independent lens design package) for
+lenspath's lens tests:
+
+- `lens::chromatic::tests::lines_agree_with_rayoptics`: the paraxial effective
+  focal length and back focal length (last glass surface to focus) at the g, F,
+  d and C lines of a thin N-BK7 singlet, an N-BK7/SF5 cemented achromat and
+  rayoptics' documented Cooke triplet, with its own Schott catalogue.
+- `lens::system::tests::an_aspheric_singlet_traces_as_rayoptics_does`: an even
+  asphere (conic and A4-A8) on a singlet; where parallel rays cross the axis.
+- `lens::lentil::tests::the_aspheric_fisheye_traces_as_rayoptics_does`: the
+  lentil database's 0014 (A4-A10 on four surfaces), read from `../shared` as
+  lenspath reads it; where real rays cross a plane behind the lens.
+
+Run in a virtual environment with `pip install rayoptics` (0.9.8 gave the
+recorded numbers):
 
     python bench/peers/lens_vs_rayoptics.py
 """
 
+import json
+from pathlib import Path
+
+import numpy as np
+from rayoptics.elem.profiles import EvenPolynomial
 from rayoptics.environment import FieldSpec, OpticalModel, PupilSpec, WvlSpec
+from rayoptics.raytr import raytrace
 
 LINES_NM = (435.8343, 486.1327, 587.5618, 656.2725)
 LENSES = {
@@ -45,3 +60,90 @@ for name, rows in LENSES.items():
     for k, nm in enumerate(LINES_NM):
         efl, bfl = first_order(rows, k)
         print(f"{name} {nm} nm: EFL {efl!r}, bfl {bfl!r}")
+
+
+D_LINE_NM = 587.5618
+
+
+def d_line_model(object_distance_mm: float) -> OpticalModel:
+    """An empty model traced at the d line, the object `object_distance_mm` in front."""
+    opm = OpticalModel()
+    osp = opm["optical_spec"]
+    osp["pupil"] = PupilSpec(osp, key=["object", "epd"], value=2)
+    osp["fov"] = FieldSpec(osp, key=["object", "angle"], flds=[0.0])
+    osp["wvls"] = WvlSpec([(D_LINE_NM, 1.0)], ref_wl=0)
+    opm.radius_mode = True
+    opm["seq_model"].gaps[0].thi = object_distance_mm
+    return opm
+
+
+def last_ray(opm: OpticalModel, start_y: float, angle_deg: float):
+    """Point and direction of a meridional ray after the last surface (its local frame)."""
+    a = np.radians(angle_deg)
+    path = raytrace.trace(
+        opm["seq_model"], np.array([0.0, start_y, 0.0]), np.array([0.0, np.sin(a), np.cos(a)]), D_LINE_NM
+    )[0]
+    return path[-2][0], path[-2][1]
+
+
+# The aspheric singlet: an AL50100-style front asphere on n 1.5168, flat back.
+singlet = d_line_model(1e10)
+singlet["seq_model"].add_surface([0.0, 1.0])
+singlet["seq_model"].add_surface([50.3583, 10.2, 1.5168, 64.17])
+singlet["seq_model"].ifcs[-2].profile = EvenPolynomial(
+    r=50.3583, cc=-0.789119, coefs=[0.0, 2.10405e-7, 1.76468e-11, 1.02641e-15]
+)
+singlet["seq_model"].add_surface([0.0, 90.0])
+singlet.update_model()
+fod = singlet["analysis_results"]["parax_data"].fod
+print(f"aspheric singlet: EFL {float(fod.efl)!r}, bfl {float(fod.bfl)!r}")
+for height in (1.0, 5.0, 10.0, 15.0, 20.0, 24.0):
+    p, d = last_ray(singlet, height, 0.0)
+    print(f"  parallel ray at {height} mm crosses the axis {float(p[2] - p[1] * d[2] / d[1])!r} mm behind the flat")
+
+# lentil 0014, as lenspath::lens::lentil reads it: flats from radii >= 99999 mm,
+# the iris as the stop, n_d (V_d only matters off the d line), A4-A10 on a sphere.
+lentil = Path(__file__).resolve().parents[2].parent / "shared" / "lenses" / "lentil" / "lenses.json"
+fisheye = d_line_model(50.0)
+sm = fisheye["seq_model"]
+for e in json.loads(lentil.read_text())["0014"]["optical-elements-patent"]:
+    flat = e["material"] == "iris" or abs(e["radius"]) >= 99999
+    r = 0.0 if flat else e["radius"]
+    if e["material"] in ("air", "iris") or e["ior"] in (None, 1.0):
+        sm.add_surface([r, e["thickness"]])
+    else:
+        sm.add_surface([r, e["thickness"], e["ior"], e["abbe"]])
+    if e["material"] == "iris":
+        sm.set_stop()
+    if e["aspherical-equation"]:
+        sm.ifcs[-2].profile = EvenPolynomial(r=r, cc=0.0, coefs=[0.0, *e["aspherical-equation"]])
+fisheye.update_model()
+fod = fisheye["analysis_results"]["parax_data"].fod
+print(f"lentil 0014: EFL {float(fod.efl)!r}, bfl {float(fod.bfl)!r}")
+for height, angle in [(0.5, 0.0), (2.0, 0.0), (-4.0, 20.0), (-12.0, 40.0), (-8.0, 40.0), (-16.0, 60.0)]:
+    # Start 50 mm in front, aimed to cross the front vertex plane at `height`.
+    p, d = last_ray(fisheye, height - np.tan(np.radians(angle)) * 50.0, angle)
+    behind = float(p[1] + d[1] * (10.0 - p[2]) / d[2])
+    print(f"  ray at {height} mm, {angle} deg: height {behind!r} 10 mm behind the rear vertex")
+
+# Zemax files (crates/lenspath/tests/data/lenses), as rayoptics reads them, at the d
+# line; `tests/lens_files.rs::zemax_files_trace_as_rayoptics_reads_them`. rayoptics
+# has no L-TIM28 (it substitutes S-TIM28), so that glass gets lenspath's n_d.
+from opticalglass.opticalmedium import ConstantIndex  # noqa: E402
+from rayoptics.environment import open_model  # noqa: E402
+
+LENS_FILES = Path(__file__).resolve().parents[2] / "crates" / "lenspath" / "tests" / "data" / "lenses"
+for name in ("US08427765-1.ZMX", "US00583336-2-scaled.zmx"):
+    opm = open_model(str(LENS_FILES / name))
+    sm = opm["seq_model"]
+    opm["optical_spec"]["wvls"] = WvlSpec([(D_LINE_NM, 1.0)], ref_wl=0)
+    if name.startswith("US08427765"):
+        sm.gaps[3].medium = ConstantIndex(1.689479492377863, "L-TIM28 (lenspath's n_d)")
+    opm.update_model()
+    fod = opm["analysis_results"]["parax_data"].fod
+    print(f"{name}: EFL {float(fod.efl)!r}, bfl {float(fod.bfl)!r}")
+    sm.gaps[0].thi = 50.0  # rays start 50 mm in front of the first surface
+    for height in (1.0, 4.0):
+        p, d = last_ray(opm, height, 0.0)
+        behind = float(p[1] + d[1] * (10.0 - p[2]) / d[2])
+        print(f"  parallel ray at {height} mm: height {behind!r} 10 mm behind the rear vertex")

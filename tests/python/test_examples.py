@@ -21,7 +21,7 @@ def test_readme_pictures_match_the_clis(cli, tmp_path: Path) -> None:
         [str(cli), "render", "--spp", "2", "--res", "64x48", "--out", str(theirs)], check=True, capture_output=True
     )
     assert (out / "images" / "cornell-spheres.png").read_bytes() == theirs.read_bytes()
-    for name in lenspath.builtin_lenses():
+    for name in ("dgauss50", "wide22", "tele250", "fisheye10"):
         plot = tmp_path / f"{name}.svg"
         subprocess.run([str(cli), "lens", name, "--plot", str(plot)], check=True, capture_output=True)
         assert (out / "lenses" / f"{name}.svg").read_text() == plot.read_text(), name

@@ -10,10 +10,12 @@ import pytest
 
 import lenspath
 
-LENSES = lenspath.builtin_lenses()
+# The built-in tables, at the scales of a camera lens (the lentil designs include 1 mm
+# fisheyes and 100 mm lenses that focus no nearer than a few focal lengths).
+LENSES = ("dgauss50", "wide22", "tele250", "fisheye10")
 
 
-@pytest.mark.parametrize("name", LENSES)
+@pytest.mark.parametrize("name", lenspath.builtin_lenses())
 def test_analysis_equals_the_clis(cli, name: str) -> None:
     out = subprocess.run([str(cli), "lens", name, "--json"], check=True, capture_output=True, text=True)
     theirs = json.loads(out.stdout)
@@ -22,6 +24,20 @@ def test_analysis_equals_the_clis(cli, name: str) -> None:
     assert len(shared) >= 15, sorted(theirs)
     for key in shared:
         assert ours[key] == theirs[key], key
+
+
+def test_every_shipped_lens_is_offered_and_listed(cli) -> None:
+    out = subprocess.run([str(cli), "lens", "--list", "--json"], check=True, capture_output=True, text=True)
+    listed = json.loads(out.stdout)
+    assert [lens["name"] for lens in listed] == lenspath.builtin_lenses()
+    assert set(LENSES) < set(lenspath.builtin_lenses())
+    for entry in listed:
+        lens = lenspath.Lens.builtin(entry["name"])
+        assert lens.analysis()["effective_focal_length_mm"] == entry["focal_length_mm"], entry["name"]
+    # Any lentil entry by id, also one the list leaves out (lentil's own test lenses).
+    assert lenspath.Lens.builtin("lentil:9993").focal_length_mm == pytest.approx(99.93, abs=0.01)
+    with pytest.raises(lenspath.LensError, match="anamorphic"):
+        lenspath.Lens.builtin("lentil:2001")
 
 
 @pytest.mark.parametrize("name", LENSES)

@@ -19,8 +19,12 @@ use crate::Outcome;
 #[derive(Args, Debug)]
 #[command(allow_negative_numbers = true)]
 pub struct LensArgs {
-    /// Built-in lens (dgauss50, wide22, tele250, fisheye10) or a lens table file.
-    lens: String,
+    /// Shipped lens (see --list: dgauss50, wide22, tele250, fisheye10, lentil:0001 ...), any lentil database entry (lentil:0014), a Zemax .zmx file or a lens table file.
+    #[arg(required_unless_present = "list")]
+    lens: Option<String>,
+    /// List the shipped lenses (name, focal length, f-number, elements, source) instead.
+    #[arg(long, conflicts_with = "lens")]
+    list: bool,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     json: bool,
@@ -30,6 +34,9 @@ pub struct LensArgs {
     /// Also write the chromatic focal shift (paraxial focus against wavelength, 400-700 nm) as SVG.
     #[arg(long, value_name = "FILE")]
     focal_shift_plot: Option<PathBuf>,
+    /// Also write the lens as a lenspath table (thickness to the next surface, glass and aspheric columns): how a Zemax file or a lentil entry is converted.
+    #[arg(long, value_name = "FILE")]
+    write_table: Option<PathBuf>,
     /// Sensor WIDTHxHEIGHT in mm (field of view, pupil sampling).
     #[arg(long, default_value = "36x24", value_parser = parse_sensor)]
     sensor: SensorSize,
@@ -53,6 +60,27 @@ pub struct LensArgs {
     sensor_depth: Option<f64>,
 }
 
+/// Prints the shipped lenses: a header line, then one line each (or a JSON array).
+fn list(json: bool) -> Result<Outcome> {
+    let lenses = lenspath::lens::library::listing()?;
+    if json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&lenses).map_err(|e| Error::InvalidArgument(e.to_string()))?
+        );
+        return Ok(Outcome::Done);
+    }
+    println!("{:<14} {:>8} {:>7} {:>8}  source", "name", "f (mm)", "f/", "elements");
+    for l in lenses {
+        let aspheric = if l.aspheric { ", aspheric" } else { "" };
+        println!(
+            "{:<14} {:>8.2} {:>7.2} {:>8}  {}{aspheric}",
+            l.name, l.focal_length_mm, l.f_number, l.elements, l.source
+        );
+    }
+    Ok(Outcome::Done)
+}
+
 /// Rays per passing-fraction estimate.
 const PASSING_SAMPLES: usize = 20_000;
 
@@ -73,7 +101,10 @@ pub fn run(mut args: LensArgs) -> Result<Outcome> {
             "--close-object-mm must be positive, got {d}"
         )));
     }
-    let prescription = LensPrescription::load(&args.lens)?;
+    let Some(lens) = &args.lens else {
+        return list(args.json);
+    };
+    let prescription = LensPrescription::load(lens)?;
     let wide_open = LensSystem::new(&prescription);
     let system = match args.fstop {
         Some(n) => wide_open.with_f_number(n)?,
@@ -124,6 +155,13 @@ pub fn run(mut args: LensArgs) -> Result<Outcome> {
     if let Some(path) = &args.plot {
         let diagonal = sensor_mm.0.hypot(sensor_mm.1);
         write_text(path, &layout_svg(&system, &analysis, diagonal))?;
+    }
+    if let Some(path) = &args.write_table {
+        let header = format!(
+            "# {} as a lenspath table: radius, thickness to the next surface, n_d, aperture diameter (mm), glass; aspheric terms\n",
+            prescription.name()
+        );
+        write_text(path, &(header + &prescription.table_text()))?;
     }
     if let Some(path) = &args.focal_shift_plot {
         write_text(path, &focal_shift_svg(&system)?)?;

@@ -5,8 +5,9 @@ use std::path::PathBuf;
 use glam::DVec3;
 use lenspath::lens::{
     chromatic::{focal_shift, ChromaticAnalysis},
+    library,
     plot::{focal_shift_svg, layout, layout_svg, Polyline},
-    AnalysisSettings, Direction, LensAnalysis, LensPrescription, LensRay, LensSystem, TableConvention, BUILTIN_LENSES,
+    AnalysisSettings, Direction, LensAnalysis, LensPrescription, LensRay, LensSystem, TableConvention,
 };
 use lenspath::Error;
 use numpy::ndarray::Array2;
@@ -65,19 +66,20 @@ pub(crate) fn drawing_diagonal_mm(sensor_diagonal_mm: Option<f64>) -> f64 {
 
 #[pymethods]
 impl Lens {
-    /// A built-in lens by name (see `builtin_lenses()`).
+    /// A shipped lens by name (see `builtin_lenses()`), or any lentil
+    /// database entry (`lentil:0014`).
     #[staticmethod]
     pub(crate) fn builtin(name: &str) -> PyResult<Lens> {
-        if !BUILTIN_LENSES.iter().any(|(n, _)| *n == name) {
+        if !library::is_shipped(name) && !name.starts_with(lenspath::lens::lentil::PREFIX) {
             return Err(value_error(format!(
                 "unknown built-in lens '{name}'; use one of {}",
-                BUILTIN_LENSES.map(|(n, _)| n).join(", ")
+                builtin_lenses()?.join(", ")
             )));
         }
         Lens::from_prescription(LensPrescription::load(name).map_err(to_py)?)
     }
 
-    /// A lens table file (pbrt / CS184 format).
+    /// A lens table file (pbrt / CS184 format) or a Zemax `.zmx` file.
     #[staticmethod]
     pub(crate) fn load(path: PathBuf) -> PyResult<Lens> {
         if !path.is_file() {
@@ -421,8 +423,8 @@ impl Lens {
     }
 }
 
-/// The built-in lenses' names.
+/// The shipped lenses' names (`lenspath lens --list`).
 #[pyfunction]
-pub(crate) fn builtin_lenses() -> Vec<&'static str> {
-    BUILTIN_LENSES.map(|(n, _)| n).to_vec()
+pub(crate) fn builtin_lenses() -> PyResult<Vec<String>> {
+    Ok(library::shipped().map_err(to_py)?.into_iter().map(|l| l.name).collect())
 }

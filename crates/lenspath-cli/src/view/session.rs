@@ -444,7 +444,9 @@ impl Config {
 
     /// The lens names the page offers: built-ins, the `--lens` files, the dropped tables.
     fn lens_names(&self) -> Vec<String> {
-        let mut names: Vec<String> = BUILTIN_LENSES.iter().map(|(n, _)| n.to_string()).collect();
+        let mut names: Vec<String> = lenspath::lens::library::shipped()
+            .map(|lenses| lenses.into_iter().map(|l| l.name).collect())
+            .unwrap_or_else(|_| BUILTIN_LENSES.iter().map(|(n, _)| n.to_string()).collect());
         names.extend(
             self.allowed_lens_paths
                 .iter()
@@ -464,7 +466,7 @@ impl Config {
     /// The lens `name` names and what a saved file calls it: a built-in, a
     /// dropped table, or a table file inside the scene's folder or given with `--lens`.
     fn resolve_lens(&self, name: &str) -> Result<(LensPrescription, String, bool)> {
-        if BUILTIN_LENSES.iter().any(|(n, _)| *n == name) {
+        if lenspath::lens::library::is_shipped(name) {
             return Ok((LensPrescription::load(name)?, name.to_string(), false));
         }
         if let Some(lens) = self.dropped_lenses.lock().unwrap_or_else(|e| e.into_inner()).get(name) {

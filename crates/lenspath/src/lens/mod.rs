@@ -2,12 +2,18 @@
 //! real-ray analysis, focusing, and the layout plot.
 
 pub mod chromatic;
+pub mod iset;
+pub mod lentil;
+pub mod library;
 pub mod plot;
 pub mod prescription;
+pub mod surface;
 pub mod system;
 pub mod through_focus;
+pub mod zemax;
 
 pub use prescription::{LensPrescription, LensSurface, TableConvention, BUILTIN_LENSES};
+pub use surface::{EvenAsphere, SurfaceShape};
 pub use system::{Direction, LensRay, LensSystem, ParaxialData};
 pub use through_focus::SpotBundle;
 

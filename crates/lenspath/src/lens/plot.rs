@@ -9,6 +9,7 @@ use std::fmt::Write as _;
 use glam::DVec3;
 
 use super::chromatic::focal_shift;
+use super::prescription::LensSurface;
 use super::system::{Direction, LensRay, LensSystem};
 use super::LensAnalysis;
 use crate::error::Result;
@@ -39,15 +40,6 @@ pub struct FanRay {
     /// The colour it is drawn in (CSS): its wavelength's when the lens
     /// disperses, else its field's.
     pub colour: &'static str,
-}
-
-/// Sag of a spherical surface: its axial offset from the vertex at height `y`.
-fn sag(radius: f64, y: f64) -> f64 {
-    if radius == 0.0 {
-        0.0
-    } else {
-        radius - radius.signum() * (radius * radius - y * y).max(0.0).sqrt()
-    }
 }
 
 /// A polyline in the layout's coordinates: (z along the axis, height), mm.
@@ -85,7 +77,7 @@ pub fn layout(system: &LensSystem, analysis: &LensAnalysis, sensor_diagonal_mm: 
 /// focused now): the rays from infinity meet it blurred unless it is at the
 /// infinity focus.
 pub fn layout_focused(system: &LensSystem, analysis: &LensAnalysis, sensor_diagonal_mm: f64, sensor_z: f64) -> Layout {
-    let surfaces: Vec<(f64, f64, f64, f64)> = system.surface_layout().collect();
+    let surfaces: Vec<_> = system.surface_layout().collect();
     let largest_aperture = surfaces.iter().map(|s| s.2).fold(0.0, f64::max);
 
     // Elements: each glass gap between two surfaces.
@@ -93,13 +85,15 @@ pub fn layout_focused(system: &LensSystem, analysis: &LensAnalysis, sensor_diago
         .windows(2)
         .filter(|pair| pair[0].3 > 1.0)
         .map(|pair| {
-            let ((za, ra, aa, _), (zb, rb, ab, _)) = (pair[0], pair[1]);
+            let ((za, sa, aa, _), (zb, sb, ab, _)) = (pair[0], pair[1]);
+            // Validation saw every surface reach its clear aperture.
+            let sag = |s: &LensSurface, h: f64| s.sag_mm(h).unwrap_or(0.0);
             let front = (0..=32)
                 .map(|k| -aa + 2.0 * aa * k as f64 / 32.0)
-                .map(|h| (za + sag(ra, h), h));
+                .map(|h| (za + sag(sa, h), h));
             let back = (0..=32)
                 .map(|k| ab - 2.0 * ab * k as f64 / 32.0)
-                .map(|h| (zb + sag(rb, h), h));
+                .map(|h| (zb + sag(sb, h), h));
             front.chain(back).collect()
         })
         .collect();

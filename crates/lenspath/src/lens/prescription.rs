@@ -13,18 +13,71 @@
 //! with the third column within 0.005), or an Abbe number V_d (the two-term
 //! Cauchy model through n_d and V_d, [`Dispersion::from_abbe`]). Four-column
 //! tables read exactly as before: every glass a constant index.
+//!
+//! After those columns a row may give its surface an aspheric shape with
+//! `key=value` words (the even asphere of [`EvenAsphere`]): `conic=K` for
+//! the conic constant and `a2=`, `a4=`, … `a20=` for the polynomial
+//! coefficients, in mm^(1−order). A radius of `inf` is a flat surface (radius
+//! 0 stays the stop, as in pbrt and CS184 tables).
 
 use std::path::Path;
 
+use super::surface::{EvenAsphere, SurfaceShape};
 use crate::error::{Error, Result};
 use crate::glass::{self, Dispersion};
+
+/// One row of a table as read, before validation: what
+/// [`LensPrescription::from_rows`] builds a lens from.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct TableRow {
+    /// Where the row came from, for errors ("line 4", "surface 7").
+    pub location: String,
+    /// Signed vertex radius, mm (0: the stop; infinite: a flat).
+    pub radius_mm: f64,
+    /// Distance to the next surface's vertex, mm.
+    pub thickness_mm: f64,
+    /// Index behind the surface at the d line (0 or 1 for air).
+    pub ior_d: f64,
+    /// Clear aperture diameter, mm.
+    pub aperture_diameter_mm: f64,
+    /// The glass column: a catalogue name or an Abbe number.
+    pub glass: Option<String>,
+    /// Its shape beyond the vertex radius.
+    pub shape: SurfaceShape,
+}
+
+impl TableRow {
+    /// A row with these columns, read at `location`.
+    pub(crate) fn new(
+        location: String,
+        radius_mm: f64,
+        thickness_mm: f64,
+        ior_d: f64,
+        aperture_diameter_mm: f64,
+        glass: Option<String>,
+        shape: SurfaceShape,
+    ) -> TableRow {
+        TableRow {
+            location,
+            radius_mm,
+            thickness_mm,
+            ior_d,
+            aperture_diameter_mm,
+            glass,
+            shape,
+        }
+    }
+}
 
 /// One surface of a prescription.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LensSurface {
-    /// Signed radius of curvature in mm: positive when the centre of curvature
-    /// lies behind the vertex (toward the sensor); 0 for the aperture stop.
+    /// Signed radius of curvature in mm at the vertex: positive when the
+    /// centre of curvature lies behind the vertex (toward the sensor); 0 for
+    /// the aperture stop, infinite for a flat.
     pub radius_mm: f64,
+    /// Its shape beyond the vertex radius (spherical unless aspheric).
+    pub shape: SurfaceShape,
     /// Axial distance from this surface's vertex to the next one's, in mm
     /// (the last surface's value is not used: the sensor is placed by focusing).
     pub thickness_mm: f64,
@@ -44,6 +97,21 @@ impl LensSurface {
     /// Index of refraction of the medium behind the surface at the d line.
     pub fn ior_d(&self) -> f64 {
         self.medium.n_d()
+    }
+
+    /// Vertex curvature, 1/mm (0 for the stop and flats).
+    pub fn curvature(&self) -> f64 {
+        if self.radius_mm == 0.0 {
+            0.0
+        } else {
+            1.0 / self.radius_mm
+        }
+    }
+
+    /// Sag (mm, toward the sensor) at `height_mm` from the axis; `None`
+    /// where the surface does not reach.
+    pub fn sag_mm(&self, height_mm: f64) -> Option<f64> {
+        self.shape.sag(self.curvature(), height_mm * height_mm)
     }
 }
 
@@ -83,8 +151,17 @@ pub const BUILTIN_LENSES: [(&str, &str); 4] = [
 ];
 
 impl LensPrescription {
-    /// A built-in lens by name, or else the table file at `name_or_path`.
+    /// A built-in lens by name, an entry of the lentil database
+    /// (`lentil:0004`, [`super::lentil`]), or else the file at `name_or_path`:
+    /// a Zemax `.zmx` ([`super::zemax`]), an ISET `.json` ([`super::iset`])
+    /// or a lens table.
     pub fn load(name_or_path: &str) -> Result<LensPrescription> {
+        if let Some(id) = name_or_path.strip_prefix(super::lentil::PREFIX) {
+            return super::lentil::load(id);
+        }
+        let extension = Path::new(name_or_path)
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase());
         if let Some((name, table)) = BUILTIN_LENSES.iter().find(|(n, _)| *n == name_or_path) {
             return LensPrescription::parse(table, name, TableConvention::ThicknessToNext);
         }
@@ -95,6 +172,11 @@ impl LensPrescription {
                 "unknown lens '{name_or_path}': not a built-in lens ({}) nor an existing file",
                 names.join(", ")
             )));
+        }
+        match extension.as_deref() {
+            Some("zmx") => return super::zemax::load(path),
+            Some("json") => return super::iset::load(path),
+            _ => {}
         }
         let text = crate::io::read_text(path, crate::FileKind::Lens)?;
         LensPrescription::parse(&text, name_or_path, TableConvention::Auto)
@@ -107,25 +189,31 @@ impl LensPrescription {
             path: source.into(),
             message: format!("line {line}: {message}"),
         };
-        // Rows: (line number, four numbers, the optional glass column).
-        let mut rows: Vec<(usize, [f64; 4], Option<&str>)> = Vec::new();
+        let mut rows: Vec<TableRow> = Vec::new();
         for (i, raw) in text.lines().enumerate() {
             let line = raw.trim();
             if line.is_empty() || line.starts_with('#') {
                 continue;
             }
             let fields: Vec<&str> = line.split_whitespace().collect();
-            if fields.len() != 4 && fields.len() != 5 {
+            let (keyed, plain): (Vec<&str>, Vec<&str>) = fields.iter().partition(|f| f.contains('='));
+            if plain.len() != 4 && plain.len() != 5 {
                 return Err(fail(
                     i + 1,
                     format!(
                         "expected 4 columns (radius, thickness, index, aperture) and an optional fifth (glass name or Abbe number), found {}",
-                        fields.len()
+                        plain.len()
                     ),
                 ));
             }
+            if fields[..plain.len()].iter().any(|f| f.contains('=')) {
+                return Err(fail(
+                    i + 1,
+                    "aspheric terms (key=value) come after the numeric columns and the glass".into(),
+                ));
+            }
             let mut row = [0.0; 4];
-            for (k, (field, name)) in fields[..4]
+            for (k, (field, name)) in plain[..4]
                 .iter()
                 .zip(["radius", "thickness", "index", "aperture"])
                 .enumerate()
@@ -133,13 +221,46 @@ impl LensPrescription {
                 let value: f64 = field
                     .parse()
                     .map_err(|_| fail(i + 1, format!("{name} '{field}' is not a number")))?;
-                if !value.is_finite() {
+                // An infinite radius is a flat; nothing else may be infinite.
+                if value.is_nan() || (value.is_infinite() && k != 0) {
                     return Err(fail(i + 1, format!("{name} '{field}' is not finite")));
                 }
                 row[k] = value;
             }
-            rows.push((i + 1, row, fields.get(4).copied()));
+            let shape = aspheric_terms(&keyed).map_err(|m| fail(i + 1, m))?;
+            rows.push(TableRow::new(
+                format!("line {}", i + 1),
+                row[0],
+                row[1],
+                row[2],
+                row[3],
+                plain.get(4).map(|g| g.to_string()),
+                shape,
+            ));
         }
+        let older = match convention {
+            TableConvention::Auto => rows.len() > 1 && rows[0].thickness_mm == 0.0,
+            TableConvention::ThicknessToNext => false,
+            TableConvention::DistanceFromPrevious => true,
+        };
+        if older {
+            // Shift column 2 up one row; the last surface gets 0.
+            for k in 0..rows.len() {
+                rows[k].thickness_mm = rows.get(k + 1).map_or(0.0, |r| r.thickness_mm);
+            }
+        }
+        LensPrescription::from_rows(source, rows)
+    }
+
+    /// A lens from rows already read (by [`LensPrescription::parse`] or an
+    /// importer of another format), validated; errors name `source` and the
+    /// row's location.
+    pub(crate) fn from_rows(source: &str, rows: Vec<TableRow>) -> Result<LensPrescription> {
+        let fail = |location: &str, message: String| Error::Parse {
+            kind: crate::FileKind::Lens,
+            path: source.into(),
+            message: format!("{location}: {message}"),
+        };
         if rows.is_empty() {
             return Err(Error::Parse {
                 kind: crate::FileKind::Lens,
@@ -147,22 +268,20 @@ impl LensPrescription {
                 message: "no surfaces".into(),
             });
         }
-        let older = match convention {
-            TableConvention::Auto => rows.len() > 1 && rows[0].1[1] == 0.0,
-            TableConvention::ThicknessToNext => false,
-            TableConvention::DistanceFromPrevious => true,
-        };
-        if older {
-            // Shift column 2 up one row; the last surface gets 0.
-            for k in 0..rows.len() {
-                rows[k].1[1] = rows.get(k + 1).map_or(0.0, |r| r.1[1]);
-            }
-        }
 
         let mut surfaces = Vec::with_capacity(rows.len());
-        let columns = rows.iter().map(|r| (r.1[2], r.2.map(str::to_string))).collect();
-        let mut stop_line: Option<usize> = None;
-        for &(line, [radius_mm, thickness_mm, ior, aperture_diameter_mm], glass_column) in &rows {
+        let columns = rows.iter().map(|r| (r.ior_d, r.glass.clone())).collect();
+        let mut stop_line: Option<&str> = None;
+        for row in &rows {
+            let line = row.location.as_str();
+            let (radius_mm, thickness_mm, ior, aperture_diameter_mm, shape) = (
+                row.radius_mm,
+                row.thickness_mm,
+                row.ior_d,
+                row.aperture_diameter_mm,
+                row.shape,
+            );
+            let glass_column = row.glass.as_deref();
             if aperture_diameter_mm <= 0.0 {
                 return Err(fail(
                     line,
@@ -172,6 +291,19 @@ impl LensPrescription {
             if thickness_mm < 0.0 {
                 return Err(fail(line, format!("thickness {thickness_mm} mm is negative")));
             }
+            // What a table's reader already refuses, for every other reader too.
+            for (name, value) in [
+                ("thickness", thickness_mm),
+                ("index", ior),
+                ("aperture", aperture_diameter_mm),
+            ] {
+                if !value.is_finite() {
+                    return Err(fail(line, format!("{name} {value} is not finite")));
+                }
+            }
+            if radius_mm.is_nan() {
+                return Err(fail(line, "radius is not a number".into()));
+            }
             if glass_column.is_some() && ior <= 1.0 {
                 return Err(fail(
                     line,
@@ -180,12 +312,12 @@ impl LensPrescription {
             }
             let ior = if radius_mm == 0.0 {
                 if let Some(first) = stop_line {
-                    return Err(fail(
-                        line,
-                        format!("a second aperture stop (the first is on line {first})"),
-                    ));
+                    return Err(fail(line, format!("a second aperture stop (the first is on {first})")));
                 }
                 stop_line = Some(line);
+                if shape != SurfaceShape::Spherical {
+                    return Err(fail(line, "the aperture stop cannot be aspheric".into()));
+                }
                 // The stop sits in air; tables write 0 or 1.
                 if ior != 0.0 && ior != 1.0 {
                     return Err(fail(
@@ -198,12 +330,25 @@ impl LensPrescription {
                 if ior < 1.0 {
                     return Err(fail(line, format!("index of refraction {ior} is below 1")));
                 }
-                if aperture_diameter_mm > 2.0 * radius_mm.abs() {
+                let spherical = shape == SurfaceShape::Spherical;
+                if spherical && aperture_diameter_mm > 2.0 * radius_mm.abs() {
                     return Err(fail(
                         line,
                         format!(
                             "aperture {aperture_diameter_mm} mm is wider than its sphere (radius {} mm)",
                             radius_mm.abs()
+                        ),
+                    ));
+                }
+                if !spherical
+                    && shape
+                        .sag(1.0 / radius_mm, 0.25 * aperture_diameter_mm * aperture_diameter_mm)
+                        .is_none()
+                {
+                    return Err(fail(
+                        line,
+                        format!(
+                            "aperture {aperture_diameter_mm} mm is wider than the asphere's base conic (radius {radius_mm} mm) reaches"
                         ),
                     ));
                 }
@@ -215,12 +360,13 @@ impl LensPrescription {
             };
             surfaces.push(LensSurface {
                 radius_mm,
+                shape,
                 thickness_mm,
                 medium,
                 aperture_diameter_mm,
             });
         }
-        let (last_line, last) = (rows[rows.len() - 1].0, surfaces[surfaces.len() - 1]);
+        let (last_line, last) = (rows[rows.len() - 1].location.as_str(), surfaces[surfaces.len() - 1]);
         if last.medium != Dispersion::Constant(1.0) {
             return Err(fail(
                 last_line,
@@ -255,8 +401,19 @@ impl LensPrescription {
             .zip(&self.columns)
             .map(|(s, (index, glass))| {
                 let glass = glass.as_deref().map_or(String::new(), |g| format!(" {g}"));
+                let mut terms = String::new();
+                if let SurfaceShape::EvenAsphere(a) = &s.shape {
+                    if a.conic != 0.0 {
+                        terms += &format!(" conic={}", a.conic);
+                    }
+                    for (value, order) in a.coefficients.iter().zip(EvenAsphere::ORDERS) {
+                        if *value != 0.0 {
+                            terms += &format!(" a{order}={value:e}");
+                        }
+                    }
+                }
                 format!(
-                    "{} {} {} {}{glass}\n",
+                    "{} {} {} {}{glass}{terms}\n",
                     s.radius_mm, s.thickness_mm, index, s.aperture_diameter_mm
                 )
             })
@@ -272,6 +429,7 @@ impl LensPrescription {
                 .iter()
                 .map(|s| LensSurface {
                     radius_mm: s.radius_mm * factor,
+                    shape: s.shape.scaled(factor),
                     thickness_mm: s.thickness_mm * factor,
                     medium: s.medium,
                     aperture_diameter_mm: s.aperture_diameter_mm * factor,
@@ -302,8 +460,46 @@ impl LensPrescription {
     }
 }
 
+/// The shape that a row's `key=value` words give its surface: spherical
+/// when there are none.
+fn aspheric_terms(words: &[&str]) -> std::result::Result<SurfaceShape, String> {
+    if words.is_empty() {
+        return Ok(SurfaceShape::Spherical);
+    }
+    let mut asphere = EvenAsphere::SPHERE;
+    let mut seen: Vec<&str> = Vec::new();
+    for word in words {
+        let (key, value) = word.split_once('=').expect("keyed words contain '='");
+        let number: f64 = value
+            .parse()
+            .ok()
+            .filter(|v: &f64| v.is_finite())
+            .ok_or_else(|| format!("aspheric term {key} = '{value}' is not a finite number"))?;
+        if seen.contains(&key) {
+            return Err(format!("aspheric term {key} is given twice"));
+        }
+        seen.push(key);
+        let slot = match key {
+            "conic" => &mut asphere.conic,
+            _ => {
+                let order = key.strip_prefix('a').and_then(|o| o.parse::<u32>().ok());
+                match order.and_then(|o| EvenAsphere::ORDERS.iter().position(|&x| x == o)) {
+                    Some(index) => &mut asphere.coefficients[index],
+                    None => {
+                        return Err(format!(
+                            "unknown aspheric term '{key}' (conic, a2, a4, ... a20 are known)"
+                        ))
+                    }
+                }
+            }
+        };
+        *slot = number;
+    }
+    Ok(SurfaceShape::EvenAsphere(asphere))
+}
+
 /// The most a named glass's n_d may differ from the table's index column.
-const GLASS_ND_TOLERANCE: f64 = 5e-3;
+pub(crate) const GLASS_ND_TOLERANCE: f64 = 5e-3;
 
 /// The medium a table's fifth column names, behind a surface whose index
 /// column says `n_d`: an Abbe number, or a catalogue glass.
@@ -403,6 +599,32 @@ mod tests {
                 "line 2: the last surface must leave the light in air",
             ),
             ("# nothing\n", "no surfaces"),
+            (
+                "10 2 1.5 8 a4=x\n0 1 0 4\n",
+                "line 1: aspheric term a4 = 'x' is not a finite number",
+            ),
+            (
+                "10 2 1.5 8 a4=inf\n0 1 0 4\n",
+                "line 1: aspheric term a4 = 'inf' is not a finite number",
+            ),
+            ("10 2 1.5 8 a5=1\n0 1 0 4\n", "line 1: unknown aspheric term 'a5'"),
+            (
+                "10 2 1.5 8 a4=1 a4=2\n0 1 0 4\n",
+                "line 1: aspheric term a4 is given twice",
+            ),
+            (
+                "10 2 conic=1 1.5 8\n0 1 0 4\n",
+                "line 1: aspheric terms (key=value) come after",
+            ),
+            (
+                "10 2 1.5 8\n0 1 0 4 a4=1e-5\n",
+                "line 2: the aperture stop cannot be aspheric",
+            ),
+            (
+                "10 2 1.5 19 conic=4\n0 1 0 4\n",
+                "line 1: aperture 19 mm is wider than the asphere's base conic",
+            ),
+            ("10 inf 1.5 8\n0 1 0 4\n", "line 1: thickness 'inf' is not finite"),
         ];
         for (text, expected) in cases {
             let err = parse_err(text);
@@ -441,7 +663,11 @@ mod tests {
     #[test]
     fn table_text_reads_back_to_the_same_lens() {
         let older = "# r axpos n ap\n20 0 1.5 10\n-20 3 1 10\n0 2 0 6\n";
+        let aspheric =
+            "0 1 0 20\n12.5 4 1.5168 20 N-BK7 conic=-0.6 a4=1.25e-5 a20=-3e-31\ninf 2 1 20 a2=0.001 a6=7e-9\n";
         let tables = [
+            LensPrescription::parse(aspheric, "aspheric", TableConvention::ThicknessToNext).unwrap(),
+            crate::lens::lentil::load("0014").unwrap(),
             LensPrescription::load("dgauss50").unwrap(),
             LensPrescription::parse(older, "older", TableConvention::Auto).unwrap(),
             LensPrescription::parse(
