@@ -225,8 +225,9 @@ class Lens:
         lentil designs lentil:0001 ... lentil:0016), or any lentil database entry (``lentil:0014``)."""
     @staticmethod
     def load(path: str | PathLike[str]) -> Lens:
-        """A lens table file (pbrt / CS184 format, with optional glass and aspheric columns) or a
-        Zemax ``.zmx`` file. Raises LensError for a broken file, naming the line."""
+        """A lens table file (pbrt / CS184 format, with optional glass and aspheric columns), a
+        Zemax ``.zmx`` file or an ISET lens ``.json``. Raises LensError for a broken file, naming
+        the line (or the surface)."""
     @staticmethod
     def from_table(table: npt.ArrayLike, name: str = "table") -> Lens:
         """A lens from an N x 4 table (radius, thickness to the next surface, index,

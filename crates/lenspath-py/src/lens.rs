@@ -79,7 +79,7 @@ impl Lens {
         Lens::from_prescription(LensPrescription::load(name).map_err(to_py)?)
     }
 
-    /// A lens table file (pbrt / CS184 format) or a Zemax `.zmx` file.
+    /// A lens table file (pbrt / CS184 format), a Zemax `.zmx` file or an ISET lens `.json`.
     #[staticmethod]
     pub(crate) fn load(path: PathBuf) -> PyResult<Lens> {
         if !path.is_file() {
