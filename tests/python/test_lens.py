@@ -135,3 +135,19 @@ def test_the_old_names_of_the_focus_conversions_still_work_and_say_the_new_ones(
     with pytest.warns(DeprecationWarning, match="use focus_distance_mm"):
         old_distance = lens.focus_distance(old_sensor)
     assert old_distance == lens.focus_distance_mm(old_sensor)
+
+
+def test_glass_tool_gives_lines_partial_dispersion_and_equivalents(cli, tmp_path) -> None:
+    out = subprocess.run([str(cli), "glass", "N-BK7", "--json"], check=True, capture_output=True, text=True)
+    bk7 = json.loads(out.stdout)
+    # Schott's catalogue: n_F 1.52238, n_C 1.51432, P_g,F 0.5349.
+    assert bk7["glass"]["indices"]["n_F"] == pytest.approx(1.52238, abs=1e-5)
+    assert bk7["glass"]["indices"]["n_C"] == pytest.approx(1.51432, abs=1e-5)
+    assert bk7["glass"]["partial_dispersion_g_f"] == pytest.approx(0.5349, abs=5e-4)
+    makers = [g["glass"].split(":")[0] for g in bk7["nearest_of_each_maker"]]
+    assert makers == ["schott", "ohara", "hoya", "cdgm", "sumita", "hikari"]
+    plot = tmp_path / "abbe.svg"
+    subprocess.run([str(cli), "glass", "--lens", "dgauss50", "--plot", str(plot)], check=True, capture_output=True)
+    assert plot.read_text().count('stroke="#c00"') == 5  # dgauss50's five distinct glasses, marked
+    bad = subprocess.run([str(cli), "glass", "N-BK8"], capture_output=True, text=True)
+    assert bad.returncode == 2 and "unknown glass 'N-BK8'" in bad.stderr

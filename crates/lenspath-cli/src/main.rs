@@ -7,6 +7,7 @@ mod autofocus;
 mod bench;
 mod bokeh;
 mod flags;
+mod glass;
 mod info;
 mod lens;
 mod progress;
@@ -37,6 +38,8 @@ enum Command {
     Info(info::InfoArgs),
     /// Analyse a lens: focal lengths, pupils, focus, a layout plot.
     Lens(lens::LensArgs),
+    /// Optical glass: indices at the Fraunhofer lines, V_d, partial dispersion, the nearest glasses of each maker, the Abbe diagram.
+    Glass(glass::GlassArgs),
     /// Look through the lens in a browser: a local server that renders as you
     /// change lens, f-stop, focus and aperture, and focuses where you click.
     View(view::ViewArgs),
@@ -121,6 +124,7 @@ fn main() -> ExitCode {
         Command::Bokeh(args) => bokeh::run(args),
         Command::Info(args) => info::run(args),
         Command::Lens(args) => lens::run(args),
+        Command::Glass(args) => glass::run(args),
         Command::View(args) => view::run(args),
         Command::Bench(BenchArgs {
             what: BenchCommand::Bvh(args),

@@ -252,19 +252,148 @@ pub fn find(name: &str) -> Result<&'static Glass> {
     )))
 }
 
-/// The catalogue glass nearest to (n_d, V_d): least (Δn_d / 0.01)² + (ΔV_d / 1)²,
-/// the weighting of a glass map's axes.
+/// How far a glass lies from (n_d, V_d) on a glass map: (Δn_d / 0.01)² +
+/// (ΔV_d / 1)², the weighting of a glass map's axes.
+fn map_distance(g: &Glass, n_d: f64, v_d: f64) -> f64 {
+    ((g.n_d - n_d) / 0.01).powi(2) + (g.v_d - v_d).powi(2)
+}
+
+/// The catalogue glass nearest to (n_d, V_d) on a glass map (see `map_distance`).
 pub fn nearest(n_d: f64, v_d: f64) -> &'static Glass {
-    let distance = |g: &Glass| ((g.n_d - n_d) / 0.01).powi(2) + (g.v_d - v_d).powi(2);
     catalogue()
         .iter()
-        .min_by(|a, b| distance(a).total_cmp(&distance(b)))
+        .min_by(|a, b| map_distance(a, n_d, v_d).total_cmp(&map_distance(b, n_d, v_d)))
         .expect("the embedded catalogue is not empty")
+}
+
+/// Each maker's glass nearest to (n_d, V_d), in [`MAKERS`] order: the
+/// equivalents a designer would look at.
+pub fn nearest_of_each_maker(n_d: f64, v_d: f64) -> Vec<&'static Glass> {
+    MAKERS
+        .iter()
+        .filter_map(|maker| {
+            catalogue()
+                .iter()
+                .filter(|g| g.maker == *maker)
+                .min_by(|a, b| map_distance(a, n_d, v_d).total_cmp(&map_distance(b, n_d, v_d)))
+        })
+        .collect()
+}
+
+impl Glass {
+    /// Relative partial dispersion P_g,F = (n_g − n_F) / (n_F − n_C), from
+    /// its formula (Schott, TIE-29): how far from the normal line its
+    /// secondary spectrum lies.
+    pub fn partial_dispersion_g_f(&self) -> f64 {
+        let n = |nm| self.dispersion.index(nm);
+        (n(G_LINE_NM) - n(F_LINE_NM)) / (n(F_LINE_NM) - n(C_LINE_NM))
+    }
+}
+
+/// The Abbe diagram as SVG: every catalogue glass as a dot at (V_d, n_d),
+/// V_d growing to the left as glass maps draw it, and `marked` glasses
+/// (label, n_d, V_d) as labelled red rings.
+pub fn abbe_diagram_svg(marked: &[(String, f64, f64)]) -> String {
+    use std::fmt::Write as _;
+    let (width, height, margin) = (900.0, 600.0, 50.0);
+    let (v_range, n_range) = ((15.0, 100.0), (1.40, 2.10));
+    let x = |v_d: f64| margin + (v_range.1 - v_d) / (v_range.1 - v_range.0) * (width - 2.0 * margin);
+    let y = |n_d: f64| height - margin - (n_d - n_range.0) / (n_range.1 - n_range.0) * (height - 2.0 * margin);
+    let mut svg = String::new();
+    let _ = writeln!(
+        svg,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" viewBox="0 0 {width} {height}">"#
+    );
+    let _ = writeln!(svg, r#"<rect width="100%" height="100%" fill="white"/>"#);
+    let _ = writeln!(
+        svg,
+        r#"<text x="{margin}" y="24" font-family="sans-serif" font-size="15">Abbe diagram: {} catalogue glasses ({}), n_d against V_d</text>"#,
+        catalogue().len(),
+        MAKERS.join(", ")
+    );
+    for v in (20..=90).step_by(10) {
+        let v = f64::from(v);
+        let _ = writeln!(
+            svg,
+            r##"<line x1="{0:.1}" y1="{1}" x2="{0:.1}" y2="{2}" stroke="#ddd"/><text x="{0:.1}" y="{3}" font-family="sans-serif" font-size="12" text-anchor="middle">{v}</text>"##,
+            x(v),
+            margin,
+            height - margin,
+            height - margin + 16.0
+        );
+    }
+    for k in 0..=7 {
+        let n = n_range.0 + 0.1 * f64::from(k);
+        let _ = writeln!(
+            svg,
+            r##"<line x1="{margin}" y1="{0:.1}" x2="{1}" y2="{0:.1}" stroke="#ddd"/><text x="{2}" y="{3:.1}" font-family="sans-serif" font-size="12" text-anchor="end">{n:.1}</text>"##,
+            y(n),
+            width - margin,
+            margin - 6.0,
+            y(n) + 4.0
+        );
+    }
+    let _ = writeln!(
+        svg,
+        r#"<text x="{}" y="{}" font-family="sans-serif" font-size="13" text-anchor="middle">V_d</text><text x="14" y="{}" font-family="sans-serif" font-size="13">n_d</text>"#,
+        width / 2.0,
+        height - 12.0,
+        height / 2.0
+    );
+    for g in catalogue() {
+        let _ = writeln!(
+            svg,
+            r##"<circle cx="{:.1}" cy="{:.1}" r="1.6" fill="#4a6fa5"><title>{}:{} n_d {} V_d {}</title></circle>"##,
+            x(g.v_d),
+            y(g.n_d),
+            g.maker,
+            g.name,
+            g.n_d,
+            g.v_d
+        );
+    }
+    for (label, n_d, v_d) in marked {
+        let _ = writeln!(
+            svg,
+            r##"<circle cx="{0:.1}" cy="{1:.1}" r="6" fill="none" stroke="#c00" stroke-width="2"/><text x="{2:.1}" y="{3:.1}" font-family="sans-serif" font-size="12" fill="#c00">{label}</text>"##,
+            x(*v_d),
+            y(*n_d),
+            x(*v_d) + 8.0,
+            y(*n_d) - 8.0
+        );
+    }
+    svg.push_str("</svg>\n");
+    svg
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// N-BK7's P_g,F from its formula is Schott's catalogue value 0.5349,
+    /// and each maker's nearest glass to it is that maker's BK7 equivalent.
+    #[test]
+    fn partial_dispersion_and_equivalents() {
+        let bk7 = find("N-BK7").unwrap();
+        assert!(
+            (bk7.partial_dispersion_g_f() - 0.5349).abs() < 5e-4,
+            "{}",
+            bk7.partial_dispersion_g_f()
+        );
+        let equivalents = nearest_of_each_maker(bk7.n_d, bk7.v_d);
+        assert_eq!(equivalents.len(), MAKERS.len());
+        assert_eq!(equivalents[0].name, "N-BK7");
+        for g in &equivalents {
+            assert!(
+                (g.n_d - 1.5168).abs() < 0.01 && (g.v_d - 64.17).abs() < 2.0,
+                "{}:{}",
+                g.maker,
+                g.name
+            );
+        }
+        let svg = abbe_diagram_svg(&[("N-BK7".into(), bk7.n_d, bk7.v_d)]);
+        assert_eq!(svg.matches("<circle").count(), catalogue().len() + 1);
+    }
 
     /// Every one of the 1,609 glasses' formulas gives its maker's n_d to
     /// 1e-4 and V_d to 0.5%: the formulas and their coefficients are read
