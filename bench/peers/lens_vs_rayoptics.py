@@ -10,6 +10,10 @@ lenspath's lens tests:
 - `lens::lentil::tests::the_aspheric_fisheye_traces_as_rayoptics_does`: the
   lentil database's 0014 (A4-A10 on four surfaces), read from `../shared` as
   lenspath reads it; where real rays cross a plane behind the lens.
+- `tests/lens_files.rs`: Zemax files, and ISET3d files whose stop sits on a
+  curved surface's vertex, read by both tools.
+- `crates/lenspath/lenses/README.md`: the shipped tables taken from rayoptics'
+  own files (triplet50, nikon-z14, achromat100), their EFL and BFL there.
 
 Run in a virtual environment with `pip install rayoptics` (0.9.8 gave the
 recorded numbers):
@@ -147,3 +151,33 @@ for name in ("US08427765-1.ZMX", "US00583336-2-scaled.zmx"):
         p, d = last_ray(opm, height, 0.0)
         behind = float(p[1] + d[1] * (10.0 - p[2]) / d[2])
         print(f"  parallel ray at {height} mm: height {behind!r} 10 mm behind the rear vertex")
+
+
+# ISET3d lens files (crates/lenspath/tests/data/lenses/iset3d-*.json) given to rayoptics
+# surface by surface, constant indices, the stop where ior and radius are 0;
+# `tests/lens_files.rs::a_stop_on_a_curved_vertex_clips_at_the_entrance_pupil`.
+for name in ("iset3d-cooke40deg-zemax.json", "iset3d-petzval-zemax.json"):
+    opm = OpticalModel()
+    sm, osp = opm["seq_model"], opm["optical_spec"]
+    osp["pupil"] = PupilSpec(osp, key=["object", "epd"], value=5.0)
+    osp["fov"] = FieldSpec(osp, key=["object", "angle"], flds=[0.0])
+    osp["wvls"] = WvlSpec([(D_LINE_NM, 1.0)], ref_wl=0)
+    opm.radius_mode = True
+    sm.gaps[0].thi = 1e10
+    for surface in json.loads((LENS_FILES / name).read_text())["surfaces"]:
+        n = surface["ior"] or 1.0
+        columns = [surface["radius"], surface["thickness"]] + ([] if n == 1.0 else [n, 50.0])
+        sm.add_surface(columns, sd=surface["semi_aperture"])
+        if surface["ior"] == 0 and surface["radius"] == 0:
+            sm.set_stop()
+    opm.update_model()
+    fod = opm["analysis_results"]["parax_data"].fod
+    print(f"{name}: EFL {float(fod.efl)!r}, bfl {float(fod.bfl)!r}")
+
+# The rayoptics files the shipped tables triplet50, nikon-z14 and achromat100 come from.
+RAYOPTICS = Path(__import__("rayoptics").__file__).parent
+SOURCES = ("models/Sasian Triplet.roa", "optical/tests/Nikon Nikkor Z 14-30mm f-4 S.roa", "codev/tests/CODV_32327.seq")
+for name in SOURCES:
+    opm = open_model(str(RAYOPTICS / name))
+    fod = opm["analysis_results"]["parax_data"].fod
+    print(f"{name}: EFL {float(fod.efl)!r}, bfl {float(fod.bfl)!r}")

@@ -221,8 +221,8 @@ class Lens:
 
     @staticmethod
     def builtin(name: str) -> Lens:
-        """A shipped lens (``builtin_lenses()``: dgauss50, wide22, tele250, fisheye10 and the
-        lentil designs lentil:0001 ... lentil:0016), or any lentil database entry (``lentil:0014``)."""
+        """A shipped lens (``builtin_lenses()``: dgauss50, triplet50, tessar100, nikon-z14 ... and
+        lentil designs such as lentil:0001), or any lentil database entry (``lentil:0014``)."""
     @staticmethod
     def load(path: str | PathLike[str]) -> Lens:
         """A lens table file (pbrt / CS184 format, with optional glass and aspheric columns), a

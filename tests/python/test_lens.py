@@ -144,10 +144,21 @@ def test_glass_tool_gives_lines_partial_dispersion_and_equivalents(cli, tmp_path
     assert bk7["glass"]["indices"]["n_F"] == pytest.approx(1.52238, abs=1e-5)
     assert bk7["glass"]["indices"]["n_C"] == pytest.approx(1.51432, abs=1e-5)
     assert bk7["glass"]["partial_dispersion_g_f"] == pytest.approx(0.5349, abs=5e-4)
+    # Internal transmittance from the catalogue's extinction (Schott's data sheet: 0.997 and
+    # 0.992 through 10 and 25 mm at 400 nm).
+    transmittance = bk7["glass"]["internal_transmittance"]
+    assert transmittance["thickness_mm"] == [10.0, 25.0]
+    h_line = transmittance["values"][transmittance["wavelength_nm"].index(404.66)]
+    assert h_line == pytest.approx([0.997, 0.993], abs=1e-3)
     makers = [g["glass"].split(":")[0] for g in bk7["nearest_of_each_maker"]]
     assert makers == ["schott", "ohara", "hoya", "cdgm", "sumita", "hikari"]
     plot = tmp_path / "abbe.svg"
     subprocess.run([str(cli), "glass", "--lens", "dgauss50", "--plot", str(plot)], check=True, capture_output=True)
     assert plot.read_text().count('stroke="#c00"') == 5  # dgauss50's five distinct glasses, marked
+    # tessar100's three glasses are constant indices: listed, but with no V_d to place them by.
+    args = [str(cli), "glass", "--lens", "tessar100", "--json", "--plot", str(plot)]
+    constant = json.loads(subprocess.run(args, check=True, capture_output=True, text=True).stdout)["lens_glasses"]
+    assert len(constant) == 3 and all(g["v_d"] is None for g in constant)
+    assert plot.read_text().count('stroke="#c00"') == 0
     bad = subprocess.run([str(cli), "glass", "N-BK8"], capture_output=True, text=True)
     assert bad.returncode == 2 and "unknown glass 'N-BK8'" in bad.stderr

@@ -188,7 +188,7 @@ impl SceneArgs {
 /// The realistic camera's lens flags (`render` and `autofocus`).
 #[derive(Args, Debug)]
 pub struct LensFlags {
-    /// Realistic camera: a shipped lens (`lenspath lens --list`: dgauss50, wide22, tele250, fisheye10, lentil:0001 ...), a Zemax .zmx file or a lens table file.
+    /// Realistic camera: a shipped lens (`lenspath lens --list`: dgauss50, triplet50, tessar100, nikon-z14, lentil:0001 ...), a Zemax .zmx file or a lens table file.
     #[arg(long)]
     pub lens: Option<String>,
     /// Realistic camera: sensor WIDTHxHEIGHT in mm; its width is kept and its height follows the

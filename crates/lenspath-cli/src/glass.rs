@@ -1,6 +1,7 @@
 //! `lenspath glass`: a catalogue glass's indices at the Fraunhofer lines,
-//! V_d, partial dispersion and its nearest equivalents from the other
-//! makers; or the glasses nearest to an (n_d, V_d); and the Abbe diagram.
+//! V_d, partial dispersion, internal transmittance and its nearest
+//! equivalents from the other makers; or the glasses nearest to an (n_d,
+//! V_d); and the Abbe diagram.
 
 use std::path::PathBuf;
 
@@ -35,6 +36,19 @@ pub struct GlassArgs {
     lens: Option<String>,
 }
 
+/// Where the internal transmittance is quoted, nm: the i, h, g, F, e, d and
+/// C lines and 700 nm, as the makers' data sheets tabulate it.
+const TRANSMITTANCE_NM: [f64; 8] = [365.01, 404.66, 435.83, 486.13, 546.07, 587.56, 656.27, 700.0];
+
+/// Through what thicknesses, mm (the data sheets' two).
+const TRANSMITTANCE_THICKNESS_MM: [f64; 2] = [10.0, 25.0];
+
+/// `g`'s internal transmittance through each of [`TRANSMITTANCE_THICKNESS_MM`]
+/// at `nm` (`None` where the catalogue gives no figure).
+fn transmittances(g: &Glass, nm: f64) -> [Option<f64>; 2] {
+    TRANSMITTANCE_THICKNESS_MM.map(|mm| g.internal_transmittance(nm, mm))
+}
+
 /// A glass as `--json` gives it.
 fn describe(g: &Glass) -> serde_json::Value {
     let lines: serde_json::Map<String, serde_json::Value> = FRAUNHOFER_LINES
@@ -49,7 +63,11 @@ fn describe(g: &Glass) -> serde_json::Value {
         "partial_dispersion_g_f": g.partial_dispersion_g_f(),
         "formula_range_nm": [g.range_nm.0, g.range_nm.1],
         "glass_code": g.glass_code,
-        "transmission": serde_json::Value::Null,
+        "internal_transmittance": {
+            "wavelength_nm": TRANSMITTANCE_NM,
+            "thickness_mm": TRANSMITTANCE_THICKNESS_MM,
+            "values": TRANSMITTANCE_NM.map(|nm| transmittances(g, nm)),
+        },
     })
 }
 
@@ -70,8 +88,8 @@ pub fn run(args: GlassArgs) -> Result<Outcome> {
         }
         _ => (None, None),
     };
-    // The lens's glasses: each glass row's name (or its n_d / V_d), once.
-    let mut lens_glasses: Vec<(String, f64, f64)> = Vec::new();
+    // The lens's glasses: each glass's n_d / V_d (no V_d: a constant index), once.
+    let mut lens_glasses: Vec<(String, f64, Option<f64>)> = Vec::new();
     if let Some(lens) = &args.lens {
         let prescription = LensPrescription::load(lens)?;
         for s in prescription.surfaces().iter().filter(|s| s.ior_d() > 1.0) {
@@ -82,13 +100,17 @@ pub fn run(args: GlassArgs) -> Result<Outcome> {
                 format!("{n_d:.4}")
             };
             if !lens_glasses.iter().any(|(l, _, _)| *l == label) {
-                lens_glasses.push((label, n_d, if v_d.is_finite() { v_d } else { 90.0 }));
+                lens_glasses.push((label, n_d, v_d.is_finite().then_some(v_d)));
             }
         }
     }
     let equivalents = target.map(|(n_d, v_d)| glass::nearest_of_each_maker(n_d, v_d));
     if let Some(path) = &args.plot {
-        let mut marked = lens_glasses.clone();
+        // A constant-index glass has no place on the diagram: it is listed only.
+        let mut marked: Vec<(String, f64, f64)> = lens_glasses
+            .iter()
+            .filter_map(|(label, n_d, v_d)| v_d.map(|v| (label.clone(), *n_d, v)))
+            .collect();
         if let Some((n_d, v_d)) = target {
             let label = subject.map_or(format!("{n_d}/{v_d}"), |g| g.name.to_string());
             marked.push((label, n_d, v_d));
@@ -113,10 +135,13 @@ pub fn run(args: GlassArgs) -> Result<Outcome> {
             println!("  n_{line} ({nm} nm)  {:.6}", g.dispersion.index(nm));
         }
         println!("  partial dispersion P_g,F  {:.4}", g.partial_dispersion_g_f());
-        println!(
-            "  formula valid {:.0}-{:.0} nm; transmission: not in the catalogue",
-            g.range_nm.0, g.range_nm.1
-        );
+        println!("  formula valid {:.0}-{:.0} nm", g.range_nm.0, g.range_nm.1);
+        println!("  internal transmittance   10 mm   25 mm");
+        let figure = |t: Option<f64>| t.map_or("     -".to_string(), |t| format!("{t:>6.3}"));
+        for nm in TRANSMITTANCE_NM {
+            let [ten, twenty_five] = transmittances(g, nm);
+            println!("    {nm:>6.1} nm             {}  {}", figure(ten), figure(twenty_five));
+        }
     }
     if let (Some(equivalents), Some((n_d, v_d))) = (&equivalents, target) {
         println!("nearest to n_d {n_d:.4}, V_d {v_d:.2}, each maker:");

@@ -19,7 +19,7 @@ use crate::Outcome;
 #[derive(Args, Debug)]
 #[command(allow_negative_numbers = true)]
 pub struct LensArgs {
-    /// Shipped lens (see --list: dgauss50, wide22, tele250, fisheye10, lentil:0001 ...), any lentil database entry (lentil:0014), a Zemax .zmx file or a lens table file.
+    /// Shipped lens (see --list: dgauss50, triplet50, tessar100, nikon-z14, lentil:0001 ...), any lentil database entry (lentil:0014), a Zemax .zmx file or a lens table file.
     #[arg(required_unless_present = "list")]
     lens: Option<String>,
     /// List the shipped lenses (name, focal length, f-number, elements, source) instead.
@@ -70,15 +70,25 @@ fn list(json: bool) -> Result<Outcome> {
         );
         return Ok(Outcome::Done);
     }
-    println!("{:<14} {:>8} {:>7} {:>8}  source", "name", "f (mm)", "f/", "elements");
+    println!(
+        "{:<14} {:>8} {:>8} {:>6} {:>8} {:>11}  source",
+        "name", "f (mm)", "source f", "f/", "elements", "sensor (mm)"
+    );
     for l in lenses {
         let aspheric = if l.aspheric { ", aspheric" } else { "" };
+        let sensor = format!("{}x{}", round_mm(l.sensor_mm.0), round_mm(l.sensor_mm.1));
         println!(
-            "{:<14} {:>8.2} {:>7.2} {:>8}  {}{aspheric}",
-            l.name, l.focal_length_mm, l.f_number, l.elements, l.source
+            "{:<14} {:>8.2} {:>8.2} {:>6.2} {:>8} {:>11}  {}{aspheric}",
+            l.name, l.focal_length_mm, l.source_focal_length_mm, l.f_number, l.elements, sensor, l.source
         );
     }
     Ok(Outcome::Done)
+}
+
+/// A sensor side for the listing: at most three decimals, no trailing zeros.
+fn round_mm(mm: f64) -> String {
+    let text = format!("{mm:.3}");
+    text.trim_end_matches('0').trim_end_matches('.').to_string()
 }
 
 /// Rays per passing-fraction estimate.

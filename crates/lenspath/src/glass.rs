@@ -164,6 +164,9 @@ pub struct Glass {
     pub glass_code: Option<&'static str>,
     /// Wavelengths, nm, over which the maker's formula holds.
     pub range_nm: (f64, f64),
+    /// The extinction coefficient k (the imaginary part of the index)
+    /// against wavelength, nm, ascending; empty where the catalogue gives none.
+    pub extinction: Vec<(f64, f64)>,
 }
 
 const CATALOGUE_TSV: &str = include_str!("../data/glass/catalogue.tsv");
@@ -183,8 +186,18 @@ pub fn catalogue() -> &'static [Glass] {
 /// One row of the embedded catalogue.
 fn parse_row(line: &'static str) -> Option<Glass> {
     let fields: Vec<&'static str> = line.split('\t').collect();
-    let [maker, name, formula, min_um, max_um, nd, vd, code, coefficients] = fields[..] else {
+    let [maker, name, formula, min_um, max_um, nd, vd, code, coefficients, k] = fields[..] else {
         return None;
+    };
+    let extinction = match k {
+        "-" => Vec::new(),
+        pairs => pairs
+            .split(' ')
+            .map(|pair| {
+                let (um, k) = pair.split_once(':')?;
+                Some((um.parse::<f64>().ok()? * 1e3, k.parse::<f64>().ok()?))
+            })
+            .collect::<Option<_>>()?,
     };
     let numbers: Vec<f64> = coefficients.split(' ').map(|c| c.parse().ok()).collect::<Option<_>>()?;
     let (&constant, pairs) = numbers.split_first()?;
@@ -210,7 +223,19 @@ fn parse_row(line: &'static str) -> Option<Glass> {
         v_d: vd.parse().ok()?,
         glass_code: (code != "-").then_some(code),
         range_nm: (min_um.parse::<f64>().ok()? * 1e3, max_um.parse::<f64>().ok()? * 1e3),
+        extinction,
     })
+}
+
+/// The catalogue glasses a lens file may mean by `name`, as lens files
+/// write glass names: the name itself, its lead-free `N-` successor (BK7 →
+/// N-BK7), and the part before a `_` (Zemax's `SF5_SCHOTT`-style
+/// suffixes), in that order.
+pub fn find_as_written(name: &str) -> impl Iterator<Item = &'static Glass> {
+    let before_underscore = name.split('_').next().unwrap_or(name).to_string();
+    [name.to_string(), format!("N-{name}"), before_underscore]
+        .into_iter()
+        .filter_map(|candidate| find(&candidate).ok())
 }
 
 /// The glass named `name`: `N-BK7` (the first maker in [`MAKERS`] order
@@ -281,6 +306,28 @@ pub fn nearest_of_each_maker(n_d: f64, v_d: f64) -> Vec<&'static Glass> {
 }
 
 impl Glass {
+    /// The internal transmittance (no surface reflections) of `thickness_mm`
+    /// of this glass at `wavelength_nm`: exp(−4π·k·d/λ) (Beer–Lambert with
+    /// the absorption coefficient 4πk/λ; Born & Wolf, §14.1), k interpolated
+    /// linearly between the catalogue's wavelengths. `None` outside them.
+    pub fn internal_transmittance(&self, wavelength_nm: f64, thickness_mm: f64) -> Option<f64> {
+        let table = &self.extinction;
+        let (first, last) = (table.first()?, table.last()?);
+        if !(first.0..=last.0).contains(&wavelength_nm) {
+            return None;
+        }
+        let above = table
+            .partition_point(|&(nm, _)| nm < wavelength_nm)
+            .max(1)
+            .min(table.len() - 1);
+        let ((nm0, k0), (nm1, k1)) = (table[above - 1], table[above]);
+        let k = if nm1 > nm0 {
+            k0 + (k1 - k0) * (wavelength_nm - nm0) / (nm1 - nm0)
+        } else {
+            k0
+        };
+        Some((-4.0 * std::f64::consts::PI * k * thickness_mm * 1e6 / wavelength_nm).exp())
+    }
     /// Relative partial dispersion P_g,F = (n_g − n_F) / (n_F − n_C), from
     /// its formula (Schott, TIE-29): how far from the normal line its
     /// secondary spectrum lies.
@@ -369,6 +416,29 @@ pub fn abbe_diagram_svg(marked: &[(String, f64, f64)]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Internal transmittance from the catalogue's k: N-BK7's data sheet
+    /// (Schott) gives τi 0.997 through 10 mm and 0.992 through 25 mm at
+    /// 400 nm; refractiveindex.info derived Schott's k from the 25 mm
+    /// figures, printed to three decimals, so every tabulated wavelength gives
+    /// back a three-decimal τi(25 mm) (a wrong unit or factor would not).
+    #[test]
+    fn internal_transmittance_follows_the_makers_figures() {
+        let bk7 = find("schott:N-BK7").unwrap();
+        let at_400 = |mm| bk7.internal_transmittance(400.0, mm).unwrap();
+        assert!((at_400(10.0) - 0.997).abs() < 5e-4, "{}", at_400(10.0));
+        assert!((at_400(25.0) - 0.992).abs() < 5e-4, "{}", at_400(25.0));
+        assert!(bk7.extinction.len() >= 20);
+        for &(nm, _) in &bk7.extinction {
+            let per_mille = 1e3 * bk7.internal_transmittance(nm, 25.0).unwrap();
+            assert!((per_mille - per_mille.round()).abs() < 0.05, "{nm} nm: {per_mille}");
+        }
+        // Thicker glass and shorter wavelengths absorb more; outside the table, no figure.
+        assert!(bk7.internal_transmittance(320.0, 10.0).unwrap() < at_400(10.0));
+        assert!(bk7.internal_transmittance(400.0, 50.0).unwrap() < at_400(25.0));
+        assert_eq!(bk7.internal_transmittance(250.0, 10.0), None);
+        assert!(catalogue().iter().all(|g| !g.extinction.is_empty()));
+    }
 
     /// N-BK7's P_g,F from its formula is Schott's catalogue value 0.5349,
     /// and each maker's nearest glass to it is that maker's BK7 equivalent.

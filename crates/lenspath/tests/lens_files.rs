@@ -60,6 +60,40 @@ fn zemax_files_trace_as_rayoptics_reads_them() {
 
 /// What the readers make of each file: the asphere with its conic and
 /// terms, the stop, the glasses by maker; a UTF-16 file like any other.
+/// ISET3d's copies of two Zemax samples put the stop on a curved surface's
+/// vertex (thickness 0 between them), so that surface's rim lies beyond the
+/// stop plane. Paraxial EFL and BFL against rayoptics 0.9.8 given the same
+/// surfaces and indices; and real rays parallel to the axis through 90% of
+/// the entrance pupil all pass (they were all blocked while the stop moved a
+/// ray to its plane), those at 110% none.
+#[test]
+fn a_stop_on_a_curved_vertex_clips_at_the_entrance_pupil() {
+    let cases = [
+        ("iset3d-cooke40deg-zemax.json", 49.9887473573, 42.4043647839),
+        ("iset3d-petzval-zemax.json", 99.8876422269, 15.1955944457),
+    ];
+    for (name, efl, bfl) in cases {
+        let lens = LensSystem::new(&LensPrescription::load(&file(name)).unwrap());
+        let p = lens.paraxial().unwrap();
+        assert!((p.effective_focal_length_mm / efl - 1.0).abs() < 1e-9, "{name}: {p:?}");
+        assert!((p.back_focal_distance_mm / bfl - 1.0).abs() < 1e-9, "{name}: {p:?}");
+        let passing = |fraction: f64| {
+            (0..16)
+                .filter(|k| {
+                    let azimuth = f64::from(*k) * std::f64::consts::TAU / 16.0;
+                    let h = fraction * 0.5 * p.entrance_pupil_diameter_mm;
+                    let ray = LensRay {
+                        origin: DVec3::new(h * azimuth.cos(), h * azimuth.sin(), lens.front_z() - 10.0),
+                        direction: DVec3::Z,
+                    };
+                    lens.trace(&ray, Direction::ToSensor).is_some()
+                })
+                .count()
+        };
+        assert_eq!((passing(0.9), passing(1.1)), (16, 0), "{name}");
+    }
+}
+
 #[test]
 fn zemax_surfaces_glasses_and_encodings() {
     let lens = LensPrescription::load(&file("US08427765-1.ZMX")).unwrap();

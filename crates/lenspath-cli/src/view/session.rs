@@ -13,7 +13,7 @@ use glam::Vec3;
 use lenspath::camera::{ApertureShape, CameraPose, LensFocus, RealisticCamera, RealisticCameraSettings};
 use lenspath::film::Image;
 use lenspath::io::scene_file::{SceneBase, SceneSettingsFile};
-use lenspath::lens::{AnalysisSettings, LensAnalysis, LensPrescription, TableConvention, BUILTIN_LENSES};
+use lenspath::lens::{AnalysisSettings, LensAnalysis, LensPrescription, TableConvention};
 use lenspath::options::SceneOptions;
 use lenspath::render::{NormalizedRect, RenderSettings};
 use lenspath::sampling::SamplerKind;
@@ -444,9 +444,7 @@ impl Config {
 
     /// The lens names the page offers: built-ins, the `--lens` files, the dropped tables.
     fn lens_names(&self) -> Vec<String> {
-        let mut names: Vec<String> = lenspath::lens::library::shipped()
-            .map(|lenses| lenses.into_iter().map(|l| l.name).collect())
-            .unwrap_or_else(|_| BUILTIN_LENSES.iter().map(|(n, _)| n.to_string()).collect());
+        let mut names: Vec<String> = lenspath::lens::library::shipped().into_iter().map(|l| l.name).collect();
         names.extend(
             self.allowed_lens_paths
                 .iter()

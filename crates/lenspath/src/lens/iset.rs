@@ -19,7 +19,7 @@ use std::path::Path;
 use serde_json::Value;
 
 use super::prescription::{LensPrescription, TableRow};
-use super::surface::{EvenAsphere, SurfaceShape};
+use super::surface::SurfaceShape;
 use crate::error::{Error, Result};
 use crate::glass::{C_LINE_NM, D_LINE_NM, F_LINE_NM};
 
@@ -110,22 +110,12 @@ fn row(surface: &Value, location: &str) -> std::result::Result<TableRow, String>
             .collect::<std::result::Result<_, _>>()?,
         Some(v) => return Err(format!("{location}.aspheric_coefficients: {v} is not an array")),
     };
-    if terms.len() > 9 {
-        return Err(format!(
+    let shape = SurfaceShape::from_terms(conic, 4, &terms).ok_or_else(|| {
+        format!(
             "{location}.aspheric_coefficients: {} terms (A4 … A20 is 9 at most)",
             terms.len()
-        ));
-    }
-    let shape = if conic == 0.0 && terms.iter().all(|&a| a == 0.0) {
-        SurfaceShape::Spherical
-    } else {
-        let mut asphere = EvenAsphere {
-            conic,
-            ..EvenAsphere::SPHERE
-        };
-        asphere.coefficients[1..1 + terms.len()].copy_from_slice(&terms);
-        SurfaceShape::EvenAsphere(asphere)
-    };
+        )
+    })?;
     let (ior_d, glass) = index(surface.get("ior"), location)?;
     Ok(TableRow::new(
         location.to_string(),
@@ -159,10 +149,10 @@ fn index(ior: Option<&Value>, location: &str) -> std::result::Result<(f64, Optio
                 ));
             }
             let at = |wavelength: f64| -> f64 {
-                let k = nm.partition_point(|&w| w < wavelength).clamp(1, nm.len().max(2) - 1);
                 if nm.len() == 1 {
                     return n[0];
                 }
+                let k = nm.partition_point(|&w| w < wavelength).clamp(1, nm.len() - 1);
                 let t = ((wavelength - nm[k - 1]) / (nm[k] - nm[k - 1])).clamp(0.0, 1.0);
                 n[k - 1] + t * (n[k] - n[k - 1])
             };

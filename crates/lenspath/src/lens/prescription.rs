@@ -118,8 +118,9 @@ impl LensSurface {
 /// How a table's second column is to be read.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum TableConvention {
-    /// `ThicknessToNext` unless the first row's second column is 0, which
-    /// only the older convention writes (a front element cannot be 0 mm thick).
+    /// `ThicknessToNext` unless the first row is a surface whose second
+    /// column is 0, which only the older convention writes (a front element
+    /// cannot be 0 mm thick; a front stop on the first vertex can).
     Auto,
     /// pbrt-v3/v4 and CS184: column 2 is the distance to the next surface.
     ThicknessToNext,
@@ -142,12 +143,20 @@ pub struct LensPrescription {
     pub(crate) columns: Vec<(f64, Option<String>)>,
 }
 
-/// Built-in lenses: name, table (the published prescriptions scaled as pbrt ships them).
-pub const BUILTIN_LENSES: [(&str, &str); 4] = [
+/// Built-in lens tables: name, table. The first four are the textbook
+/// prescriptions pbrt and the CS184 course ship; [`super::library`] lists
+/// every one with its source.
+pub const BUILTIN_LENSES: [(&str, &str); 10] = [
     ("dgauss50", include_str!("../../lenses/dgauss50.dat")),
     ("wide22", include_str!("../../lenses/wide22.dat")),
     ("tele250", include_str!("../../lenses/tele250.dat")),
     ("fisheye10", include_str!("../../lenses/fisheye10.dat")),
+    ("werfel100", include_str!("../../lenses/werfel100.dat")),
+    ("triplet50", include_str!("../../lenses/triplet50.dat")),
+    ("tessar100", include_str!("../../lenses/tessar100.dat")),
+    ("asph31", include_str!("../../lenses/asph31.dat")),
+    ("nikon-z14", include_str!("../../lenses/nikon-z14.dat")),
+    ("achromat100", include_str!("../../lenses/achromat100.dat")),
 ];
 
 impl LensPrescription {
@@ -239,7 +248,7 @@ impl LensPrescription {
             ));
         }
         let older = match convention {
-            TableConvention::Auto => rows.len() > 1 && rows[0].thickness_mm == 0.0,
+            TableConvention::Auto => rows.len() > 1 && rows[0].thickness_mm == 0.0 && rows[0].radius_mm != 0.0,
             TableConvention::ThicknessToNext => false,
             TableConvention::DistanceFromPrevious => true,
         };
@@ -530,9 +539,14 @@ mod tests {
 
     #[test]
     fn builtins_parse_with_one_stop() {
-        for (name, _) in BUILTIN_LENSES {
+        for (name, table) in BUILTIN_LENSES {
             let lens = LensPrescription::load(name).unwrap();
-            assert!(lens.surfaces.len() >= 7, "{name}");
+            // Every row read (the cemented achromat has four, the others seven or more).
+            let rows = table
+                .lines()
+                .filter(|l| !l.trim().is_empty() && !l.trim().starts_with('#'))
+                .count();
+            assert!(lens.surfaces.len() == rows && rows >= 4, "{name}");
             assert!(lens.surfaces[lens.stop_index()].is_stop());
         }
     }
@@ -556,6 +570,15 @@ mod tests {
         assert_eq!(lens.surfaces.len(), 3);
         assert_eq!(lens.surfaces[1].radius_mm, -10.0);
         assert_eq!(lens.surfaces[2].ior_d(), 1.0);
+    }
+
+    #[test]
+    fn a_front_stop_on_the_first_vertex_is_not_the_older_convention() {
+        // A cemented achromat with its stop on the front vertex, as lens files give them.
+        let table = "0 0 0 24\n61.47 6 1.5168 24\n-44.64 2.5 1.6727 24\n-129.94 95.95 1 24\n";
+        let lens = LensPrescription::parse(table, "t", TableConvention::Auto).unwrap();
+        let thicknesses: Vec<f64> = lens.surfaces.iter().map(|s| s.thickness_mm).collect();
+        assert_eq!(thicknesses, [0.0, 6.0, 2.5, 95.95]);
     }
 
     #[test]

@@ -36,6 +36,26 @@ impl SurfaceShape {
         }
     }
 
+    /// The shape a lens file gives as a conic constant and the polynomial
+    /// terms of h^`first_order`, h^(`first_order` + 2), …: a sphere when all
+    /// are zero; `None` when `first_order` is not an even power from 2 or
+    /// the terms run past h²⁰ (each reader names its own limit).
+    pub fn from_terms(conic: f64, first_order: usize, terms: &[f64]) -> Option<SurfaceShape> {
+        if first_order < 2 || first_order % 2 != 0 || first_order / 2 - 1 + terms.len() > 10 {
+            return None;
+        }
+        if conic == 0.0 && terms.iter().all(|&a| a == 0.0) {
+            return Some(SurfaceShape::Spherical);
+        }
+        let mut asphere = EvenAsphere {
+            conic,
+            ..EvenAsphere::SPHERE
+        };
+        let first = first_order / 2 - 1;
+        asphere.coefficients[first..first + terms.len()].copy_from_slice(terms);
+        Some(SurfaceShape::EvenAsphere(asphere))
+    }
+
     /// The same shape on a lens with every length multiplied by `factor`.
     pub fn scaled(&self, factor: f64) -> SurfaceShape {
         match self {

@@ -55,14 +55,18 @@ pub enum Direction {
 /// How a surface is intersected.
 #[derive(Clone, Copy, Debug)]
 enum Intersection {
-    /// The stop or a flat: the plane of the vertex.
+    /// A plane between equal indices (the stop; a flat in air): it clips
+    /// but bends nothing, so a ray is tested where its line crosses the
+    /// plane and goes on from where it was. Lens files put the stop on a
+    /// curved surface's vertex, whose rim then lies beyond the plane: the
+    /// ray meets that surface before (or after) the plane along its line.
+    Aperture,
+    /// A flat between different indices: the plane of the vertex.
     Plane,
     /// A sphere of the surface's radius.
     Sphere,
-    /// An even asphere (the prescription's surface of this index), by
-    /// Newton's method from the vertex sphere's hit; its coefficients stay
-    /// in the prescription so every surface stays small.
-    Asphere(usize),
+    /// An even asphere, by Newton's method from the vertex sphere's hit.
+    Asphere(EvenAsphere),
 }
 
 /// One surface on the axis.
@@ -170,13 +174,15 @@ impl LensSystem {
         let surfaces = prescription
             .surfaces
             .iter()
-            .enumerate()
-            .map(|(index, s)| {
+            .map(|s| {
                 let ior = s.medium.index(wavelength_nm);
                 let intersection = match s.shape {
+                    _ if s.curvature() == 0.0 && s.shape == SurfaceShape::Spherical && ior == ior_front => {
+                        Intersection::Aperture
+                    }
                     _ if s.curvature() == 0.0 && s.shape == SurfaceShape::Spherical => Intersection::Plane,
                     SurfaceShape::Spherical => Intersection::Sphere,
-                    SurfaceShape::EvenAsphere(_) => Intersection::Asphere(index),
+                    SurfaceShape::EvenAsphere(asphere) => Intersection::Asphere(asphere),
                 };
                 let surface = Surface {
                     z,
@@ -339,14 +345,22 @@ impl LensSystem {
         visit: &mut impl FnMut(DVec3),
     ) -> Option<LensRay> {
         let (t, normal) = match &surface.intersection {
+            Intersection::Aperture => {
+                let forward = match direction {
+                    Direction::ToSensor => ray.direction.z > 0.0,
+                    Direction::ToScene => ray.direction.z < 0.0,
+                };
+                if !forward {
+                    return None;
+                }
+                let p = ray.origin + ray.direction * ((surface.z - ray.origin.z) / ray.direction.z);
+                visit(p);
+                let inside = p.x * p.x + p.y * p.y <= surface.aperture_radius * surface.aperture_radius;
+                return inside.then_some(*ray);
+            }
             Intersection::Plane => ((surface.z - ray.origin.z) / ray.direction.z, DVec3::Z),
             Intersection::Sphere => intersect_sphere(ray, surface, direction)?,
-            Intersection::Asphere(index) => {
-                let SurfaceShape::EvenAsphere(asphere) = &self.prescription.surfaces[*index].shape else {
-                    unreachable!("built from this prescription")
-                };
-                intersect_asphere(ray, surface, asphere, direction)?
-            }
+            Intersection::Asphere(asphere) => intersect_asphere(ray, surface, asphere, direction)?,
         };
         // Also rejects NaN (a tangent ray).
         if t.is_nan() || t <= 0.0 {

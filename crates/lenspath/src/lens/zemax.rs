@@ -26,7 +26,7 @@
 use std::path::Path;
 
 use super::prescription::{LensPrescription, TableRow};
-use super::surface::{EvenAsphere, SurfaceShape};
+use super::surface::SurfaceShape;
 use crate::error::{Error, Result};
 use crate::glass;
 
@@ -217,20 +217,11 @@ pub fn parse(bytes: &[u8], source: &str) -> Result<LensPrescription> {
             None => (1.0, None),
         };
         let glass_behind = ior_d != 1.0;
-        let mut shape = SurfaceShape::Spherical;
-        if s.aspheric && (s.conic != 0.0 || s.parm.iter().any(|&p| p != 0.0)) {
-            let mut asphere = EvenAsphere {
-                conic: s.conic,
-                ..EvenAsphere::SPHERE
-            };
-            asphere.coefficients[..8].copy_from_slice(&s.parm);
-            shape = SurfaceShape::EvenAsphere(asphere.scaled(unit_mm));
-        } else if s.conic != 0.0 {
-            shape = SurfaceShape::EvenAsphere(EvenAsphere {
-                conic: s.conic,
-                ..EvenAsphere::SPHERE
-            });
-        }
+        // STANDARD surfaces have a conic only; PARMs count on EVENASPH.
+        let terms: &[f64] = if s.aspheric { &s.parm } else { &[] };
+        let shape = SurfaceShape::from_terms(s.conic, 2, terms)
+            .expect("eight terms from h² fit")
+            .scaled(unit_mm);
         let radius_mm = if s.curvature == 0.0 {
             f64::INFINITY
         } else {
@@ -313,10 +304,8 @@ fn glass_of(name: &str, model: Option<(f64, f64)>) -> std::result::Result<(f64, 
         }
         return Ok((n_d, (n_d > 1.0).then(|| v_d.to_string())));
     }
-    let before_underscore = name.split('_').next().unwrap_or(name);
-    [name.to_string(), format!("N-{name}"), before_underscore.to_string()]
-        .iter()
-        .find_map(|c| glass::find(c).ok())
+    glass::find_as_written(name)
+        .next()
         .map(|found| (found.dispersion.n_d(), Some(format!("{}:{}", found.maker, found.name))))
         .ok_or_else(|| {
             format!(
