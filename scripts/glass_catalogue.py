@@ -40,7 +40,7 @@ for maker in MAKERS:
         k_pairs = "-"
         if k:
             values = k.group(1).split()
-            k_pairs = " ".join(f"{w}:{v}" for w, v in zip(values[0::2], values[1::2]))
+            k_pairs = " ".join(f"{w}:{v}" for w, v in zip(values[0::2], values[1::2], strict=True))
         lines.append(
             "\t".join(
                 [
