@@ -10,6 +10,9 @@ lenspath's lens tests:
 - `lens::lentil::tests::the_aspheric_fisheye_traces_as_rayoptics_does`: the
   lentil database's 0014 (A4-A10 on four surfaces), read from `../shared` as
   lenspath reads it; where real rays cross a plane behind the lens.
+- `lens::lentil::tests::the_anamorphic_prime_traces_as_rayoptics_does`: lentil's
+  2004, whose cylinders rayoptics models as toroids; skew rays, and each meridian's
+  focal length.
 - `tests/lens_files.rs`: Zemax files, and ISET3d files whose stop sits on a
   curved surface's vertex, read by both tools.
 - `crates/lenspath/lenses/README.md`: the shipped tables taken from rayoptics'
@@ -108,20 +111,35 @@ for height in (1.0, 5.0, 10.0, 15.0, 20.0, 24.0):
 # lentil 0014, as lenspath::lens::lentil reads it: flats from radii >= 99999 mm,
 # the iris as the stop, n_d (V_d only matters off the d line), A4-A10 on a sphere.
 lentil = Path(__file__).resolve().parents[2].parent / "shared" / "lenses" / "lentil" / "lenses.json"
-fisheye = d_line_model(50.0)
-sm = fisheye["seq_model"]
-for e in json.loads(lentil.read_text())["0014"]["optical-elements-patent"]:
-    flat = e["material"] == "iris" or abs(e["radius"]) >= 99999
-    r = 0.0 if flat else e["radius"]
-    if e["material"] in ("air", "iris") or e["ior"] in (None, 1.0):
-        sm.add_surface([r, e["thickness"]])
-    else:
-        sm.add_surface([r, e["thickness"], e["ior"], e["abbe"]])
-    if e["material"] == "iris":
-        sm.set_stop()
-    if e["aspherical-equation"]:
-        sm.ifcs[-2].profile = EvenPolynomial(r=r, cc=0.0, coefs=[0.0, *e["aspherical-equation"]])
-fisheye.update_model()
+
+
+def lentil_model(lens_id: str, profile) -> OpticalModel:
+    """A lentil design as lenspath reads it, 50 mm behind the object plane; `profile(element,
+    radius)` gives a surface's rayoptics profile, or None to keep it spherical."""
+    opm = d_line_model(50.0)
+    sm = opm["seq_model"]
+    for e in json.loads(lentil.read_text())[lens_id]["optical-elements-patent"]:
+        flat = e["material"] == "iris" or abs(e["radius"]) >= 99999
+        r = 0.0 if flat else e["radius"]
+        if e["material"] in ("air", "iris") or e["ior"] in (None, 1.0):
+            sm.add_surface([r, e["thickness"]])
+        else:
+            sm.add_surface([r, e["thickness"], e["ior"], e["abbe"]])
+        if e["material"] == "iris":
+            sm.set_stop()
+        shape = profile(e, r)
+        if shape is not None:
+            sm.ifcs[-2].profile = shape
+    opm.update_model()
+    return opm
+
+
+fisheye = lentil_model(
+    "0014",
+    lambda e, r: (
+        EvenPolynomial(r=r, cc=0.0, coefs=[0.0, *e["aspherical-equation"]]) if e["aspherical-equation"] else None
+    ),
+)
 fod = fisheye["analysis_results"]["parax_data"].fod
 print(f"lentil 0014: EFL {float(fod.efl)!r}, bfl {float(fod.bfl)!r}")
 for height, angle in [(0.5, 0.0), (2.0, 0.0), (-4.0, 20.0), (-12.0, 40.0), (-8.0, 40.0), (-16.0, 60.0)]:
@@ -181,3 +199,40 @@ for name in SOURCES:
     opm = open_model(str(RAYOPTICS / name))
     fod = opm["analysis_results"]["parax_data"].fod
     print(f"{name}: EFL {float(fod.efl)!r}, bfl {float(fod.bfl)!r}")
+
+# lentil 2004, the anamorphic prime (US 6,310,731), as lenspath::lens::lentil reads it:
+# `cyl-y` curves in the x-z plane (rayoptics' XToroid with no sweep curvature), `cyl-x`
+# in the y-z plane (YToroid); `lens::lentil::tests::the_anamorphic_prime_traces_as_rayoptics_does`.
+# Skew rays start 50 mm in front of the front vertex; where they cross the plane 10 mm
+# behind the rear vertex, and the paraxial focal lengths of parallel rays 0.01 mm off
+# the axis in each meridian (rayoptics' paraxial model sees only the y-z plane).
+from rayoptics.elem.profiles import XToroid, YToroid  # noqa: E402
+
+CYLINDERS = {"cyl-y": XToroid, "cyl-x": YToroid}
+anamorphic = lentil_model(
+    "2004", lambda e, r: CYLINDERS[e["lens-geometry"]](r=r, rR=0.0) if e["lens-geometry"] in CYLINDERS else None
+)
+
+
+def skew_ray(opm: OpticalModel, start: tuple, direction: tuple):
+    """Point and direction of a ray after the last surface (its local frame)."""
+    d = np.array(direction) / np.linalg.norm(direction)
+    path = raytrace.trace(opm["seq_model"], np.array(start), d, D_LINE_NM)[0]
+    return path[-2][0], path[-2][1]
+
+
+for start, direction in [
+    ((3.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
+    ((0.0, 3.0, 0.0), (0.0, 0.0, 1.0)),
+    ((2.0, -3.0, 0.0), (0.03, 0.05, 1.0)),
+    ((-6.0, 4.0, 0.0), (0.06, -0.03, 1.0)),
+    ((5.0, 5.0, 0.0), (-0.08, -0.04, 1.0)),
+]:
+    p, d = skew_ray(anamorphic, start, direction)
+    behind = p + d * (10.0 - p[2]) / d[2]
+    print(f"lentil 2004 ray from {start} along {direction}: ({float(behind[0])!r}, {float(behind[1])!r})")
+for axis in (0, 1):
+    start = [0.0, 0.0, 0.0]
+    start[axis] = 0.01
+    p, d = skew_ray(anamorphic, tuple(start), (0.0, 0.0, 1.0))
+    print(f"lentil 2004 meridian {'xy'[axis]}: focal length {float(-0.01 / d[axis] * d[2])!r} (0.01 mm ray)")

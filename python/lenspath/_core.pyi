@@ -249,8 +249,11 @@ class Lens:
     @property
     def table(self) -> npt.NDArray[np.float64]:
         """The prescription as an N x 4 array (as ``from_table`` takes it)."""
-    def analysis(self) -> dict[str, float]:
-        """Every figure ``lenspath lens --json`` prints (focal lengths, pupils, focus range, ...)."""
+    def analysis(self) -> dict[str, Any]:
+        """Every figure ``lenspath lens --json`` prints (focal lengths, pupils, focus range, ...),
+        floats; ``"anamorphic"`` is None, or for a lens with cylinders its ``"squeeze"`` and the
+        ``"horizontal"`` and ``"vertical"`` meridians' focal length, f-number, entrance pupil,
+        field of view and infinity focus."""
     @property
     def focal_length_mm(self) -> float:
         """Real-ray focal length, |P' - F'|."""
@@ -345,6 +348,7 @@ class Camera:
         aperture: str | npt.ArrayLike | None = None,
         scene_unit_m: float | None = None,
         dispersion: bool | None = None,
+        desqueeze: bool | None = None,
     ) -> Camera:
         """A real lens (default: the scene file's, else dgauss50) focused at ``focus_distance``
         (scene units from the sensor) or with the sensor ``sensor_depth_mm`` behind the stop
@@ -352,7 +356,8 @@ class Camera:
         ``sensor_width_mm`` wide sensor (default 36; its height follows the image), an
         ``aperture`` shape, ``scene_unit_m`` metres per unit; ``dispersion=False`` gives every
         glass its d-line index (no colour, a little less colour noise; default: the scene file's,
-        else glasses disperse)."""
+        else glasses disperse); ``desqueeze=True`` stretches an anamorphic lens's image by its
+        squeeze (the sensor's height grows by it; default: the scene file's, else squeezed)."""
 
 @overload
 def render(

@@ -135,6 +135,7 @@ def test_cameras_lenses_and_scenes_pickle_to_the_same_render() -> None:
         *CAMERAS.values(),
         Camera.realistic(Lens.builtin("wide22").stopped_down(4.0), focus_distance=2.5, aperture="star:5:0.4"),
         Camera.realistic(aperture=np.eye(8, dtype=np.float32) + 0.2),
+        Camera.realistic("lentil:2004", desqueeze=True),
     ]
     for camera in cameras:
         copy = pickle.loads(pickle.dumps(camera))

@@ -36,8 +36,12 @@ def test_every_shipped_lens_is_offered_and_listed(cli) -> None:
         assert lens.analysis()["effective_focal_length_mm"] == entry["focal_length_mm"], entry["name"]
     # Any lentil entry by id, also one the list leaves out (lentil's own test lenses).
     assert lenspath.Lens.builtin("lentil:9993").focal_length_mm == pytest.approx(99.93, abs=0.01)
-    with pytest.raises(lenspath.LensError, match="anamorphic"):
-        lenspath.Lens.builtin("lentil:2001")
+    # An anamorphic one: its own focal length in each meridian (rayoptics: 31.4876, 60.5546).
+    anamorphic = lenspath.Lens.builtin("lentil:2004").analysis()["anamorphic"]
+    assert anamorphic["horizontal"]["effective_focal_length_mm"] == pytest.approx(31.4876, abs=1e-4)
+    assert anamorphic["vertical"]["effective_focal_length_mm"] == pytest.approx(60.5546, abs=1e-4)
+    assert anamorphic["squeeze"] == pytest.approx(60.5546 / 31.4876, rel=1e-5)
+    assert lenspath.Lens.builtin("dgauss50").analysis()["anamorphic"] is None
 
 
 @pytest.mark.parametrize("name", LENSES)
@@ -162,3 +166,17 @@ def test_glass_tool_gives_lines_partial_dispersion_and_equivalents(cli, tmp_path
     assert plot.read_text().count('stroke="#c00"') == 0
     bad = subprocess.run([str(cli), "glass", "N-BK8"], capture_output=True, text=True)
     assert bad.returncode == 2 and "unknown glass 'N-BK8'" in bad.stderr
+
+
+def test_desqueezing_stretches_only_an_anamorphic_lens_image() -> None:
+    """``desqueeze=True`` keeps the sensor's width and makes it the squeeze times taller: a
+    different picture through an anamorphic lens, the same one through a round lens."""
+    options = {"spp": 2, "resolution": (40, 30)}
+
+    def shot(lens: str, desqueeze: bool | None) -> np.ndarray:
+        return lenspath.render("cornell-spheres", lenspath.Camera.realistic(lens, desqueeze=desqueeze), **options)
+
+    assert np.array_equal(shot("dgauss50", True), shot("dgauss50", None))
+    squeezed, desqueezed = shot("lentil:2004", False), shot("lentil:2004", True)
+    assert squeezed.shape == desqueezed.shape
+    assert not np.array_equal(squeezed, desqueezed)

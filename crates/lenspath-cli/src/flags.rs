@@ -208,6 +208,10 @@ pub struct LensFlags {
     /// little less colour noise, no tracing back per wavelength; default: glasses disperse).
     #[arg(long)]
     pub no_dispersion: bool,
+    /// Realistic camera with an anamorphic lens: stretch the image's width by the lens's
+    /// squeeze, as projected (default: as the sensor records it, squeezed).
+    #[arg(long)]
+    pub desqueeze: bool,
 }
 
 impl LensFlags {
@@ -224,6 +228,7 @@ impl LensFlags {
                 RadiometryKind::Physical => Radiometry::Physical,
             }),
             dispersion: self.no_dispersion.then_some(false),
+            desqueeze: self.desqueeze.then_some(true),
             ..RealisticDescription::default()
         })
     }

@@ -168,7 +168,7 @@ pub fn run(mut args: LensArgs) -> Result<Outcome> {
     }
     if let Some(path) = &args.write_table {
         let header = format!(
-            "# {} as a lenspath table: radius, thickness to the next surface, n_d, aperture diameter (mm), glass; aspheric terms\n",
+            "# {} as a lenspath table: radius, thickness to the next surface, n_d, aperture diameter (mm), glass; aspheric terms or the cylinder's axis\n",
             prescription.name()
         );
         write_text(path, &(header + &prescription.table_text()))?;
@@ -237,6 +237,21 @@ pub fn run(mut args: LensArgs) -> Result<Outcome> {
         "  field of view           {:.2} deg diagonal, {:.2} deg horizontal ({}x{} mm sensor)",
         a.diagonal_fov_deg, a.horizontal_fov_deg, sensor_mm.0, sensor_mm.1
     );
+    if let Some(anamorphic) = &a.anamorphic {
+        println!(
+            "anamorphic                squeeze {:.4}x (vertical over horizontal focal length)",
+            anamorphic.squeeze
+        );
+        for (name, m) in [
+            ("horizontal", &anamorphic.horizontal),
+            ("vertical", &anamorphic.vertical),
+        ] {
+            println!(
+                "  {name:<10}              EFL {:.4} mm, f/{:.3}, field {:.2} deg, infinity focus {:.4} mm",
+                m.effective_focal_length_mm, m.f_number, m.field_of_view_deg, m.infinity_focus_mm
+            );
+        }
+    }
     println!("colour (paraxial)");
     for l in &chromatic.lines {
         println!(
@@ -253,6 +268,9 @@ pub fn run(mut args: LensArgs) -> Result<Outcome> {
         chromatic.lateral_color_mm, chromatic.field_height_mm
     );
     println!("real rays at {} mm height", a.ray_height_mm);
+    if a.anamorphic.is_some() {
+        println!("                          focus positions midway between the two meridians' line foci");
+    }
     println!("  infinity focus          sensor at {:.4} mm", a.infinity_focus_mm);
     println!(
         "  close focus             sensor at {:.4} mm (object {:.4} mm in front of the stop)",

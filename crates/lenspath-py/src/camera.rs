@@ -163,8 +163,9 @@ impl Camera {
                 r.f_number,
                 r.scene_unit_m,
                 r.dispersion,
+                r.desqueeze,
             ),
-            _ => (None, None, None, None, None),
+            _ => (None, None, None, None, None, None),
         };
         Ok((
             py.get_type::<Camera>().getattr("_from_state")?,
@@ -185,11 +186,18 @@ impl Camera {
             Option<Bound<'_, PyAny>>,
             Option<Bound<'_, PyAny>>,
         ),
-        realistic: (Option<f64>, Option<f64>, Option<f64>, Option<f64>, Option<bool>),
+        realistic: (
+            Option<f64>,
+            Option<f64>,
+            Option<f64>,
+            Option<f64>,
+            Option<bool>,
+            Option<bool>,
+        ),
     ) -> PyResult<Camera> {
         let (kind, fov_deg, aperture_radius, focus_distance, aperture, lens) = state;
         let (aperture, lens) = (aperture.filter(|a| !a.is_none()), lens.filter(|l| !l.is_none()));
-        let (sensor_depth_mm, sensor_width_mm, f_number, scene_unit_m, dispersion) = realistic;
+        let (sensor_depth_mm, sensor_width_mm, f_number, scene_unit_m, dispersion, desqueeze) = realistic;
         match kind.as_str() {
             "pinhole" => Ok(Camera::pinhole(fov_deg)),
             "thin_lens" => Camera::thin_lens(
@@ -209,6 +217,7 @@ impl Camera {
                 aperture.as_ref(),
                 scene_unit_m,
                 dispersion,
+                desqueeze,
             ),
         }
     }
@@ -249,11 +258,12 @@ impl Camera {
     /// sensor) or with the sensor `sensor_depth_mm` behind the stop (formerly
     /// `sensor_mm`), stopped down to `f_number`, with a `sensor_width_mm` wide
     /// sensor and an `aperture` shape; `dispersion=False` gives every glass
-    /// its d-line index (default: the scene file's, else glasses disperse).
+    /// its d-line index (default: the scene file's, else glasses disperse);
+    /// `desqueeze=True` stretches an anamorphic lens's image by its squeeze.
     #[staticmethod]
     #[pyo3(signature = (lens = None, *, focus_distance = None, sensor_depth_mm = None, sensor_mm = None,
                         f_number = None, sensor_width_mm = None, aperture = None, scene_unit_m = None,
-                        dispersion = None))]
+                        dispersion = None, desqueeze = None))]
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn realistic(
         py: Python<'_>,
@@ -266,6 +276,7 @@ impl Camera {
         aperture: Option<&Bound<'_, PyAny>>,
         scene_unit_m: Option<f64>,
         dispersion: Option<bool>,
+        desqueeze: Option<bool>,
     ) -> PyResult<Camera> {
         let sensor_depth_mm = renamed(
             py,
@@ -290,6 +301,7 @@ impl Camera {
             scene_unit_m,
             radiometry: None,
             dispersion,
+            desqueeze,
         })))
     }
 }

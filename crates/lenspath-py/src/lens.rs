@@ -7,7 +7,7 @@ use lenspath::lens::{
     chromatic::{focal_shift, ChromaticAnalysis},
     library,
     plot::{focal_shift_svg, layout, layout_svg, Polyline},
-    AnalysisSettings, Direction, LensAnalysis, LensPrescription, LensRay, LensSystem, TableConvention,
+    AnalysisSettings, Direction, LensAnalysis, LensPrescription, LensRay, LensSystem, MeridianFigures, TableConvention,
 };
 use lenspath::Error;
 use numpy::ndarray::Array2;
@@ -195,6 +195,30 @@ impl Lens {
         ] {
             d.set_item(key, value)?;
         }
+        let anamorphic = match &a.anamorphic {
+            None => None,
+            Some(figures) => {
+                let meridian = |m: &MeridianFigures| -> PyResult<Bound<'py, PyDict>> {
+                    let d = PyDict::new(py);
+                    for (key, value) in [
+                        ("effective_focal_length_mm", m.effective_focal_length_mm),
+                        ("f_number", m.f_number),
+                        ("entrance_pupil_diameter_mm", m.entrance_pupil_diameter_mm),
+                        ("infinity_focus_mm", m.infinity_focus_mm),
+                        ("field_of_view_deg", m.field_of_view_deg),
+                    ] {
+                        d.set_item(key, value)?;
+                    }
+                    Ok(d)
+                };
+                let d = PyDict::new(py);
+                d.set_item("squeeze", figures.squeeze)?;
+                d.set_item("horizontal", meridian(&figures.horizontal)?)?;
+                d.set_item("vertical", meridian(&figures.vertical)?)?;
+                Some(d)
+            }
+        };
+        d.set_item("anamorphic", anamorphic)?;
         Ok(d)
     }
 
@@ -426,5 +450,5 @@ impl Lens {
 /// The shipped lenses' names (`lenspath lens --list`).
 #[pyfunction]
 pub(crate) fn builtin_lenses() -> Vec<String> {
-    library::shipped().into_iter().map(|l| l.name).collect()
+    library::shipped().iter().map(|l| l.name.clone()).collect()
 }

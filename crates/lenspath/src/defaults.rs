@@ -32,6 +32,10 @@ pub const LENS: &str = "dgauss50";
 /// Whether a lens's glasses disperse (the realistic camera traces each ray
 /// at its own wavelength) unless the caller or the scene file says not.
 pub const LENS_DISPERSION: bool = true;
+
+/// Whether an anamorphic lens's image is desqueezed (its width stretched by
+/// the lens's squeeze) rather than shown as the sensor records it.
+pub const LENS_DESQUEEZE: bool = false;
 /// The realistic camera's sensor width (a full-frame 35 mm sensor), mm; its
 /// height follows the image's aspect.
 pub const SENSOR_WIDTH_MM: f64 = 36.0;

@@ -44,4 +44,6 @@ pub struct LensOptions {
     pub aperture: Option<ApertureShape>,
     /// Whether the lens's glasses disperse (`None`: they do).
     pub dispersion: Option<bool>,
+    /// Whether an anamorphic lens's image is desqueezed (`None`: it is not).
+    pub desqueeze: Option<bool>,
 }

@@ -22,7 +22,7 @@ use crate::defaults;
 use crate::error::{Error, Result};
 use crate::film::{Filter, NormalizedRect, PixelRect};
 use crate::integrator::Integrator;
-use crate::lens::LensPrescription;
+use crate::lens::{LensPrescription, LensSystem};
 use crate::options::SceneOptions;
 use crate::render::RenderSettings;
 use crate::sampling::SamplerKind;
@@ -115,6 +115,11 @@ pub struct RealisticDescription {
     /// Whether the lens's glasses disperse (default: the scene file's, else
     /// [`defaults::LENS_DISPERSION`]).
     pub dispersion: Option<bool>,
+    /// Whether an anamorphic lens's image is desqueezed (default: the scene
+    /// file's, else [`defaults::LENS_DESQUEEZE`]): the sensor keeps its
+    /// width, and its height grows by the lens's squeeze, so each pixel
+    /// covers that many times more of it in height than in width.
+    pub desqueeze: Option<bool>,
 }
 
 // ---------------------------------------------------------------------------
@@ -301,7 +306,8 @@ pub fn resolve_camera(
 /// The realistic camera `description` asks for, for a `width` × `height`
 /// image: the caller's settings over the scene file's `[camera]` (lens,
 /// sensor, f-number, aperture, focus distance or sensor depth, scene unit)
-/// over the defaults. The sensor's height follows the image's aspect.
+/// over the defaults. The sensor's height follows the image's aspect (times
+/// an anamorphic lens's squeeze when the image is desqueezed).
 pub fn realistic_settings(
     options: &SceneOptions,
     view: &SceneView,
@@ -336,8 +342,18 @@ pub fn realistic_settings(
             "the scene unit must be a positive number of metres, got {scene_unit_m}"
         )));
     }
+    // Desqueezed, the image is the sensor's record stretched in width by the
+    // squeeze: the same pixels over a sensor that much taller.
+    let (sensor_w, mut sensor_h) = sensor_for_image(sensor_width_mm, width, height);
+    if description
+        .desqueeze
+        .or(file.desqueeze)
+        .unwrap_or(defaults::LENS_DESQUEEZE)
+    {
+        sensor_h *= LensSystem::new(&lens).squeeze()?;
+    }
     // Radiometry has no scene-file key: the caller's, else `RealisticCameraSettings::new`'s.
-    let library = RealisticCameraSettings::new(lens, sensor_for_image(sensor_width_mm, width, height), focus);
+    let library = RealisticCameraSettings::new(lens, (sensor_w, sensor_h), focus);
     Ok(RealisticCameraSettings {
         f_number: description.f_number.or(file.f_number),
         scene_unit_m,
@@ -536,6 +552,41 @@ mod tests {
         assert!(!dispersion(Some(false), None));
         assert!(dispersion(Some(false), Some(true)));
         assert!(!dispersion(None, Some(false)));
+
+        // Desqueezing (the caller's, else the file's, else off) keeps the
+        // sensor's width and makes it the lens's squeeze times taller than
+        // the image's aspect says; a rotationally symmetric lens has none.
+        let sensor_mm = |lens: &str, file_says: Option<bool>, caller_says: Option<bool>| {
+            let file = SceneOptions {
+                lens: Some(LensOptions {
+                    lens: Some(lens.into()),
+                    desqueeze: file_says,
+                    ..LensOptions::default()
+                }),
+                ..SceneOptions::default()
+            };
+            let asked = RenderOverrides {
+                resolution: Some((40, 30)),
+                camera: CameraDescription::Realistic(RealisticDescription {
+                    desqueeze: caller_says,
+                    ..RealisticDescription::default()
+                }),
+                ..RenderOverrides::default()
+            };
+            match resolve(&file, &view, &asked).unwrap().camera {
+                CameraSettings::Realistic(camera) => camera.sensor_mm,
+                _ => unreachable!(),
+            }
+        };
+        let squeeze = LensSystem::new(&LensPrescription::load("lentil:2004").unwrap())
+            .squeeze()
+            .unwrap();
+        let (w, h) = (defaults::SENSOR_WIDTH_MM, defaults::SENSOR_WIDTH_MM * 30.0 / 40.0);
+        assert_eq!(sensor_mm("lentil:2004", None, None), (w, h));
+        assert_eq!(sensor_mm("lentil:2004", Some(true), None), (w, h * squeeze));
+        assert_eq!(sensor_mm("lentil:2004", Some(true), Some(false)), (w, h));
+        assert_eq!(sensor_mm("lentil:2004", None, Some(true)), (w, h * squeeze));
+        assert_eq!(sensor_mm("dgauss50", None, Some(true)), (w, h));
 
         // Nothing asked, nothing in the file: the defaults.
         let bare = resolve(&SceneOptions::default(), &view, &RenderOverrides::default()).unwrap();

@@ -102,7 +102,7 @@ fn zemax_surfaces_glasses_and_encodings() {
         .iter()
         .find_map(|s| match s.shape {
             SurfaceShape::EvenAsphere(a) => Some((s.radius_mm, a)),
-            SurfaceShape::Spherical => None,
+            _ => None,
         })
         .expect("surface 4 is an even asphere");
     assert_eq!(asphere.1.conic, 0.02);

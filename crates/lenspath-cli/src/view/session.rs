@@ -444,7 +444,10 @@ impl Config {
 
     /// The lens names the page offers: built-ins, the `--lens` files, the dropped tables.
     fn lens_names(&self) -> Vec<String> {
-        let mut names: Vec<String> = lenspath::lens::library::shipped().into_iter().map(|l| l.name).collect();
+        let mut names: Vec<String> = lenspath::lens::library::shipped()
+            .iter()
+            .map(|l| l.name.clone())
+            .collect();
         names.extend(
             self.allowed_lens_paths
                 .iter()

@@ -121,6 +121,9 @@ struct CameraSpec {
     /// Whether the lens's glasses disperse (default: they do).
     #[serde(skip_serializing_if = "Option::is_none")]
     dispersion: Option<bool>,
+    /// Whether an anamorphic lens's image is desqueezed (default: it is not).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    desqueeze: Option<bool>,
 }
 
 fn y_up() -> [f32; 3] {
@@ -517,6 +520,7 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
             || sensor_depth_mm.is_some()
             || aperture.is_some()
             || cam.dispersion.is_some()
+            || cam.desqueeze.is_some()
         {
             options.lens = Some(LensOptions {
                 lens: cam.lens.clone(),
@@ -526,6 +530,7 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
                 sensor_depth_mm,
                 aperture,
                 dispersion: cam.dispersion,
+                desqueeze: cam.desqueeze,
             });
         }
     }
@@ -630,6 +635,7 @@ impl SceneSettingsFile {
                 ]),
                 aperture: Some(aperture),
                 dispersion: (!self.dispersion).then_some(false),
+                desqueeze: None,
             }),
             film: Some(FilmSpec {
                 width: self.resolution.0,

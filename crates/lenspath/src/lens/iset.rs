@@ -233,7 +233,7 @@ mod tests {
             SurfaceShape::EvenAsphere(a) => {
                 assert_eq!((a.conic, a.coefficients[1], a.coefficients[2]), (-0.5, 1e-5, -2e-8))
             }
-            SurfaceShape::Spherical => panic!("aspheric"),
+            other => panic!("aspheric, not {other:?}"),
         }
     }
 

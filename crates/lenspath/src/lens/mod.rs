@@ -13,7 +13,7 @@ pub mod through_focus;
 pub mod zemax;
 
 pub use prescription::{LensPrescription, LensSurface, TableConvention, BUILTIN_LENSES};
-pub use surface::{EvenAsphere, SurfaceShape};
+pub use surface::{CylinderAxis, EvenAsphere, Meridian, SurfaceShape};
 pub use system::{Direction, LensRay, LensSystem, ParaxialData};
 pub use through_focus::SpotBundle;
 
@@ -41,8 +41,41 @@ impl Default for AnalysisSettings {
     }
 }
 
+/// First-order and real-ray figures of one meridian of an anamorphic lens.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct MeridianFigures {
+    /// Paraxial effective focal length in this meridian.
+    pub effective_focal_length_mm: f64,
+    /// Paraxial f-number in this meridian (its focal length over its
+    /// entrance pupil's extent in it).
+    pub f_number: f64,
+    /// Paraxial entrance pupil extent in this meridian.
+    pub entrance_pupil_diameter_mm: f64,
+    /// Real ray: the sensor position where objects at infinity focus in this meridian (its line focus).
+    pub infinity_focus_mm: f64,
+    /// Field of view across the sensor in this meridian (its width for the
+    /// horizontal, its height for the vertical), paraxial.
+    pub field_of_view_deg: f64,
+}
+
+/// What makes an anamorphic lens one: its two meridians' figures.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct AnamorphicFigures {
+    /// Across the sensor's width.
+    pub horizontal: MeridianFigures,
+    /// Across the sensor's height.
+    pub vertical: MeridianFigures,
+    /// Vertical over horizontal focal length: how many times more of the
+    /// scene's width than of its height the sensor takes in, per mm (2 for a
+    /// "2×" anamorphic); stretching the image's width by it desqueezes it.
+    pub squeeze: f64,
+}
+
 /// Everything `lenspath lens` reports. Positions are along the axis in mm
-/// from the aperture stop, positive toward the sensor.
+/// from the aperture stop, positive toward the sensor. For an anamorphic
+/// lens the paraxial figures are its horizontal meridian's, the real-ray
+/// focus positions lie midway between its two meridians' line foci (where
+/// the camera focuses), and [`LensAnalysis::anamorphic`] gives each meridian.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct LensAnalysis {
     /// Paraxial effective focal length.
@@ -83,6 +116,8 @@ pub struct LensAnalysis {
     pub front_vertex_mm: f64,
     /// Rear vertex position.
     pub rear_vertex_mm: f64,
+    /// Each meridian's figures, for a lens that is not rotationally symmetric.
+    pub anamorphic: Option<AnamorphicFigures>,
 }
 
 impl LensAnalysis {
@@ -90,12 +125,47 @@ impl LensAnalysis {
     pub fn new(system: &LensSystem, settings: &AnalysisSettings) -> Result<LensAnalysis> {
         let p = system.paraxial()?;
         let h = settings.ray_height_mm;
-        let (infinity_focus, real_principal) = system.real_focus_at_infinity(h)?;
-        let focal_length = (infinity_focus - real_principal).abs();
+        let (horizontal_focus, real_principal) = system.real_focus_at_infinity(h)?;
+        let focal_length = (horizontal_focus - real_principal).abs();
+        let infinity_focus = system.infinity_focus_z(h)?;
         let close_distance = settings.close_object_distance_mm.unwrap_or(5.0 * focal_length);
         let close_focus = system.real_image_z(-close_distance, h)?;
         let (w, ht) = settings.sensor_mm;
         let fov = |half: f64| 2.0 * (half / p.effective_focal_length_mm.abs()).atan().to_degrees();
+        let anamorphic = match system.is_rotationally_symmetric() {
+            true => None,
+            false => {
+                let figures = |meridian: Meridian, half_sensor_mm: f64| -> Result<MeridianFigures> {
+                    let p = system.paraxial_in(meridian)?;
+                    Ok(MeridianFigures {
+                        effective_focal_length_mm: p.effective_focal_length_mm,
+                        f_number: p.f_number,
+                        entrance_pupil_diameter_mm: p.entrance_pupil_diameter_mm,
+                        infinity_focus_mm: system.real_focus_at_infinity_in(h, meridian)?.0,
+                        field_of_view_deg: 2.0
+                            * (half_sensor_mm / p.effective_focal_length_mm.abs()).atan().to_degrees(),
+                    })
+                };
+                let (horizontal, vertical) = (
+                    figures(Meridian::Horizontal, 0.5 * w)?,
+                    figures(Meridian::Vertical, 0.5 * ht)?,
+                );
+                Some(AnamorphicFigures {
+                    horizontal,
+                    vertical,
+                    squeeze: system.squeeze()?,
+                })
+            }
+        };
+        // An anamorphic lens's diagonal: each half-side through its own focal length.
+        let diagonal_fov_deg = match anamorphic {
+            None => fov(0.5 * w.hypot(ht)),
+            Some(a) => {
+                let tan = (0.5 * w / a.horizontal.effective_focal_length_mm)
+                    .hypot(0.5 * ht / a.vertical.effective_focal_length_mm);
+                2.0 * tan.atan().to_degrees()
+            }
+        };
         Ok(LensAnalysis {
             effective_focal_length_mm: p.effective_focal_length_mm,
             back_focal_distance_mm: p.back_focal_distance_mm,
@@ -107,7 +177,7 @@ impl LensAnalysis {
             exit_pupil_mm: p.exit_pupil_z_mm,
             exit_pupil_diameter_mm: p.exit_pupil_diameter_mm,
             f_number: p.f_number,
-            diagonal_fov_deg: fov(0.5 * w.hypot(ht)),
+            diagonal_fov_deg,
             horizontal_fov_deg: fov(0.5 * w),
             infinity_focus_mm: infinity_focus,
             close_focus_mm: close_focus,
@@ -116,6 +186,7 @@ impl LensAnalysis {
             ray_height_mm: h,
             front_vertex_mm: system.front_z(),
             rear_vertex_mm: system.rear_z(),
+            anamorphic,
         })
     }
 }

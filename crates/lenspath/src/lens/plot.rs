@@ -10,6 +10,7 @@ use glam::DVec3;
 
 use super::chromatic::focal_shift;
 use super::prescription::LensSurface;
+use super::surface::Meridian;
 use super::system::{Direction, LensRay, LensSystem};
 use super::LensAnalysis;
 use crate::error::Result;
@@ -87,7 +88,8 @@ pub fn layout_focused(system: &LensSystem, analysis: &LensAnalysis, sensor_diago
         .map(|pair| {
             let ((za, sa, aa, _), (zb, sb, ab, _)) = (pair[0], pair[1]);
             // Validation saw every surface reach its clear aperture.
-            let sag = |s: &LensSurface, h: f64| s.sag_mm(h).unwrap_or(0.0);
+            // The horizontal section, where the ray fans are traced.
+            let sag = |s: &LensSurface, h: f64| s.sag_mm(h, Meridian::Horizontal).unwrap_or(0.0);
             let front = (0..=32)
                 .map(|k| -aa + 2.0 * aa * k as f64 / 32.0)
                 .map(|h| (za + sag(sa, h), h));

@@ -18,11 +18,14 @@
 //! `key=value` words (the even asphere of [`EvenAsphere`]): `conic=K` for
 //! the conic constant and `a2=`, `a4=`, … `a20=` for the polynomial
 //! coefficients, in mm^(1−order). A radius of `inf` is a flat surface (radius
-//! 0 stays the stop, as in pbrt and CS184 tables).
+//! 0 stays the stop, as in pbrt and CS184 tables). `cylinder=x` or
+//! `cylinder=y` makes the surface a cylinder of the row's radius with its
+//! axis along x or y (lentil's `cyl-x`, `cyl-y`): `cylinder=y` curves in
+//! the horizontal meridian, across the sensor's width.
 
 use std::path::Path;
 
-use super::surface::{EvenAsphere, SurfaceShape};
+use super::surface::{CylinderAxis, EvenAsphere, Meridian, SurfaceShape};
 use crate::error::{Error, Result};
 use crate::glass::{self, Dispersion};
 
@@ -108,10 +111,14 @@ impl LensSurface {
         }
     }
 
-    /// Sag (mm, toward the sensor) at `height_mm` from the axis; `None`
-    /// where the surface does not reach.
-    pub fn sag_mm(&self, height_mm: f64) -> Option<f64> {
-        self.shape.sag(self.curvature(), height_mm * height_mm)
+    /// Sag (mm, toward the sensor) at `height_mm` from the axis in
+    /// `meridian` (a cylinder is flat in the one it does not curve in);
+    /// `None` where the surface does not reach.
+    pub fn sag_mm(&self, height_mm: f64, meridian: Meridian) -> Option<f64> {
+        match self.shape {
+            SurfaceShape::Cylindrical(axis) if axis.curved_meridian() != meridian => Some(0.0),
+            _ => self.shape.sag(self.curvature(), height_mm * height_mm),
+        }
     }
 }
 
@@ -339,7 +346,8 @@ impl LensPrescription {
                 if ior < 1.0 {
                     return Err(fail(line, format!("index of refraction {ior} is below 1")));
                 }
-                let spherical = shape == SurfaceShape::Spherical;
+                // A cylinder's curved section is its radius's circle too.
+                let spherical = matches!(shape, SurfaceShape::Spherical | SurfaceShape::Cylindrical(_));
                 if spherical && aperture_diameter_mm > 2.0 * radius_mm.abs() {
                     return Err(fail(
                         line,
@@ -411,6 +419,9 @@ impl LensPrescription {
             .map(|(s, (index, glass))| {
                 let glass = glass.as_deref().map_or(String::new(), |g| format!(" {g}"));
                 let mut terms = String::new();
+                if let SurfaceShape::Cylindrical(axis) = &s.shape {
+                    terms += &format!(" cylinder={}", axis.spelling());
+                }
                 if let SurfaceShape::EvenAsphere(a) = &s.shape {
                     if a.conic != 0.0 {
                         terms += &format!(" conic={}", a.conic);
@@ -467,6 +478,11 @@ impl LensPrescription {
     pub fn is_dispersive(&self) -> bool {
         self.surfaces.iter().any(|s| !s.medium.is_constant())
     }
+
+    /// False for an anamorphic lens: one with a cylindrical surface.
+    pub fn is_rotationally_symmetric(&self) -> bool {
+        self.surfaces.iter().all(|s| s.shape.is_rotationally_symmetric())
+    }
 }
 
 /// The shape that a row's `key=value` words give its surface: spherical
@@ -475,10 +491,22 @@ fn aspheric_terms(words: &[&str]) -> std::result::Result<SurfaceShape, String> {
     if words.is_empty() {
         return Ok(SurfaceShape::Spherical);
     }
+    if let [word] = words {
+        if let Some(axis) = word.strip_prefix("cylinder=") {
+            return match axis {
+                "x" => Ok(SurfaceShape::Cylindrical(CylinderAxis::X)),
+                "y" => Ok(SurfaceShape::Cylindrical(CylinderAxis::Y)),
+                _ => Err(format!("cylinder={axis}: the cylinder's axis is x or y")),
+            };
+        }
+    }
     let mut asphere = EvenAsphere::SPHERE;
     let mut seen: Vec<&str> = Vec::new();
     for word in words {
         let (key, value) = word.split_once('=').expect("keyed words contain '='");
+        if key == "cylinder" {
+            return Err("a cylindrical surface takes no aspheric terms".into());
+        }
         let number: f64 = value
             .parse()
             .ok()
@@ -623,6 +651,18 @@ mod tests {
             ),
             ("# nothing\n", "no surfaces"),
             (
+                "10 2 1.5 8 cylinder=z\n0 1 0 4\n",
+                "line 1: cylinder=z: the cylinder's axis is x or y",
+            ),
+            (
+                "10 2 1.5 8 cylinder=x a4=1e-5\n0 1 0 4\n",
+                "line 1: a cylindrical surface takes no aspheric terms",
+            ),
+            (
+                "10 2 1.5 30 cylinder=y\n0 1 0 4\n",
+                "line 1: aperture 30 mm is wider than its sphere",
+            ),
+            (
                 "10 2 1.5 8 a4=x\n0 1 0 4\n",
                 "line 1: aspheric term a4 = 'x' is not a finite number",
             ),
@@ -691,6 +731,7 @@ mod tests {
         let tables = [
             LensPrescription::parse(aspheric, "aspheric", TableConvention::ThicknessToNext).unwrap(),
             crate::lens::lentil::load("0014").unwrap(),
+            crate::lens::lentil::load("2004").unwrap(),
             LensPrescription::load("dgauss50").unwrap(),
             LensPrescription::parse(older, "older", TableConvention::Auto).unwrap(),
             LensPrescription::parse(

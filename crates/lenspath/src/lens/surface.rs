@@ -1,10 +1,11 @@
-//! The shapes of refracting surfaces: spheres, flats and even aspheres (a
-//! conic plus an even polynomial), with their sag, its slope, and the exact
-//! intersection of a ray with an asphere.
+//! The shapes of refracting surfaces: spheres, flats, even aspheres (a
+//! conic plus an even polynomial) and cylinders, with their sag, its slope,
+//! and the exact intersection of a ray with an asphere.
 //!
 //! Sag is measured along the axis from the vertex, positive toward the
-//! sensor, as a function of the height `h` from the axis; a surface's
-//! curvature `c` is 1 / its vertex radius (0 for a flat).
+//! sensor, as a function of the height `h` from the axis (for a cylinder,
+//! the distance from its axis plane); a surface's curvature `c` is 1 / its
+//! vertex radius (0 for a flat).
 
 use glam::DVec3;
 
@@ -15,6 +16,78 @@ pub enum SurfaceShape {
     Spherical,
     /// An even asphere whose base conic has the surface's vertex radius.
     EvenAsphere(EvenAsphere),
+    /// A circular cylinder of the surface's radius whose axis runs along
+    /// `CylinderAxis` (lentil's `cyl-x` / `cyl-y`): it curves only in the
+    /// other meridian, which is what makes a lens anamorphic.
+    Cylindrical(CylinderAxis),
+}
+
+/// The direction a cylindrical surface's axis runs in, across the optical axis.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CylinderAxis {
+    /// Along x (the sensor's width): the surface curves in the vertical (y–z) meridian.
+    X,
+    /// Along y (the sensor's height): the surface curves in the horizontal (x–z) meridian.
+    Y,
+}
+
+impl CylinderAxis {
+    /// The meridian the surface curves in.
+    pub fn curved_meridian(self) -> Meridian {
+        match self {
+            CylinderAxis::X => Meridian::Vertical,
+            CylinderAxis::Y => Meridian::Horizontal,
+        }
+    }
+
+    /// How lens tables and lentil spell it (`x`, `y`).
+    pub fn spelling(self) -> &'static str {
+        match self {
+            CylinderAxis::X => "x",
+            CylinderAxis::Y => "y",
+        }
+    }
+}
+
+/// A plane through the optical axis, in which first-order optics is traced.
+/// A rotationally symmetric lens is the same in every one; an anamorphic
+/// lens has its own focal length in each of these two.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Meridian {
+    /// The x–z plane: across the sensor's width.
+    Horizontal,
+    /// The y–z plane: across the sensor's height.
+    Vertical,
+}
+
+impl Meridian {
+    /// Both, horizontal first.
+    pub const BOTH: [Meridian; 2] = [Meridian::Horizontal, Meridian::Vertical];
+
+    /// The unit vector across the axis in this meridian.
+    pub fn across(self) -> DVec3 {
+        match self {
+            Meridian::Horizontal => DVec3::X,
+            Meridian::Vertical => DVec3::Y,
+        }
+    }
+
+    /// The component of `v` across the axis in this meridian.
+    #[inline]
+    pub fn component(self, v: DVec3) -> f64 {
+        match self {
+            Meridian::Horizontal => v.x,
+            Meridian::Vertical => v.y,
+        }
+    }
+
+    /// Its name as reports print it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Meridian::Horizontal => "horizontal",
+            Meridian::Vertical => "vertical",
+        }
+    }
 }
 
 impl SurfaceShape {
@@ -22,18 +95,27 @@ impl SurfaceShape {
     /// `None` where the surface does not reach (outside a conic's domain).
     pub fn sag(&self, curvature: f64, h2: f64) -> Option<f64> {
         match self {
-            SurfaceShape::Spherical => EvenAsphere::SPHERE.sag_and_slope(curvature, h2).map(|(z, _)| z),
+            SurfaceShape::Spherical | SurfaceShape::Cylindrical(_) => {
+                EvenAsphere::SPHERE.sag_and_slope(curvature, h2).map(|(z, _)| z)
+            }
             SurfaceShape::EvenAsphere(a) => a.sag_and_slope(curvature, h2).map(|(z, _)| z),
         }
     }
 
-    /// Curvature of the surface at its vertex: what paraxial optics sees.
-    pub fn paraxial_curvature(&self, curvature: f64) -> f64 {
+    /// Curvature of the surface at its vertex in `meridian`: what paraxial optics sees.
+    pub fn paraxial_curvature(&self, curvature: f64, meridian: Meridian) -> f64 {
         match self {
             SurfaceShape::Spherical => curvature,
             // z ≈ (c/2 + A2) h² near the axis.
             SurfaceShape::EvenAsphere(a) => curvature + 2.0 * a.coefficients[0],
+            SurfaceShape::Cylindrical(axis) if axis.curved_meridian() == meridian => curvature,
+            SurfaceShape::Cylindrical(_) => 0.0,
         }
+    }
+
+    /// True unless the surface is a cylinder.
+    pub fn is_rotationally_symmetric(&self) -> bool {
+        !matches!(self, SurfaceShape::Cylindrical(_))
     }
 
     /// The shape a lens file gives as a conic constant and the polynomial
@@ -59,7 +141,7 @@ impl SurfaceShape {
     /// The same shape on a lens with every length multiplied by `factor`.
     pub fn scaled(&self, factor: f64) -> SurfaceShape {
         match self {
-            SurfaceShape::Spherical => SurfaceShape::Spherical,
+            SurfaceShape::Spherical | SurfaceShape::Cylindrical(_) => *self,
             SurfaceShape::EvenAsphere(a) => SurfaceShape::EvenAsphere(a.scaled(factor)),
         }
     }

@@ -172,23 +172,23 @@ impl RealisticCamera {
     /// drew it (the hero's), so it lies in its grid, which testing it again
     /// could miss by a rounding at a cell's edge.
     fn pupil_density(&self, side: &FilmSide, drawn: bool) -> f64 {
-        let (band, r, azimuth) = self.film_band(side.film);
-        let grid = &self.pupils[band];
+        let (patch, local, frame) = self.film_place(side.film);
+        let grid = &self.pupils[patch];
         if grid.cells.is_empty() {
             return 0.0;
         }
-        let q = DVec2::new(azimuth.x, -azimuth.y).rotate(side.rear);
+        let q = frame.grid_from_film(side.rear);
         match &self.shaped {
             None => {
-                if drawn || grid.contains(q, r) {
+                if drawn || grid.contains(q, local) {
                     1.0 / grid.area()
                 } else {
                     0.0
                 }
             }
-            Some((aperture, maps)) => maps[band]
+            Some((aperture, maps)) => maps[patch]
                 .as_ref()
-                .map_or(0.0, |map| self.shaped_density(aperture, grid, map, r, azimuth, q)),
+                .map_or(0.0, |map| self.shaped_density(aperture, grid, map, local, frame, q)),
         }
     }
 }

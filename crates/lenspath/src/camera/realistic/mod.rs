@@ -5,7 +5,10 @@
 //! sensor a grid of cells on the rear vertex plane holds the cells that rays
 //! from that band get through, found once by tracing and carried along with
 //! the pupil's drift across the band; a sample picks one of those cells
-//! uniformly, rotated to the film point's azimuth. Unlike pbrt's bounding
+//! uniformly, rotated to the film point's azimuth. An anamorphic lens is not
+//! the same at every azimuth, only mirror-symmetric about the x–z and y–z
+//! planes, so its grids are kept for tiles of one quadrant of the sensor
+//! instead, and mirrored into the other three. Unlike pbrt's bounding
 //! boxes (at most π/4 of whose samples pass even on axis), about 94% of the
 //! samples get through at the image centre, and no retry loop is needed. The weight is
 //! `cos⁴θ · A / d²` (A: the sampled area, d: sensor to rear plane), pbrt's
@@ -46,6 +49,69 @@ use crate::spectrum::{LAMBDA_MAX_NM, LAMBDA_MIN_NM};
 /// Real-ray height used when focusing, in mm (the CS184 lens simulator's).
 const FOCUS_RAY_HEIGHT_MM: f64 = 0.1;
 
+/// How the sensor is divided into patches with a pupil grid each.
+#[derive(Clone, Copy, Debug)]
+enum PupilLayout {
+    /// [`PUPIL_BANDS`] rings of this width (mm), from the centre out, each
+    /// turned to a film point's azimuth: a rotationally symmetric lens.
+    Bands { width_mm: f64 },
+    /// [`PUPIL_TILES_PER_SIDE`]² tiles of this size (mm) over the quadrant
+    /// x, y ≥ 0, mirrored into the others: an anamorphic lens.
+    Tiles { size_mm: DVec2 },
+}
+
+impl PupilLayout {
+    /// How many patches there are.
+    fn count(&self) -> usize {
+        match self {
+            PupilLayout::Bands { .. } => PUPIL_BANDS,
+            PupilLayout::Tiles { .. } => PUPIL_TILES_PER_SIDE * PUPIL_TILES_PER_SIDE,
+        }
+    }
+
+    /// The film points patch `index` serves, in its frame.
+    fn patch(&self, index: usize) -> FilmPatch {
+        match *self {
+            PupilLayout::Bands { width_mm } => FilmPatch::Band {
+                r0: index as f64 * width_mm,
+                width: width_mm,
+            },
+            PupilLayout::Tiles { size_mm } => FilmPatch::Tile {
+                min: DVec2::new(
+                    (index % PUPIL_TILES_PER_SIDE) as f64,
+                    (index / PUPIL_TILES_PER_SIDE) as f64,
+                ) * size_mm,
+                size: size_mm,
+            },
+        }
+    }
+
+    /// The patch of a film point (lens coordinates), the point in the
+    /// patch's frame, and how that frame turns onto the film.
+    #[inline(always)]
+    fn place(&self, p_film: DVec3) -> (usize, DVec2, FilmFrame) {
+        let p = p_film.truncate();
+        match *self {
+            PupilLayout::Bands { width_mm } => {
+                let r = p.length();
+                let band = ((r / width_mm) as usize).min(PUPIL_BANDS - 1);
+                let azimuth = if r > 0.0 { p / r } else { DVec2::X };
+                (band, DVec2::new(r, 0.0), FilmFrame::rotated(azimuth))
+            }
+            PupilLayout::Tiles { size_mm } => {
+                let local = p.abs();
+                let signs = DVec2::new(if p.x < 0.0 { -1.0 } else { 1.0 }, if p.y < 0.0 { -1.0 } else { 1.0 });
+                let last = PUPIL_TILES_PER_SIDE - 1;
+                let (i, j) = (
+                    ((local.x / size_mm.x) as usize).min(last),
+                    ((local.y / size_mm.y) as usize).min(last),
+                );
+                (j * PUPIL_TILES_PER_SIDE + i, local, FilmFrame::mirrored(signs))
+            }
+        }
+    }
+}
+
 /// A camera looking through a real lens.
 #[derive(Clone, Debug)]
 pub struct RealisticCamera {
@@ -62,7 +128,7 @@ pub struct RealisticCamera {
     resolution: (f64, f64),
     scene_per_mm: f64,
     rear_z_mm: f64,
-    band_width_mm: f64,
+    layout: PupilLayout,
     pupils: Vec<PupilGrid>,
     weight_scale: f64,
     /// A shaped aperture and each band's stop map (`None`: the plain circle).
@@ -139,12 +205,25 @@ impl RealisticCamera {
             }
         };
         let rear_z_mm = system.rear_z();
-        let band_width_mm = 0.5 * sw.hypot(sh) / PUPIL_BANDS as f64;
+        let layout = if system.is_rotationally_symmetric() {
+            PupilLayout::Bands {
+                width_mm: 0.5 * sw.hypot(sh) / PUPIL_BANDS as f64,
+            }
+        } else {
+            PupilLayout::Tiles {
+                size_mm: DVec2::new(sw, sh) * 0.5 / PUPIL_TILES_PER_SIDE as f64,
+            }
+        };
         // The bands the region's film points (with a 2-pixel margin for the
-        // filter) fall in, and band 0, which sets the exposure.
-        let bands = match region {
-            None => 0..PUPIL_BANDS,
-            Some(r) => {
+        // filter) fall in, and band 0, which sets the exposure; every tile.
+        let bands = match (region, layout) {
+            (None, _) | (_, PupilLayout::Tiles { .. }) => 0..layout.count(),
+            (
+                Some(r),
+                PupilLayout::Bands {
+                    width_mm: band_width_mm,
+                },
+            ) => {
                 let (px, py) = (sw / f64::from(width), sh / f64::from(height));
                 let x = [f64::from(r.x0) - 2.0, f64::from(r.x0 + r.width) + 2.0].map(|x| x * px - 0.5 * sw);
                 let y = [f64::from(r.y0) - 2.0, f64::from(r.y0 + r.height) + 2.0].map(|y| y * py - 0.5 * sh);
@@ -163,11 +242,11 @@ impl RealisticCamera {
         };
         let disperses = settings.dispersion && system.is_dispersive();
         let bounding = bounding_systems(&system, disperses);
-        let pupils = (0..PUPIL_BANDS)
+        let pupils = (0..layout.count())
             .into_par_iter()
             .map(|band| {
                 if band == 0 || bands.contains(&band) {
-                    bound_pupil(&bounding, sensor_z_mm, band as f64 * band_width_mm, band_width_mm)
+                    bound_pupil(&bounding, sensor_z_mm, layout.patch(band))
                 } else {
                     PupilGrid::EMPTY
                 }
@@ -184,10 +263,7 @@ impl RealisticCamera {
             let maps = pupils
                 .par_iter()
                 .enumerate()
-                .map(|(band, grid)| {
-                    let r0 = band as f64 * band_width_mm;
-                    fit_stop_map(&system, sensor_z_mm, grid, r0, band_width_mm)
-                })
+                .map(|(band, grid)| fit_stop_map(&system, sensor_z_mm, grid, layout.patch(band)))
                 .collect();
             (Arc::new(aperture), maps)
         });
@@ -204,7 +280,7 @@ impl RealisticCamera {
             resolution: (f64::from(width), f64::from(height)),
             scene_per_mm: 1.0 / mm_per_scene,
             rear_z_mm,
-            band_width_mm,
+            layout,
             pupils,
             weight_scale: 1.0,
             shaped: None,
@@ -214,12 +290,7 @@ impl RealisticCamera {
         // with this lens as set, or wide open for physical exposure.
         let centre_irradiance = match (settings.radiometry, settings.f_number) {
             (Radiometry::Physical, Some(_)) => {
-                let pupil = bound_pupil(
-                    &bounding_systems(&wide_open, disperses),
-                    sensor_z_mm,
-                    0.0,
-                    band_width_mm,
-                );
+                let pupil = bound_pupil(&bounding_systems(&wide_open, disperses), sensor_z_mm, layout.patch(0));
                 RealisticCamera {
                     system: wide_open,
                     pupils: vec![pupil],
@@ -291,15 +362,13 @@ impl RealisticCamera {
         DVec3::new(-x, -y, self.sensor_z_mm)
     }
 
-    /// The sensor band of a film point (lens coordinates), its radius and
-    /// its azimuth as a unit vector: the band's pupil grid and stop map are
-    /// for film points on +x, and turn by the azimuth.
+    /// The sensor patch of a film point (lens coordinates), the point in
+    /// the patch's frame and how that frame turns onto the film: the patch's
+    /// pupil grid and stop map are for film points in its frame.
     #[inline(always)]
-    fn film_band(&self, p_film: DVec3) -> (usize, f64, DVec2) {
-        let r = p_film.truncate().length();
-        let band = ((r / self.band_width_mm) as usize).min(self.pupils.len() - 1);
-        let azimuth = if r > 0.0 { p_film.truncate() / r } else { DVec2::X };
-        (band, r, azimuth)
+    fn film_place(&self, p_film: DVec3) -> (usize, DVec2, FilmFrame) {
+        let (patch, local, frame) = self.layout.place(p_film);
+        (patch.min(self.pupils.len() - 1), local, frame)
     }
 
     /// The raster position of a point on the sensor plane (lens
@@ -312,12 +381,12 @@ impl RealisticCamera {
 
     /// The lens ray for a film point and a pupil sample, with its unnormalised weight.
     fn lens_ray(&self, p_film: DVec3, u: Vec2) -> Option<(LensRay, f64)> {
-        let (band, r, azimuth) = self.film_band(p_film);
-        let grid = &self.pupils[band];
+        let (patch, local, frame) = self.film_place(p_film);
+        let grid = &self.pupils[patch];
         if grid.cells.is_empty() {
             return None;
         }
-        let q = azimuth.rotate(grid.sample(u, r));
+        let q = frame.film_from_grid(grid.sample(u, local));
         let ray = LensRay::between(p_film, DVec3::new(q.x, q.y, self.rear_z_mm));
         let cos_theta = -ray.direction.z;
         let d = self.sensor_z_mm - self.rear_z_mm;
@@ -338,26 +407,25 @@ impl RealisticCamera {
         p_film: DVec3,
         u: Vec2,
     ) -> Option<TracedSample> {
-        let (band, r, azimuth) = self.film_band(p_film);
-        let (grid, map) = (&self.pupils[band], maps[band].as_ref()?);
+        let (patch, local, frame) = self.film_place(p_film);
+        let (grid, map) = (&self.pupils[patch], maps[patch].as_ref()?);
         if grid.cells.is_empty() {
             return None;
         }
-        let to_band = DVec2::new(azimuth.x, -azimuth.y);
-        let (a, b) = map.at(r);
+        let (a, b) = map.at(local);
         let stop_radius = self.system.stop_radius();
         let ux = f64::from(u.x);
         let q = if ux < GRID_SHARE {
-            grid.sample(Vec2::new((ux / GRID_SHARE) as f32, u.y), r)
+            grid.sample(Vec2::new((ux / GRID_SHARE) as f32, u.y), local)
         } else {
             let (s, _) = aperture.sample(Vec2::new(((ux - GRID_SHARE) / (1.0 - GRID_SHARE)) as f32, u.y));
-            a.inverse() * (to_band.rotate(s * stop_radius) - b)
+            a.inverse() * (frame.grid_from_film(s * stop_radius) - b)
         };
-        let pdf = self.shaped_density(aperture, grid, map, r, azimuth, q);
+        let pdf = self.shaped_density(aperture, grid, map, local, frame, q);
         if pdf <= 0.0 {
             return None;
         }
-        let target = azimuth.rotate(q);
+        let target = frame.film_from_grid(q);
         let ray = LensRay::between(p_film, DVec3::new(target.x, target.y, self.rear_z_mm));
         let out = system
             .trace_via_stop(&ray, Direction::ToScene)
@@ -371,22 +439,26 @@ impl RealisticCamera {
     }
 
     /// The density of [`RealisticCamera::shaped_ray`]'s mixture at `q` (rear
-    /// plane, in the band's frame), per mm², for a film point at radius `r`
-    /// and `azimuth`.
+    /// plane, in the patch's frame), per mm², for the film point `local` in
+    /// that frame, which `frame` turns onto the film.
     fn shaped_density(
         &self,
         aperture: &Aperture,
         grid: &PupilGrid,
         map: &StopMap,
-        r: f64,
-        azimuth: DVec2,
+        local: DVec2,
+        frame: FilmFrame,
         q: DVec2,
     ) -> f64 {
-        let (a, b) = map.at(r);
+        let (a, b) = map.at(local);
         let stop_radius = self.system.stop_radius();
-        let predicted_stop = azimuth.rotate(a * q + b) / stop_radius;
+        let predicted_stop = frame.film_from_grid(a * q + b) / stop_radius;
         let from_shape = aperture.pdf(predicted_stop) * a.determinant().abs() / (stop_radius * stop_radius);
-        let from_grid = if grid.contains(q, r) { 1.0 / grid.area() } else { 0.0 };
+        let from_grid = if grid.contains(q, local) {
+            1.0 / grid.area()
+        } else {
+            0.0
+        };
         GRID_SHARE * from_grid + (1.0 - GRID_SHARE) * from_shape
     }
 
