@@ -7,7 +7,7 @@ use lenspath::lens::{
     chromatic::{focal_shift, ChromaticAnalysis},
     library,
     plot::{focal_shift_svg, layout, layout_svg, Polyline},
-    AnalysisSettings, Direction, LensAnalysis, LensPrescription, LensRay, LensSystem, MeridianFigures, TableConvention,
+    AnalysisSettings, Direction, LensAnalysis, LensPrescription, LensRay, LensSystem, TableConvention,
 };
 use lenspath::Error;
 use numpy::ndarray::Array2;
@@ -168,58 +168,15 @@ impl Lens {
         a.into_pyarray(py)
     }
 
-    /// Every figure of `lenspath lens --json`, as a dict.
+    /// Every figure of `lenspath lens --json`, as a dict: the same
+    /// serialisation of the library's analysis, read back by Python's json,
+    /// so the two front ends cannot drift apart (floats round-trip exactly).
     pub(crate) fn analysis<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let a = &self.analysis;
-        let d = PyDict::new(py);
-        for (key, value) in [
-            ("effective_focal_length_mm", a.effective_focal_length_mm),
-            ("back_focal_distance_mm", a.back_focal_distance_mm),
-            ("front_focal_distance_mm", a.front_focal_distance_mm),
-            ("front_principal_plane_mm", a.front_principal_plane_mm),
-            ("rear_principal_plane_mm", a.rear_principal_plane_mm),
-            ("entrance_pupil_mm", a.entrance_pupil_mm),
-            ("entrance_pupil_diameter_mm", a.entrance_pupil_diameter_mm),
-            ("exit_pupil_mm", a.exit_pupil_mm),
-            ("exit_pupil_diameter_mm", a.exit_pupil_diameter_mm),
-            ("f_number", a.f_number),
-            ("diagonal_fov_deg", a.diagonal_fov_deg),
-            ("horizontal_fov_deg", a.horizontal_fov_deg),
-            ("infinity_focus_mm", a.infinity_focus_mm),
-            ("close_focus_mm", a.close_focus_mm),
-            ("close_focus_object_distance_mm", a.close_focus_object_distance_mm),
-            ("focal_length_mm", a.focal_length_mm),
-            ("ray_height_mm", a.ray_height_mm),
-            ("front_vertex_mm", a.front_vertex_mm),
-            ("rear_vertex_mm", a.rear_vertex_mm),
-        ] {
-            d.set_item(key, value)?;
-        }
-        let anamorphic = match &a.anamorphic {
-            None => None,
-            Some(figures) => {
-                let meridian = |m: &MeridianFigures| -> PyResult<Bound<'py, PyDict>> {
-                    let d = PyDict::new(py);
-                    for (key, value) in [
-                        ("effective_focal_length_mm", m.effective_focal_length_mm),
-                        ("f_number", m.f_number),
-                        ("entrance_pupil_diameter_mm", m.entrance_pupil_diameter_mm),
-                        ("infinity_focus_mm", m.infinity_focus_mm),
-                        ("field_of_view_deg", m.field_of_view_deg),
-                    ] {
-                        d.set_item(key, value)?;
-                    }
-                    Ok(d)
-                };
-                let d = PyDict::new(py);
-                d.set_item("squeeze", figures.squeeze)?;
-                d.set_item("horizontal", meridian(&figures.horizontal)?)?;
-                d.set_item("vertical", meridian(&figures.vertical)?)?;
-                Some(d)
-            }
-        };
-        d.set_item("anamorphic", anamorphic)?;
-        Ok(d)
+        let text = serde_json::to_string(&self.analysis).expect("numbers and nulls always serialise");
+        Ok(py
+            .import("json")?
+            .call_method1("loads", (text,))?
+            .cast_into::<PyDict>()?)
     }
 
     /// Real-ray focal length |P′ − F′|, mm.

@@ -527,26 +527,35 @@ mod tests {
         );
         assert_eq!(camera.dispersion, defaults::LENS_DISPERSION);
 
-        // The lens's dispersion: the caller's, else the file's, else on.
-        let dispersion = |file_says: Option<bool>, caller_says: Option<bool>| {
+        // The realistic camera that a file's lens settings and a caller's
+        // description resolve to, for a 40x30 image.
+        let realistic = |file: LensOptions, asked: RealisticDescription| {
             let file = SceneOptions {
-                lens: Some(LensOptions {
-                    dispersion: file_says,
-                    ..LensOptions::default()
-                }),
+                lens: Some(file),
                 ..SceneOptions::default()
             };
             let asked = RenderOverrides {
-                camera: CameraDescription::Realistic(RealisticDescription {
-                    dispersion: caller_says,
-                    ..RealisticDescription::default()
-                }),
+                resolution: Some((40, 30)),
+                camera: CameraDescription::Realistic(asked),
                 ..RenderOverrides::default()
             };
             match resolve(&file, &view, &asked).unwrap().camera {
-                CameraSettings::Realistic(camera) => camera.dispersion,
+                CameraSettings::Realistic(camera) => camera,
                 _ => unreachable!(),
             }
+        };
+
+        // The lens's dispersion: the caller's, else the file's, else on.
+        let dispersion = |file_says: Option<bool>, caller_says: Option<bool>| {
+            let file = LensOptions {
+                dispersion: file_says,
+                ..LensOptions::default()
+            };
+            let asked = RealisticDescription {
+                dispersion: caller_says,
+                ..RealisticDescription::default()
+            };
+            realistic(file, asked).dispersion
         };
         assert!(dispersion(None, None));
         assert!(!dispersion(Some(false), None));
@@ -557,26 +566,16 @@ mod tests {
         // sensor's width and makes it the lens's squeeze times taller than
         // the image's aspect says; a rotationally symmetric lens has none.
         let sensor_mm = |lens: &str, file_says: Option<bool>, caller_says: Option<bool>| {
-            let file = SceneOptions {
-                lens: Some(LensOptions {
-                    lens: Some(lens.into()),
-                    desqueeze: file_says,
-                    ..LensOptions::default()
-                }),
-                ..SceneOptions::default()
+            let file = LensOptions {
+                lens: Some(lens.into()),
+                desqueeze: file_says,
+                ..LensOptions::default()
             };
-            let asked = RenderOverrides {
-                resolution: Some((40, 30)),
-                camera: CameraDescription::Realistic(RealisticDescription {
-                    desqueeze: caller_says,
-                    ..RealisticDescription::default()
-                }),
-                ..RenderOverrides::default()
+            let asked = RealisticDescription {
+                desqueeze: caller_says,
+                ..RealisticDescription::default()
             };
-            match resolve(&file, &view, &asked).unwrap().camera {
-                CameraSettings::Realistic(camera) => camera.sensor_mm,
-                _ => unreachable!(),
-            }
+            realistic(file, asked).sensor_mm
         };
         let squeeze = LensSystem::new(&LensPrescription::load("lentil:2004").unwrap())
             .squeeze()

@@ -553,10 +553,9 @@ fn pupil_sampling_loses_no_light_through_an_anamorphic_lens() {
     use lenspath::spectrum::D_LINE_NM;
     let (pixels, sensor_mm) = ((220u32, 186u32), (22.0, 18.6));
     let cam = camera(&Shot {
-        f_number: None,
+        pixels,
         ..anamorphic_shot(sensor_mm, LensFocus::Distance(3.0))
     });
-    let cam = cam.with_image_size(pixels.0, pixels.1).unwrap();
     let system = cam.system().clone();
     let sensor_z = cam.sensor_z_mm();
     let centre_brute = brute_force_irradiance(&system, sensor_z, 0.0, 0.0);

@@ -156,9 +156,14 @@ pub fn load(id: &str) -> Result<LensPrescription> {
 fn row(element: &Element, location: &str) -> std::result::Result<TableRow, String> {
     let material = element.material.as_deref().unwrap_or("air");
     let stop = material.eq_ignore_ascii_case("iris");
-    let shape = match element.geometry.as_str() {
-        "spherical" => SurfaceShape::Spherical,
-        "aspherical" => {
+    let cylinder_axis = element
+        .geometry
+        .strip_prefix("cyl-")
+        .and_then(CylinderAxis::from_spelling);
+    let shape = match (element.geometry.as_str(), cylinder_axis) {
+        (_, Some(axis)) => SurfaceShape::Cylindrical(axis),
+        ("spherical", _) => SurfaceShape::Spherical,
+        ("aspherical", _) => {
             let terms = element.aspherical_equation.as_deref().unwrap_or(&[]);
             if terms.len() > 4 {
                 return Err(format!(
@@ -168,9 +173,7 @@ fn row(element: &Element, location: &str) -> std::result::Result<TableRow, Strin
             }
             SurfaceShape::from_terms(0.0, 4, terms).expect("four terms from h⁴ fit")
         }
-        "cyl-x" => SurfaceShape::Cylindrical(CylinderAxis::X),
-        "cyl-y" => SurfaceShape::Cylindrical(CylinderAxis::Y),
-        other => {
+        (other, None) => {
             return Err(format!(
                 "{location}: unknown lens geometry '{other}' (spherical, aspherical, cyl-x and cyl-y are known)"
             ))

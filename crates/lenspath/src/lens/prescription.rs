@@ -493,11 +493,9 @@ fn aspheric_terms(words: &[&str]) -> std::result::Result<SurfaceShape, String> {
     }
     if let [word] = words {
         if let Some(axis) = word.strip_prefix("cylinder=") {
-            return match axis {
-                "x" => Ok(SurfaceShape::Cylindrical(CylinderAxis::X)),
-                "y" => Ok(SurfaceShape::Cylindrical(CylinderAxis::Y)),
-                _ => Err(format!("cylinder={axis}: the cylinder's axis is x or y")),
-            };
+            return CylinderAxis::from_spelling(axis)
+                .map(SurfaceShape::Cylindrical)
+                .ok_or_else(|| format!("cylinder={axis}: the cylinder's axis is x or y"));
         }
     }
     let mut asphere = EvenAsphere::SPHERE;

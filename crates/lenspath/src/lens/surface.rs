@@ -47,6 +47,13 @@ impl CylinderAxis {
             CylinderAxis::Y => "y",
         }
     }
+
+    /// The axis [`CylinderAxis::spelling`] spells as `text`.
+    pub fn from_spelling(text: &str) -> Option<CylinderAxis> {
+        [CylinderAxis::X, CylinderAxis::Y]
+            .into_iter()
+            .find(|axis| axis.spelling() == text)
+    }
 }
 
 /// A plane through the optical axis, in which first-order optics is traced.

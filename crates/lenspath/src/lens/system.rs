@@ -42,6 +42,13 @@ impl LensRay {
         let (height, slope) = (meridian.component(self.origin), meridian.component(self.direction));
         (slope != 0.0).then(|| self.origin.z - height * self.direction.z / slope)
     }
+
+    /// Whether the ray heads toward the axis in `meridian` (its height and
+    /// slope there have opposite signs): only then does it form a real
+    /// image (or object) where it crosses it.
+    pub fn heads_toward_axis(&self, meridian: Meridian) -> bool {
+        meridian.component(self.origin) * meridian.component(self.direction) < 0.0
+    }
 }
 
 /// Which way light goes through the lens.
@@ -183,8 +190,7 @@ impl LensSystem {
         if self.is_rotationally_symmetric() {
             return Ok(1.0);
         }
-        let [horizontal, vertical] = [Meridian::Horizontal, Meridian::Vertical]
-            .map(|m| self.paraxial_in(m).map(|p| p.effective_focal_length_mm));
+        let [horizontal, vertical] = Meridian::BOTH.map(|m| self.paraxial_in(m).map(|p| p.effective_focal_length_mm));
         Ok(vertical? / horizontal?)
     }
 
@@ -543,7 +549,7 @@ impl LensSystem {
         let out = self.trace(ray, Direction::ToSensor).ok_or_else(|| self.blocked(what))?;
         // A real image only when the ray leaves heading toward the axis.
         match out.axis_crossing_z(meridian) {
-            Some(z) if meridian.component(out.origin) * meridian.component(out.direction) < 0.0 => Ok((out, z)),
+            Some(z) if out.heads_toward_axis(meridian) => Ok((out, z)),
             _ => Err(Error::InvalidArgument(format!(
                 "{}: the {what} ray leaves the lens diverging, so it forms no real image",
                 self.prescription.name
@@ -676,7 +682,7 @@ impl LensSystem {
         );
         let out = self.trace(&ray, Direction::ToScene)?;
         // In focus only if the ray leaves heading toward the axis.
-        if meridian.component(out.origin) * meridian.component(out.direction) >= 0.0 {
+        if !out.heads_toward_axis(meridian) {
             return None;
         }
         let object_z = out.axis_crossing_z(meridian)?;

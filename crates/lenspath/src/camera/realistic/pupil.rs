@@ -15,9 +15,6 @@ pub(super) const PUPIL_BANDS: usize = 16;
 /// Cells per side of a band's pupil grid.
 pub(super) const PUPIL_GRID: usize = 48;
 
-/// Film positions traced per band (its two edges and between).
-pub(super) const FILM_POSITIONS_PER_BAND: usize = 3;
-
 /// Tiles per side of the sensor quadrant an anamorphic lens's pupils are
 /// kept for (each traced at its corners and centre).
 pub(super) const PUPIL_TILES_PER_SIDE: usize = 8;
@@ -66,41 +63,30 @@ pub(super) enum FilmPatch {
 }
 
 impl FilmPatch {
-    /// The film points whose pupils are traced: a band's two edges and
-    /// middle, a tile's corners and centre.
+    /// The film points the pupil's drift is measured between: a band's two
+    /// edges, a tile's corners in the order (0, 0), (1, 0), (0, 1), (1, 1).
+    fn anchors(&self) -> Vec<DVec2> {
+        match *self {
+            FilmPatch::Band { r0, width } => vec![DVec2::new(r0, 0.0), DVec2::new(r0 + width, 0.0)],
+            FilmPatch::Tile { min, size } => [DVec2::ZERO, DVec2::X, DVec2::Y, DVec2::ONE]
+                .map(|t| min + t * size)
+                .to_vec(),
+        }
+    }
+
+    /// Its middle: a band's middle radius, a tile's centre.
+    fn middle(&self) -> DVec2 {
+        match *self {
+            FilmPatch::Band { r0, width } => DVec2::new(r0 + 0.5 * width, 0.0),
+            FilmPatch::Tile { min, size } => min + 0.5 * size,
+        }
+    }
+
+    /// The film points whose pupils are traced: the anchors and the middle.
     fn film_points(&self) -> Vec<DVec2> {
-        match *self {
-            FilmPatch::Band { r0, width } => (0..FILM_POSITIONS_PER_BAND)
-                .map(|k| DVec2::new(r0 + width * k as f64 / (FILM_POSITIONS_PER_BAND - 1) as f64, 0.0))
-                .collect(),
-            FilmPatch::Tile { min, size } => [
-                DVec2::ZERO,
-                DVec2::new(1.0, 0.0),
-                DVec2::new(0.0, 1.0),
-                DVec2::ONE,
-                DVec2::splat(0.5),
-            ]
-            .map(|t| min + t * size)
-            .to_vec(),
-        }
-    }
-
-    /// The film points the pupil's drift is measured between: a band's
-    /// edges, a tile's corners (the first of [`FilmPatch::film_points`]).
-    fn anchor_count(&self) -> usize {
-        match self {
-            FilmPatch::Band { .. } => 2,
-            FilmPatch::Tile { .. } => 4,
-        }
-    }
-
-    /// The film points a shaped aperture's stop map is fitted at: a band's
-    /// edges (interpolated between), a tile's centre.
-    pub(super) fn stop_map_ends(&self) -> [DVec2; 2] {
-        match *self {
-            FilmPatch::Band { r0, width } => [DVec2::new(r0, 0.0), DVec2::new(r0 + width, 0.0)],
-            FilmPatch::Tile { min, size } => [min + 0.5 * size; 2],
-        }
+        let mut points = self.anchors();
+        points.push(self.middle());
+        points
     }
 }
 
@@ -244,20 +230,13 @@ pub(super) fn bound_pupil(systems: &[LensSystem], sensor_z: f64, patch: FilmPatc
         Some((centroid, points, step))
     };
     // The pupils at the anchors: a band's edges, a tile's corners.
-    let anchors: Vec<_> = match patch {
-        FilmPatch::Band { .. } => vec![films[0], films[films.len() - 1]],
-        FilmPatch::Tile { .. } => films[..patch.anchor_count()].to_vec(),
-    }
-    .into_iter()
-    .map(passing_at)
-    .collect();
-    let (film0, centre, drift) = match (patch, anchors.as_slice()) {
+    let film0 = films[0];
+    let anchors: Vec<_> = patch.anchors().into_iter().map(passing_at).collect();
+    let (centre, drift) = match (patch, anchors.as_slice()) {
         (FilmPatch::Band { width, .. }, [Some(a), Some(b)]) => {
-            (films[0], a.0, DMat2::from_cols((b.0 - a.0) / width, DVec2::ZERO))
+            (a.0, DMat2::from_cols((b.0 - a.0) / width, DVec2::ZERO))
         }
-        // A tile's corners, in film_points' order: (0, 0), (1, 0), (0, 1), (1, 1).
         (FilmPatch::Tile { size, .. }, [Some(c00), Some(c10), Some(c01), Some(c11)]) => (
-            films[0],
             c00.0,
             DMat2::from_cols(
                 ((c10.0 - c00.0) + (c11.0 - c01.0)) / (2.0 * size.x),
@@ -270,7 +249,7 @@ pub(super) fn bound_pupil(systems: &[LensSystem], sensor_z: f64, patch: FilmPatc
             if seen.is_empty() {
                 return PupilGrid::EMPTY;
             }
-            (films[0], seen.iter().sum::<DVec2>() / seen.len() as f64, DMat2::ZERO)
+            (seen.iter().sum::<DVec2>() / seen.len() as f64, DMat2::ZERO)
         }
     };
     // 2. The pupil moves across the patch; follow it, so the grid only holds its shape.
@@ -367,13 +346,19 @@ pub(super) fn fit_stop_map(system: &LensSystem, sensor_z: f64, grid: &PupilGrid,
         let a = DMat2::from_cols(DVec2::new(cx.x, cy.x), DVec2::new(cx.y, cy.y));
         (a.determinant().abs() > 1e-12).then_some((a, DVec2::new(cx.z, cy.z)))
     };
-    let [from, to] = patch.stop_map_ends();
-    let (r0, width) = match patch {
-        FilmPatch::Band { r0, width } => (r0, width),
-        // One fit: any width interpolates it with itself.
-        FilmPatch::Tile { .. } => (from.x, 1.0),
+    let (r0, width, start, end) = match patch {
+        FilmPatch::Band { r0, width } => (
+            r0,
+            width,
+            fit_at(DVec2::new(r0, 0.0)),
+            fit_at(DVec2::new(r0 + width, 0.0)),
+        ),
+        // One fit at the middle, which any width interpolates with itself.
+        FilmPatch::Tile { .. } => {
+            let fit = fit_at(patch.middle());
+            (patch.middle().x, 1.0, fit, fit)
+        }
     };
-    let (start, end) = (fit_at(from), fit_at(to));
     let ends = match (start, end) {
         (Some(a), Some(b)) => [a, b],
         (Some(a), None) | (None, Some(a)) => [a, a],
