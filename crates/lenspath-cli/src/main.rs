@@ -29,7 +29,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Render a scene to an image (PNG or EXR by extension).
-    Render(render::RenderArgs),
+    Render(Box<render::RenderArgs>),
     /// Focus the realistic camera on an image patch by contrast or by range.
     Autofocus(autofocus::AutofocusArgs),
     /// Blur an image with a mask-shaped kernel (bokeh as a post-process).
@@ -119,7 +119,7 @@ fn main() -> ExitCode {
         }
     };
     let outcome = match cli.command {
-        Command::Render(args) => render::run(args),
+        Command::Render(args) => render::run(*args),
         Command::Autofocus(args) => autofocus::run(args),
         Command::Bokeh(args) => bokeh::run(args),
         Command::Info(args) => info::run(args),

@@ -16,6 +16,9 @@ use lenspath::io::image::{check_output_path, write_image};
 use lenspath::render::{render_from, Accumulation, Checkpoints, RenderSettings};
 use lenspath::sampling::SamplerKind;
 use lenspath::scene::Scene;
+use lenspath::sensor::develop::develop;
+use lenspath::sensor::raw_file::{write_raw, RawFormat};
+use lenspath::sensor::RawFrame;
 use lenspath::setup::{
     autofocus_before_render, resolve, CameraDescription, CameraSettings, RealisticDescription, RenderOverrides,
 };
@@ -25,7 +28,7 @@ use sha2::{Digest, Sha256};
 
 use crate::flags::{
     parse_crop, parse_duration, parse_patch, parse_resolution, ApertureFlags, CameraKind, FilterKind, LensFlags,
-    Resolution, SamplerArg, SceneArgs,
+    Resolution, SamplerArg, SceneArgs, SensorFlags,
 };
 use crate::progress::Progress;
 use crate::Outcome;
@@ -73,6 +76,8 @@ pub struct RenderArgs {
     lens: LensFlags,
     #[command(flatten)]
     aperture: ApertureFlags,
+    #[command(flatten)]
+    sensor: SensorFlags,
     /// Realistic camera: focus on this patch of the image first, X,Y,W,H in fractions of the
     /// image (0 to 1) such as 0.55,0.7,0.1,0.12, with `lenspath autofocus`'s fast strategy.
     #[arg(long, value_name = "X,Y,W,H", value_parser = parse_patch, conflicts_with_all = ["focus_distance", "sensor_depth"])]
@@ -235,12 +240,17 @@ fn overrides(args: &RenderArgs) -> Result<RenderOverrides> {
         depth: Some(true),
         wavelength_nm: args.wavelength_nm,
         camera,
+        sensor: args.sensor.description()?,
     })
 }
 
 /// Runs `lenspath render`.
 pub fn run(args: RenderArgs) -> Result<Outcome> {
     check_output_path(&args.out)?;
+    if let Some(raw) = &args.sensor.raw {
+        RawFormat::of(raw)?;
+        lenspath::io::check_writable(raw)?;
+    }
     if !args.exposure.is_finite() {
         return Err(Error::InvalidArgument("--exposure must be a finite number".into()));
     }
@@ -325,7 +335,18 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
         &cancel,
     )?;
     progress.finish();
-    write_image(&args.out, &output.image, args.exposure)?;
+    // Through a sensor the film holds its channels' electron rates: the
+    // image written is the raw frame developed.
+    match setup.capture(camera.as_ref(), &output.image)? {
+        Some(frame) => {
+            if let Some(raw) = &args.sensor.raw {
+                write_raw(raw, &frame)?;
+            }
+            write_image(&args.out, &develop(&frame), args.exposure)?;
+            eprintln!("{}", exposure_line(&frame));
+        }
+        None => write_image(&args.out, &output.image, args.exposure)?,
+    }
 
     let s = &output.stats;
     let interrupted = s.cancelled;
@@ -367,4 +388,25 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
     } else {
         Outcome::Done
     })
+}
+
+/// How the frame is exposed: its median and the share of clipped pixels.
+fn exposure_line(frame: &RawFrame) -> String {
+    let mut sorted = frame.dn.clone();
+    sorted.sort_unstable();
+    let median = sorted[sorted.len() / 2];
+    let clipped = frame
+        .dn
+        .iter()
+        .filter(|&&v| u32::from(v) >= frame.white_level_dn)
+        .count();
+    format!(
+        "sensor {}: median {} DN (black {}, white {}), {:.1}% of pixels clipped, {:.3} e-/DN",
+        frame.sensor_name,
+        median,
+        frame.black_level_dn,
+        frame.white_level_dn,
+        100.0 * clipped as f64 / frame.dn.len() as f64,
+        frame.electrons_per_dn
+    )
 }

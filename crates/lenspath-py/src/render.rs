@@ -79,6 +79,8 @@ pub(crate) fn render<'py>(
         depth: Some(want_depth),
         wavelength_nm,
         camera: camera.map(|c| c.description.clone()).unwrap_or_default(),
+        // The sensor is not in the Python API yet (issue 32): linear sRGB.
+        sensor: None,
     };
     let setup = resolve(&scene.options, &scene.view()?, &overrides).map_err(to_py)?;
     let camera = match camera {

@@ -52,6 +52,7 @@ pub mod raysets;
 pub mod render;
 pub mod sampling;
 pub mod scene;
+pub mod sensor;
 pub mod setup;
 pub mod shapes;
 pub mod spectrum;

@@ -17,6 +17,7 @@ use crate::math::Rgb;
 use crate::parallel::worker_pool;
 use crate::sampling::{Sampler, SamplerKind, MAX_SAMPLES_PER_PIXEL};
 use crate::scene::CompiledScene;
+use crate::sensor::SpectralResponse;
 use crate::spectrum::{SampledWavelengths, LAMBDA_MAX_NM, LAMBDA_MIN_NM};
 
 /// Lens samples tried for a pixel's depth: the middle of the lens first,
@@ -60,6 +61,21 @@ pub struct RenderSettings {
     /// there, the same in all three channels (a lens designer's
     /// monochromatic image; `None`, the default, renders colour).
     pub wavelength_nm: Option<f32>,
+    /// What the film records of the light: linear sRGB (the default) or a
+    /// sensor's channels ([`FilmResponse`]).
+    pub film: FilmResponse,
+}
+
+/// What a pixel's three numbers are.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum FilmResponse {
+    /// Linear sRGB radiance, from the CIE matching functions.
+    #[default]
+    Srgb,
+    /// Each channel's photoelectron rate through this sensor response per
+    /// unit étendue ([`SpectralResponse::electron_rate`]), for
+    /// [`crate::sensor::capture`].
+    Sensor(&'static SpectralResponse),
 }
 
 impl Default for RenderSettings {
@@ -78,6 +94,7 @@ impl Default for RenderSettings {
             crop: None,
             depth: true,
             wavelength_nm: None,
+            film: FilmResponse::Srgb,
         }
     }
 }
@@ -131,6 +148,9 @@ impl RenderSettings {
                 return fail(format!(
                     "wavelength must be in {LAMBDA_MIN_NM}..={LAMBDA_MAX_NM} nm, got {nm}"
                 ));
+            }
+            if self.film != FilmResponse::Srgb {
+                return fail("a sensor records colour: render it across the visible, not at one wavelength".into());
             }
         }
         if let Filter::Gaussian { sigma, radius } = self.filter {
@@ -445,10 +465,17 @@ fn render_tile(
                     let l = ray.map_or(Rgb::ZERO, |cr| {
                         let integrator = &settings.integrator;
                         cr.weight
-                            * match settings.wavelength_nm {
-                                None => integrator.li(scene, cr.ray, cr.wavelengths, sampler, &mut tile_rays),
+                            * match (settings.wavelength_nm, settings.film) {
+                                (None, FilmResponse::Srgb) => {
+                                    integrator.li(scene, cr.ray, cr.wavelengths, sampler, &mut tile_rays)
+                                }
+                                (None, FilmResponse::Sensor(response)) => {
+                                    let (l, lambda) =
+                                        integrator.li_spectrum(scene, cr.ray, cr.wavelengths, sampler, &mut tile_rays);
+                                    response.electron_rate(&lambda, l)
+                                }
                                 // One wavelength at density 1: the estimate is the radiance itself.
-                                Some(_) => Rgb::splat(
+                                (Some(_), _) => Rgb::splat(
                                     integrator
                                         .li_spectrum(scene, cr.ray, cr.wavelengths, sampler, &mut tile_rays)
                                         .0

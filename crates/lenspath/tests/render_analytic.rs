@@ -13,7 +13,7 @@ use lenspath::io::image::{read_exr, write_image};
 use lenspath::lights::Light;
 use lenspath::materials::Material;
 use lenspath::math::Rgb;
-use lenspath::render::{render, RenderSettings};
+use lenspath::render::{render, FilmResponse, RenderSettings};
 use lenspath::sampling::SamplerKind;
 use lenspath::scene::Scene;
 use lenspath::shapes::{Sphere, TriangleMesh};
@@ -33,6 +33,7 @@ fn settings(width: u32, height: u32, spp: u32, seed: u32) -> RenderSettings {
         crop: None,
         depth: true,
         wavelength_nm: None,
+        film: FilmResponse::Srgb,
     }
 }
 

@@ -21,7 +21,7 @@ use crate::film::Filter;
 use crate::film::PixelRect;
 use crate::integrator::Integrator;
 use crate::lens::{AnalysisSettings, LensAnalysis, LensSystem};
-use crate::render::{render, RenderSettings};
+use crate::render::{render, FilmResponse, RenderSettings};
 use crate::sampling::SamplerKind;
 use crate::scene::CompiledScene;
 
@@ -427,6 +427,7 @@ impl<'a> Focuser<'a> {
             crop: Some(s.patch),
             depth: false,
             wavelength_nm: None,
+            film: FilmResponse::Srgb,
         };
         let output = render(
             self.scene,

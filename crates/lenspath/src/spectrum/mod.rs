@@ -151,7 +151,7 @@ impl SampledWavelengths {
     /// The mean over lanes of L(λ) · `weight`(λ) / p(λ): the Monte Carlo
     /// estimate of ∫ L(λ) weight(λ) dλ, terminated lanes left out.
     #[inline(always)]
-    fn estimate(&self, l: SampledSpectrum, weight: impl Fn(f32) -> Vec3) -> Vec3 {
+    pub(crate) fn estimate(&self, l: SampledSpectrum, weight: impl Fn(f32) -> Vec3) -> Vec3 {
         // Most samples of a dark pixel carry nothing: skip the table lookups.
         if l == SampledSpectrum::ZERO {
             return Vec3::ZERO;

@@ -38,7 +38,7 @@ pub use settings::{sensor_for_image, LensFocus, Radiometry, RealisticCameraSetti
 use glam::{DVec2, DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
-use super::{Aperture, Camera, CameraPose, CameraRay, CameraSample};
+use super::{Aperture, Camera, CameraPose, CameraRay, CameraSample, FilmRadiometry};
 use crate::error::{Error, Result};
 use crate::film::PixelRect;
 use crate::lens::{Direction, LensRay, LensSystem};
@@ -529,5 +529,16 @@ impl Camera for RealisticCamera {
     fn view_axis(&self) -> (Vec3, Vec3) {
         let m = &self.pose.render_from_camera;
         (m.transform_point3(Vec3::ZERO), m.transform_vector3(Vec3::Z).normalize())
+    }
+
+    fn film_radiometry(&self) -> Option<FilmRadiometry> {
+        // A reading of 1 is the irradiance the weights were normalised by.
+        Some(FilmRadiometry {
+            irradiance_per_reading_sr: 1.0 / self.weight_scale,
+            pixel_pitch_um: (
+                1000.0 * self.sensor_mm.0 / self.resolution.0,
+                1000.0 * self.sensor_mm.1 / self.resolution.1,
+            ),
+        })
     }
 }
