@@ -131,29 +131,27 @@ impl LensAnalysis {
         let close_distance = settings.close_object_distance_mm.unwrap_or(5.0 * focal_length);
         let close_focus = system.real_image_z(-close_distance, h)?;
         let (w, ht) = settings.sensor_mm;
-        let fov = |half: f64| 2.0 * (half / p.effective_focal_length_mm.abs()).atan().to_degrees();
+        // Paraxial field of view across a half-width `half_mm` through a focal length.
+        let fov_deg = |half_mm: f64, focal_mm: f64| 2.0 * (half_mm / focal_mm.abs()).atan().to_degrees();
+        let fov = |half_mm: f64| fov_deg(half_mm, p.effective_focal_length_mm);
         let anamorphic = match system.is_rotationally_symmetric() {
             true => None,
             false => {
-                let figures = |meridian: Meridian, half_sensor_mm: f64| -> Result<MeridianFigures> {
-                    let p = system.paraxial_in(meridian)?;
-                    Ok(MeridianFigures {
-                        effective_focal_length_mm: p.effective_focal_length_mm,
-                        f_number: p.f_number,
-                        entrance_pupil_diameter_mm: p.entrance_pupil_diameter_mm,
-                        infinity_focus_mm: system.real_focus_at_infinity_in(h, meridian)?.0,
-                        field_of_view_deg: 2.0
-                            * (half_sensor_mm / p.effective_focal_length_mm.abs()).atan().to_degrees(),
-                    })
+                let figures = |p: &ParaxialData, line_focus_mm: f64, half_sensor_mm: f64| MeridianFigures {
+                    effective_focal_length_mm: p.effective_focal_length_mm,
+                    f_number: p.f_number,
+                    entrance_pupil_diameter_mm: p.entrance_pupil_diameter_mm,
+                    infinity_focus_mm: line_focus_mm,
+                    field_of_view_deg: fov_deg(half_sensor_mm, p.effective_focal_length_mm),
                 };
-                let (horizontal, vertical) = (
-                    figures(Meridian::Horizontal, 0.5 * w)?,
-                    figures(Meridian::Vertical, 0.5 * ht)?,
-                );
+                // The horizontal meridian is what `p` and `horizontal_focus` traced.
+                let vertical = system.paraxial_in(Meridian::Vertical)?;
+                let vertical_focus = system.real_focus_at_infinity_in(h, Meridian::Vertical)?.0;
                 Some(AnamorphicFigures {
-                    horizontal,
-                    vertical,
-                    squeeze: system.squeeze()?,
+                    horizontal: figures(&p, horizontal_focus, 0.5 * w),
+                    vertical: figures(&vertical, vertical_focus, 0.5 * ht),
+                    // As `LensSystem::squeeze`: f_v / f_h.
+                    squeeze: vertical.effective_focal_length_mm / p.effective_focal_length_mm,
                 })
             }
         };
