@@ -191,24 +191,24 @@ impl SceneArgs {
 #[derive(Args, Debug)]
 pub struct SensorFlags {
     /// Record through an image sensor with this spectral response: `ideal` (CIE x̄ȳz̄) or a
-    /// measured camera (sony_ilce_7m3, nikon_d850, canon_eos_5d_mkiv, ...) [default with any
-    /// sensor flag: sony_ilce_7m3]. Noise, gain and levels default to ISETCam's Sony IMX363.
+    /// measured camera (sony_ilce_7m3, nikon_d850, canon_eos_5d_mkiv, ...). Noise, gain and
+    /// levels default to ISETCam's Sony IMX363.
     #[arg(long, value_name = "NAME")]
     pub sensor_model: Option<String>,
-    /// Sensor: colour filter array, rggb, bggr, grbg, gbrg or mono [default: rggb].
+    /// Sensor: colour filter array, rggb, bggr, grbg, gbrg or mono.
     #[arg(long, value_name = "PATTERN")]
     pub cfa: Option<String>,
-    /// Sensor: exposure time in seconds [default: 1/60].
+    /// Sensor: exposure time in seconds.
     #[arg(long, value_name = "S")]
     pub exposure_time: Option<f64>,
-    /// Sensor: ISO speed; the analogue gain is ISO/55 [default: 55].
+    /// Sensor: ISO speed; the analogue gain is ISO over the sensor's base ISO.
     #[arg(long)]
     pub iso: Option<f64>,
     /// Sensor: luminance in cd/m² of a white emitter of value 1 in the scene (72983 reads emission
-    /// as W/(m² sr nm)) [default: 100].
+    /// as W/(m² sr nm)).
     #[arg(long, value_name = "CD_M2")]
     pub white_luminance: Option<f64>,
-    /// Sensor: read noise, electrons RMS [default: 5].
+    /// Sensor: read noise, electrons RMS.
     #[arg(long, value_name = "E")]
     pub read_noise: Option<f64>,
     /// Sensor: seed of the temporal noise; another seed is another frame of the same sensor.
@@ -223,18 +223,7 @@ pub struct SensorFlags {
 impl SensorFlags {
     /// The sensor the flags describe, `None` when no flag asks for one.
     pub fn description(&self) -> Result<Option<SensorDescription>> {
-        let asked = self.sensor_model.is_some()
-            || self.cfa.is_some()
-            || self.exposure_time.is_some()
-            || self.iso.is_some()
-            || self.white_luminance.is_some()
-            || self.read_noise.is_some()
-            || self.frame_seed.is_some()
-            || self.raw.is_some();
-        if !asked {
-            return Ok(None);
-        }
-        Ok(Some(SensorDescription {
+        let described = SensorDescription {
             model: self.sensor_model.clone(),
             cfa: self.cfa.as_deref().map(Cfa::parse).transpose()?,
             exposure_time_s: self.exposure_time,
@@ -243,7 +232,9 @@ impl SensorFlags {
             read_noise_e: self.read_noise,
             frame_seed: self.frame_seed,
             ..SensorDescription::default()
-        }))
+        };
+        let asked = described != SensorDescription::default() || self.raw.is_some();
+        Ok(asked.then_some(described))
     }
 }
 

@@ -83,6 +83,18 @@ fn command() -> clap::Command {
         ("scene_unit", scene_file_else(d::SCENE_UNIT_M.to_string())),
         ("aperture_radius", d::THIN_LENS_APERTURE_RADIUS.to_string()),
         ("radiometry", "normalized".to_string()),
+        (
+            "sensor_model",
+            format!("{} when another sensor flag is given", d::SENSOR_RESPONSE),
+        ),
+        ("cfa", d::SENSOR_CFA.name().to_string()),
+        ("exposure_time", format!("1/{:.0} s", 1.0 / d::SENSOR_EXPOSURE_TIME_S)),
+        (
+            "iso",
+            format!("{} (base ISO {})", d::SENSOR_ISO, d::SENSOR_UNITY_GAIN_ISO),
+        ),
+        ("white_luminance", d::SENSOR_WHITE_LUMINANCE_CD_M2.to_string()),
+        ("read_noise", d::SENSOR_READ_NOISE_E.to_string()),
     ];
     let with_defaults = |mut c: clap::Command| {
         for (id, value) in &defaults {

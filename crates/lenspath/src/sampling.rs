@@ -153,7 +153,7 @@ impl SobolStream {
 
 /// SplitMix64's finalizer (Steele et al. 2014): a bijective 64-bit hash.
 #[inline]
-fn mix64(mut z: u64) -> u64 {
+pub(crate) fn mix64(mut z: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
     z ^ (z >> 31)

@@ -27,7 +27,7 @@ use crate::options::SceneOptions;
 use crate::render::{FilmResponse, RenderSettings};
 use crate::sampling::SamplerKind;
 use crate::scene::SceneView;
-use crate::sensor::{capture, Cfa, RawFrame, SensorSettings, SpectralResponse};
+use crate::sensor::{capture, needs_a_lens, Cfa, RawFrame, SensorSettings, SpectralResponse};
 
 // ---------------------------------------------------------------------------
 // What a caller asks for
@@ -270,9 +270,7 @@ impl RenderSetup {
         let Some(sensor) = &self.sensor else {
             return Ok(None);
         };
-        let radiometry = camera.film_radiometry().ok_or_else(|| {
-            Error::InvalidArgument("a sensor counts photons through a lens: use the realistic camera".into())
-        })?;
+        let radiometry = camera.film_radiometry().ok_or_else(needs_a_lens)?;
         let origin = self.settings.crop.map_or((0, 0), |c| (c.x0, c.y0));
         capture(image, origin, &radiometry, sensor).map(Some)
     }
@@ -290,9 +288,7 @@ pub fn resolve(options: &SceneOptions, view: &SceneView, overrides: &RenderOverr
     let sensor = overrides.sensor.as_ref().map(SensorDescription::resolve).transpose()?;
     if let Some(sensor) = &sensor {
         if !matches!(camera, CameraSettings::Realistic(_)) {
-            return Err(Error::InvalidArgument(
-                "a sensor counts photons through a lens: use the realistic camera".into(),
-            ));
+            return Err(needs_a_lens());
         }
         settings.film = FilmResponse::Sensor(sensor.response);
         settings.validate()?;

@@ -92,12 +92,11 @@ fn the_centre_of_a_uniform_scene_collects_what_the_camera_equation_says() {
     let sky = Emission::from(Rgb::ONE).spectrum();
     let per_um2_s_sr: f64 = (360..=830)
         .map(|nm| {
-            let nm = f64::from(nm);
             f64::from(sky.at(nm as f32))
                 * sensor.radiance_per_scene_unit()
                 * sensor.peak_qe
-                * response.relative_qe(nm).y
-                * electrons_per_energy(nm)
+                * response.relative_qe(nm as f32).y
+                * electrons_per_energy(f64::from(nm))
         })
         .sum();
     let expected = std::f64::consts::PI / (4.0 * F_NUMBER * F_NUMBER)

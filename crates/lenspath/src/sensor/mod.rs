@@ -42,6 +42,7 @@ pub use response::SpectralResponse;
 use crate::camera::FilmRadiometry;
 use crate::defaults;
 use crate::film::Image;
+use crate::sampling::mix64;
 use crate::spectrum::cie;
 use crate::{Error, Result};
 
@@ -309,7 +310,7 @@ pub fn capture(
     let per_reading = settings.electrons_per_reading(optics);
     let full_well = settings.full_well_e(optics);
     let dark = settings.dark_current_e_per_s_um2 * optics.pixel_area_um2() * settings.exposure_time_s;
-    let gain = 1.0 / settings.electrons_per_dn(optics);
+    let electrons_per_dn = settings.electrons_per_dn(optics);
     let (black, white) = (f64::from(settings.black_level_dn), f64::from(settings.white_level_dn()));
     let (origin_x, origin_y) = origin;
     let mut dn = vec![0u16; image.width as usize * image.height as usize];
@@ -329,12 +330,9 @@ pub fn capture(
                 let collected = poisson(mean, &mut temporal).min(full_well);
                 let read: f64 = temporal.sample(StandardNormal);
                 let electrons = collected + settings.dsnu_e * dsnu + settings.read_noise_e * read;
-                *out = (electrons * gain + black).round().clamp(0.0, white) as u16;
+                *out = (electrons / electrons_per_dn + black).round().clamp(0.0, white) as u16;
             }
         });
-    let xyz_to_camera = settings.response.xyz_to_camera();
-    let tables = cie::tables();
-    let neutral = xyz_to_camera * tables.spectrum_to_xyz(|nm| tables.d65(nm)).as_dvec3();
     Ok(RawFrame {
         width: image.width,
         height: image.height,
@@ -342,9 +340,9 @@ pub fn capture(
         cfa: phase(settings.cfa, origin),
         black_level_dn: settings.black_level_dn,
         white_level_dn: settings.white_level_dn(),
-        electrons_per_dn: settings.electrons_per_dn(optics),
-        xyz_to_camera,
-        neutral: neutral / neutral.max_element(),
+        electrons_per_dn,
+        xyz_to_camera: settings.response.xyz_to_camera(),
+        neutral: settings.response.d65_neutral(),
         sensor_name: settings.response.name().to_string(),
     })
 }
@@ -361,21 +359,22 @@ fn poisson(mean: f64, rng: &mut Pcg64Mcg) -> f64 {
 fn phase(cfa: Cfa, origin: (u32, u32)) -> Cfa {
     let at = |dx, dy| cfa.channel(origin.0 + dx, origin.1 + dy);
     let block = [at(0, 0), at(1, 0), at(0, 1), at(1, 1)];
-    match cfa {
-        Cfa::Mono => Cfa::Mono,
-        _ => Cfa::ALL
-            .iter()
-            .map(|(c, _)| *c)
-            .find(|c| c.block() == block)
-            .unwrap_or(cfa),
-    }
+    // Every pattern's block is its own (mono's is all green).
+    Cfa::ALL
+        .iter()
+        .map(|(c, _)| *c)
+        .find(|c| c.block() == block)
+        .unwrap_or(cfa)
 }
 
-/// A 64-bit seed from a seed and a pixel's place (SplitMix64's finaliser,
-/// Steele et al. 2014, of their sum).
+/// A 64-bit seed from a seed and a pixel's place: SplitMix64's finaliser
+/// of the seed's golden-ratio multiple plus the place.
 fn mix(seed: u64, site: u64) -> u64 {
-    let mut z = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15).wrapping_add(site);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
+    mix64(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15).wrapping_add(site))
+}
+
+/// Why a sensor needs the realistic camera (the ideal ones have no optics
+/// to count photons through).
+pub(crate) fn needs_a_lens() -> Error {
+    Error::InvalidArgument("a sensor counts photons through a lens: use the realistic camera".into())
 }

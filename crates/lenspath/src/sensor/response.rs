@@ -15,7 +15,8 @@ use std::sync::OnceLock;
 use glam::{DMat3, DVec3, Vec3};
 
 use crate::math::Rgb;
-use crate::spectrum::{cie, SampledSpectrum, SampledWavelengths, Spectrum, LAMBDA_MAX_NM, LAMBDA_MIN_NM};
+use crate::spectrum::cie::{self, CieTables};
+use crate::spectrum::{SampledSpectrum, SampledWavelengths, Spectrum, Tabulated, LAMBDA_MAX_NM, LAMBDA_MIN_NM};
 use crate::{Error, Result};
 
 /// Planck's constant, J·s (SI 2019, exact).
@@ -83,13 +84,29 @@ pub fn electrons_per_energy(lambda_nm: f64) -> f64 {
 /// A sensor's three channels, tabulated at 1 nm over the renderer's
 /// wavelengths, relative to the most sensitive channel's peak (the sensor's
 /// peak quantum efficiency, [`super::SensorSettings::peak_qe`], scales them).
-#[derive(PartialEq)]
 pub struct SpectralResponse {
     name: &'static str,
     /// Relative quantum efficiency of each channel, 1 nm apart from `LAMBDA_MIN_NM`.
     qe: Vec<DVec3>,
     /// The same times λ/(hc): electrons s⁻¹ µm⁻² sr⁻¹ per W·m⁻²·sr⁻¹·nm⁻¹ per nm.
     yield_per_nm: Vec<Vec3>,
+    /// The colour matrix and D65's neutral, fitted when first asked for.
+    colour: OnceLock<Colour>,
+}
+
+/// How a response relates to CIE XYZ under D65.
+#[derive(Clone, Copy)]
+struct Colour {
+    xyz_to_camera: DMat3,
+    /// The channels' reading of D65 white, largest 1.
+    neutral: DVec3,
+}
+
+impl PartialEq for SpectralResponse {
+    // One response per name ([`SpectralResponse::named`]).
+    fn eq(&self, other: &Self) -> bool {
+        self.name == other.name
+    }
 }
 
 impl fmt::Debug for SpectralResponse {
@@ -121,7 +138,12 @@ impl SpectralResponse {
             .enumerate()
             .map(|(i, c)| (*c * electrons_per_energy(LAMBDA_MIN_NM as f64 + i as f64)).as_vec3())
             .collect();
-        SpectralResponse { name, qe, yield_per_nm }
+        SpectralResponse {
+            name,
+            qe,
+            yield_per_nm,
+            colour: OnceLock::new(),
+        }
     }
 
     /// The response's name.
@@ -131,14 +153,11 @@ impl SpectralResponse {
 
     /// Quantum efficiency of the three channels at `lambda_nm` relative to
     /// the peak (0 outside the renderer's wavelengths).
-    pub fn relative_qe(&self, lambda_nm: f64) -> DVec3 {
-        let i = lambda_nm - LAMBDA_MIN_NM as f64;
-        if !(0.0..=(self.qe.len() - 1) as f64).contains(&i) {
-            return DVec3::ZERO;
+    pub fn relative_qe(&self, lambda_nm: f32) -> DVec3 {
+        match CieTables::locate(lambda_nm) {
+            Some((i, t)) => self.qe[i].lerp(self.qe[i + 1], f64::from(t)),
+            None => DVec3::ZERO,
         }
-        let (k, t) = (i.floor() as usize, i.fract());
-        let next = self.qe[(k + 1).min(self.qe.len() - 1)];
-        self.qe[k] * (1.0 - t) + next * t
     }
 
     /// The Monte Carlo estimate of each channel's electron rate at peak
@@ -146,12 +165,7 @@ impl SpectralResponse {
     /// scene unit) carried at `lambda`: what a sensor render's film sums.
     #[inline(always)]
     pub fn electron_rate(&self, lambda: &SampledWavelengths, l: SampledSpectrum) -> Rgb {
-        lambda.estimate(l, |nm| {
-            let i = (nm - LAMBDA_MIN_NM).clamp(0.0, (self.yield_per_nm.len() - 1) as f32);
-            let (k, t) = (i as usize, i.fract());
-            let next = self.yield_per_nm[(k + 1).min(self.yield_per_nm.len() - 1)];
-            self.yield_per_nm[k] * (1.0 - t) + next * t
-        })
+        lambda.estimate(l, |nm| CieTables::interpolate(&self.yield_per_nm, nm))
     }
 
     /// The 3 × 3 matrix taking CIE XYZ to this sensor's channels, fitted by
@@ -160,6 +174,20 @@ impl SpectralResponse {
     /// scaled so D65 white (Y = 1) gives 1 in its largest channel, as DNG
     /// asks. Exact for the ideal sensor.
     pub fn xyz_to_camera(&self) -> DMat3 {
+        self.colour().xyz_to_camera
+    }
+
+    /// The channels' reading of D65 white through [`Self::xyz_to_camera`],
+    /// largest 1 (DNG `AsShotNeutral` for a D65 scene).
+    pub fn d65_neutral(&self) -> DVec3 {
+        self.colour().neutral
+    }
+
+    fn colour(&self) -> Colour {
+        *self.colour.get_or_init(|| self.fit_colour())
+    }
+
+    fn fit_colour(&self) -> Colour {
         let t = cie::tables();
         let nm = |i: usize| LAMBDA_MIN_NM as f64 + i as f64;
         // Under D65, per unit reflectance at each wavelength.
@@ -186,7 +214,10 @@ impl SpectralResponse {
         }
         let m = cx * xx.inverse();
         let white = m * xyz_of(&|_| 1.0);
-        m * (1.0 / white.max_element())
+        Colour {
+            xyz_to_camera: m * (1.0 / white.max_element()),
+            neutral: white / white.max_element(),
+        }
     }
 }
 
@@ -206,32 +237,33 @@ fn training_colours() -> impl Iterator<Item = Rgb> {
 /// `LAMBDA_MIN_NM` to `LAMBDA_MAX_NM`; zero where the measurement stops
 /// (the cameras' infrared filters cut beyond it).
 fn relative_curves(name: &str) -> Vec<DVec3> {
-    let wavelengths = (LAMBDA_MIN_NM as u32..=LAMBDA_MAX_NM as u32).map(f64::from);
+    let wavelengths = (LAMBDA_MIN_NM as u32..=LAMBDA_MAX_NM as u32).map(|nm| nm as f32);
     let csv = match CAMERAS.iter().find(|(n, _)| *n == name) {
         Some((_, csv)) => csv,
         None => {
             let t = cie::tables();
-            return wavelengths.map(|nm| t.xyz_bar(nm as f32).as_dvec3()).collect();
+            return wavelengths.map(|nm| t.xyz_bar(nm).as_dvec3()).collect();
         }
     };
-    let rows: Vec<(f64, DVec3)> = csv
+    let rows: Vec<[f32; 4]> = csv
         .lines()
         .skip(1)
         .map(|line| {
-            let v: Vec<f64> = line
-                .split(',')
-                .map(|x| x.trim().parse().expect("embedded table"))
-                .collect();
-            (v[0], DVec3::new(v[1], v[2], v[3]))
+            let mut v = line.split(',').map(|x| x.trim().parse().expect("embedded table"));
+            std::array::from_fn(|_| v.next().expect("four columns"))
         })
         .collect();
+    let channel =
+        |c: usize| Tabulated::new(&rows.iter().map(|r| (r[0], r[c])).collect::<Vec<_>>()).expect("embedded table");
+    let (r, g, b) = (channel(1), channel(2), channel(3));
+    let measured = rows[0][0]..=rows[rows.len() - 1][0];
     wavelengths
-        .map(|nm| match rows.windows(2).find(|w| w[0].0 <= nm && nm <= w[1].0) {
-            Some(w) => {
-                let t = (nm - w[0].0) / (w[1].0 - w[0].0);
-                w[0].1 * (1.0 - t) + w[1].1 * t
+        .map(|nm| {
+            if measured.contains(&nm) {
+                Vec3::new(r.at(nm), g.at(nm), b.at(nm)).as_dvec3()
+            } else {
+                DVec3::ZERO
             }
-            None => DVec3::ZERO,
         })
         .collect()
 }
@@ -244,7 +276,7 @@ mod tests {
     fn every_camera_reads_with_its_green_peak_at_1() {
         for name in names() {
             let r = SpectralResponse::named(name).unwrap();
-            let qe = |nm: u32| r.relative_qe(f64::from(nm));
+            let qe = |nm: u32| r.relative_qe(nm as f32);
             let peak = (360..=830).map(|nm| qe(nm).max_element()).fold(0.0, f64::max);
             assert!((peak - 1.0).abs() < 1e-12, "{name}: {peak}");
             if name != IDEAL_SENSOR {

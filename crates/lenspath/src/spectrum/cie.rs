@@ -187,7 +187,7 @@ impl CieTables {
 
     /// Index and fraction of `lambda_nm` on the 1 nm grid, or `None` outside it.
     #[inline(always)]
-    fn locate(lambda_nm: f32) -> Option<(usize, f32)> {
+    pub(crate) fn locate(lambda_nm: f32) -> Option<(usize, f32)> {
         let x = lambda_nm - LAMBDA_MIN_NM;
         if !(0.0..=(SAMPLES - 1) as f32).contains(&x) {
             return None;
@@ -212,7 +212,7 @@ impl CieTables {
 
     /// A table on the 1 nm grid at `lambda_nm`, linear between entries, zero outside.
     #[inline(always)]
-    fn interpolate(table: &[Vec3], lambda_nm: f32) -> Vec3 {
+    pub(crate) fn interpolate(table: &[Vec3], lambda_nm: f32) -> Vec3 {
         match Self::locate(lambda_nm) {
             Some((i, t)) => table[i].lerp(table[i + 1], t),
             None => Vec3::ZERO,
