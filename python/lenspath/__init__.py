@@ -19,7 +19,7 @@ from typing import Any, Literal, overload
 import numpy as np
 import numpy.typing as npt
 
-from . import _core
+from . import _core, sensor
 from ._core import (
     AutofocusResult,
     Camera,
@@ -28,8 +28,10 @@ from ._core import (
     Lens,
     LensError,
     LenspathError,
+    RawFrame,
     Scene,
     SceneError,
+    Sensor,
     bokeh,
     builtin_lenses,
     builtin_scenes,
@@ -39,6 +41,7 @@ from ._core import (
     lens_blur,
     load,
     read,
+    sensor_models,
     write,
 )
 
@@ -52,8 +55,10 @@ __all__ = [
     "Lens",
     "LensError",
     "LenspathError",
+    "RawFrame",
     "Scene",
     "SceneError",
+    "Sensor",
     "autofocus",
     "bokeh",
     "builtin_lenses",
@@ -65,6 +70,8 @@ __all__ = [
     "load",
     "read",
     "render",
+    "sensor",
+    "sensor_models",
     "write",
 ]
 
@@ -116,7 +123,26 @@ def render(
     progress: bool | Callable[[int, int], Any] = False,
     sampler: Literal["sobol", "independent"] | None = None,
     wavelength_nm: float | None = None,
+    sensor: None = None,
 ) -> npt.NDArray[np.float32]: ...
+@overload
+def render(
+    scene: Scene | str | os.PathLike[str],
+    camera: Camera | None = None,
+    *,
+    spp: int | None = None,
+    resolution: tuple[int, int] | None = None,
+    seed: int | None = None,
+    max_depth: int | None = None,
+    light_samples: int | None = None,
+    threads: int | None = None,
+    aovs: None = None,
+    crop: tuple[int, int, int, int] | None = None,
+    progress: bool | Callable[[int, int], Any] = False,
+    sampler: Literal["sobol", "independent"] | None = None,
+    wavelength_nm: float | None = None,
+    sensor: Sensor,
+) -> RawFrame: ...
 @overload
 def render(
     scene: Scene | str | os.PathLike[str],
@@ -133,6 +159,7 @@ def render(
     progress: bool | Callable[[int, int], Any] = False,
     sampler: Literal["sobol", "independent"] | None = None,
     wavelength_nm: float | None = None,
+    sensor: None = None,
 ) -> dict[str, npt.NDArray[np.float32]]: ...
 def render(
     scene: Scene | str | os.PathLike[str],
@@ -149,7 +176,8 @@ def render(
     progress: bool | Callable[[int, int], Any] = False,
     sampler: Literal["sobol", "independent"] | None = None,
     wavelength_nm: float | None = None,
-) -> npt.NDArray[np.float32] | dict[str, npt.NDArray[np.float32]]:
+    sensor: Sensor | None = None,
+) -> npt.NDArray[np.float32] | dict[str, npt.NDArray[np.float32]] | RawFrame:
     """Renders ``scene`` and returns linear RGB, float32, shape (height, width, 3).
 
     ``scene`` is a :class:`Scene`, a built-in scene name (``"cornell-spheres"``)
@@ -172,8 +200,33 @@ def render(
     True for a tqdm bar, or a callable ``(samples_done, samples_total)``. The
     GIL is released while rendering; Ctrl-C stops the render and raises
     KeyboardInterrupt.
+
+    ``sensor=lenspath.Sensor(...)`` records the light through an image sensor
+    (its settings over the scene file's ``[sensor]``) and returns the
+    :class:`RawFrame` it reads out (``.mosaic``, ``.develop()``, ``.write()``),
+    the frame ``lenspath render --raw`` writes. Without ``sensor`` a scene
+    file's ``[sensor]`` still applies and the result is the developed image,
+    as ``lenspath render --out`` writes it.
     """
     callback = _tqdm_progress() if progress is True else (progress or None)
+    if sensor is not None and aovs is not None:
+        raise ValueError("a sensor render gives a raw frame, without AOVs: render the depth without the sensor")
+    if sensor is not None:
+        return _core.render(
+            _as_scene(scene),
+            camera,
+            spp=spp,
+            resolution=resolution,
+            seed=seed,
+            max_depth=max_depth,
+            light_samples=light_samples,
+            threads=threads,
+            crop=crop,
+            progress=callback,
+            sampler=sampler,
+            wavelength_nm=wavelength_nm,
+            sensor=sensor,
+        )
     if aovs is None:
         return _core.render(
             _as_scene(scene),

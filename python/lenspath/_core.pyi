@@ -24,6 +24,10 @@ __all__ = [
     "Glass",
     "Lens",
     "Camera",
+    "Sensor",
+    "RawFrame",
+    "sensor_models",
+    "_sensor_from_settings",
     "load",
     "builtin_scenes",
     "builtin_lenses",
@@ -375,7 +379,26 @@ def render(
     progress: Callable[[int, int], Any] | None = None,
     sampler: Literal["sobol", "independent"] | None = None,
     wavelength_nm: float | None = None,
+    sensor: None = None,
 ) -> npt.NDArray[np.float32]: ...
+@overload
+def render(
+    scene: Scene,
+    camera: Camera | None = None,
+    *,
+    spp: int | None = None,
+    resolution: tuple[int, int] | None = None,
+    seed: int | None = None,
+    max_depth: int | None = None,
+    light_samples: int | None = None,
+    threads: int | None = None,
+    aovs: None = None,
+    crop: tuple[int, int, int, int] | None = None,
+    progress: Callable[[int, int], Any] | None = None,
+    sampler: Literal["sobol", "independent"] | None = None,
+    wavelength_nm: float | None = None,
+    sensor: Sensor,
+) -> RawFrame: ...
 @overload
 def render(
     scene: Scene,
@@ -392,7 +415,87 @@ def render(
     progress: Callable[[int, int], Any] | None = None,
     sampler: Literal["sobol", "independent"] | None = None,
     wavelength_nm: float | None = None,
+    sensor: None = None,
 ) -> dict[str, npt.NDArray[np.float32]]: ...
+
+@final
+class Sensor:
+    """An image sensor for ``render(..., sensor=...)``: photons to a raw frame (shot noise,
+    read noise, dark current, fixed patterns, full well, gain, bit depth, colour filter array)
+    and its development. Every argument left out is the scene file's ``[sensor]``, else the
+    library's default (ISETCam's Sony IMX363 behind the measured Sony α7 III colour filters);
+    the names and spellings are the scene file's (docs/sensor.md)."""
+
+    def __new__(
+        cls,
+        model: str | None = None,
+        *,
+        cfa: Literal["rggb", "bggr", "grbg", "gbrg", "mono"] | None = None,
+        exposure_time_s: float | None = None,
+        iso: float | None = None,
+        white_luminance_cd_m2: float | None = None,
+        peak_qe: float | None = None,
+        read_noise_e: float | None = None,
+        full_well_e_per_um2: float | None = None,
+        dark_current_e_per_s_um2: float | None = None,
+        dsnu_e: float | None = None,
+        prnu: float | None = None,
+        bit_depth: int | None = None,
+        black_level_dn: int | None = None,
+        frame_seed: int | None = None,
+        fixed_pattern_seed: int | None = None,
+        white_balance: str | None = None,
+        demosaic: Literal["mhc", "bilinear"] | None = None,
+        tone_curve: Literal["linear", "filmic"] | None = None,
+    ) -> Sensor: ...
+    def settings(self) -> dict[str, Any]:
+        """Every setting with the defaults filled in (a scene file's ``[sensor]`` aside)."""
+    def __reduce__(self) -> tuple[Any, tuple[dict[str, Any]]]: ...
+
+def _sensor_from_settings(settings: dict[str, Any]) -> Sensor: ...
+def sensor_models() -> list[str]:
+    """The spectral responses a Sensor may name: ``ideal`` (CIE x̄ȳz̄) and 17 measured cameras."""
+
+@final
+class RawFrame:
+    """A raw frame a sensor read out: the mosaic of digital numbers and what a raw developer
+    needs to read it."""
+
+    @property
+    def mosaic(self) -> npt.NDArray[np.uint16]:
+        """The digital numbers, shape (height, width)."""
+    @property
+    def cfa(self) -> str:
+        """The colour filter array at the top-left pixel: rggb, bggr, grbg, gbrg or mono."""
+    @property
+    def black_level_dn(self) -> int:
+        """Digital number of no light."""
+    @property
+    def white_level_dn(self) -> int:
+        """Largest digital number."""
+    @property
+    def electrons_per_dn(self) -> float:
+        """Electrons per digital number."""
+    @property
+    def xyz_to_camera(self) -> npt.NDArray[np.float64]:
+        """CIE XYZ to the sensor's channels under D65 (DNG ColorMatrix1), 3 × 3."""
+    @property
+    def as_shot_neutral(self) -> tuple[float, float, float]:
+        """The channels' reading of the balanced-for white, largest 1 (DNG AsShotNeutral)."""
+    @property
+    def sensor_name(self) -> str:
+        """The spectral response's name."""
+    def develop(
+        self,
+        *,
+        demosaic: Literal["mhc", "bilinear"] | None = None,
+        tone_curve: Literal["linear", "filmic"] | None = None,
+    ) -> npt.NDArray[np.float32]:
+        """Linear sRGB (H, W, 3): white balance, demosaic, colour matrix, tone curve; what is
+        left out is the render's development (what ``lenspath render --out`` writes)."""
+    def write(self, path: str | PathLike[str]) -> None:
+        """Writes .dng (raw developers read it) or .png / .tif (the 16-bit mosaic), atomically."""
+
 def defaults() -> dict[str, Any]:
     """The library's defaults: what a setting left out of ``render`` or ``autofocus`` becomes
     when the scene file does not give it (resolution, spp, max_depth, light_samples, seed,

@@ -165,3 +165,49 @@ def test_the_defaults_are_the_librarys() -> None:
     assert (d["spp"], d["max_depth"], d["light_samples"], d["seed"]) == (64, 16, 1, 0)
     assert d["resolution"] == (640, 480) and d["sampler"] == "sobol" and d["lens"] == "dgauss50"
     assert (d["autofocus_spp"], d["autofocus_max_depth"], d["autofocus_patience"]) == (16, 8, 12)
+
+
+#: A sensor set in every front end's spelling: the scene file's `[sensor]` keys
+#: (also Python's `Sensor` arguments and the viewer's), and the CLI's flags.
+SENSOR = {"model": "nikon_d850", "cfa": "gbrg", "iso": 800.0, "exposure_time_s": 0.02, "white_balance": "3200K"}
+SENSOR_FLAGS = ["--sensor-model", "nikon_d850", "--cfa", "gbrg", "--iso", "800", "--exposure-time", "0.02"]
+SENSOR_FLAGS += ["--white-balance", "3200K", "--sensor", "4.8x3.6"]
+
+
+def test_every_front_end_gives_the_same_sensor_frame(cli: Path, chromium: Any, tmp_path: Path) -> None:
+    from PIL import Image
+
+    scene = "cornell-spheres"
+    flags = ["--res", f"{RESOLUTION[0]}x{RESOLUTION[1]}", "--spp", str(SPP), *SENSOR_FLAGS]
+    developed = cli_render(cli, scene, [*flags, "--raw", str(tmp_path / "cli.png")], tmp_path / "cli.exr")
+    mosaic = np.asarray(Image.open(tmp_path / "cli.png"), dtype=np.uint16)
+    assert mosaic.shape == (RESOLUTION[1], RESOLUTION[0]) and mosaic.max() > 64
+
+    camera = Camera.realistic(sensor_width_mm=4.8)
+    frame = lenspath.render(
+        python_scene(scene), camera, spp=SPP, resolution=RESOLUTION, sensor=lenspath.Sensor(**SENSOR)
+    )
+    assert np.array_equal(frame.mosaic, mosaic), "lenspath.render's raw frame differs from lenspath render --raw"
+    assert np.array_equal(frame.develop(), developed), "RawFrame.develop() differs from lenspath render --out"
+
+    # The same sensor from a scene file's [sensor] table.
+    table = "\n".join(f"{k} = {v!r}".replace("'", '"') for k, v in SENSOR.items())
+    scene_file = tmp_path / "with_sensor.toml"
+    scene_file.write_text(
+        f'builtin = "cornell-spheres"\n[camera]\neye = [0, 1, 3.8]\nlook_at = [0, 1, 0]\nsensor_mm = [4.8, 3.6]\n'
+        f"[sensor]\n{table}\n"
+    )
+    shape = ["--res", f"{RESOLUTION[0]}x{RESOLUTION[1]}", "--spp", str(SPP)]
+    from_file = cli_render(cli, str(scene_file), [*shape, "--raw", str(tmp_path / "file.png")], tmp_path / "f.exr")
+    file_mosaic = np.asarray(Image.open(tmp_path / "file.png"), dtype=np.uint16)
+    python_developed = lenspath.render(str(scene_file), spp=SPP, resolution=RESOLUTION)
+    python_frame = lenspath.render(str(scene_file), spp=SPP, resolution=RESOLUTION, sensor=lenspath.Sensor())
+    assert np.array_equal(python_frame.mosaic, file_mosaic), "Python's frame differs from the CLI's, from a file"
+    assert np.array_equal(python_developed, from_file), "a file's [sensor] develops alike in Python and the CLI"
+
+    # The viewer: the page's sensor settings show the developed frame, and the saved file has them.
+    saved, shown = viewer_saved_file(cli, chromium, str(scene_file), {}, tmp_path)
+    assert "[sensor]" in saved.read_text() and 'white_balance = "3200K"' in saved.read_text()
+    again = cli_render(cli, str(saved), [], tmp_path / "saved.exr")
+    assert np.array_equal(shown, from_file), "the viewer shows another developed frame than lenspath render"
+    assert np.array_equal(again, from_file), "the viewer's saved scene develops another frame"

@@ -79,3 +79,58 @@ def test_libraw_reads_the_dng_as_written(cli, tmp_path, cfa) -> None:
         camera_from_srgb = xyz_to_camera @ srgb_to_xyz
         camera_from_srgb /= camera_from_srgb.sum(axis=1, keepdims=True)
         np.testing.assert_allclose(np.array(raw.color_matrix)[:, :3], np.linalg.inv(camera_from_srgb), atol=1e-4)
+
+
+# ---- The Python API: lenspath.sensor ----
+
+import pickle  # noqa: E402
+
+import lenspath  # noqa: E402
+from lenspath.sensor import RawFrame, Sensor, models  # noqa: E402
+
+
+def test_a_sensor_fills_in_the_librarys_defaults_and_pickles() -> None:
+    sensor = Sensor("ideal", iso=400, cfa="bggr")
+    settings = sensor.settings()
+    assert settings["model"] == "ideal" and settings["iso"] == 400.0 and settings["cfa"] == "bggr"
+    defaults = Sensor().settings()
+    assert (defaults["model"], defaults["bit_depth"], defaults["black_level_dn"]) == ("sony_ilce_7m3", 10, 64)
+    assert (defaults["white_balance"], defaults["demosaic"], defaults["tone_curve"]) == ("daylight", "mhc", "linear")
+    assert repr(sensor) == "Sensor(cfa='bggr', iso=400.0, model='ideal')"
+    assert pickle.loads(pickle.dumps(sensor)).settings() == settings
+    assert "ideal" in models() and "nikon_d850" in models() and len(models()) == 18
+
+
+@pytest.mark.parametrize(
+    ("arguments", "message"),
+    [
+        ({"cfa": "rgbw"}, "unknown colour filter array 'rgbw'"),
+        ({"model": "leica_m3"}, "unknown sensor 'leica_m3'"),
+        ({"iso": -100}, "ISO must be positive"),
+        ({"bit_depth": 20}, "bit depth must be 1 to 16"),
+        ({"white_balance": "tungsten"}, "unknown white balance 'tungsten'"),
+        ({"demosaic": "ahd"}, "unknown demosaicking method 'ahd'"),
+    ],
+)
+def test_a_bad_sensor_setting_is_a_clear_error(arguments, message) -> None:
+    with pytest.raises(ValueError, match=message):
+        Sensor(**arguments)
+
+
+def test_a_sensor_render_gives_a_raw_frame_raw_developers_read(tmp_path) -> None:
+    camera = lenspath.Camera.realistic(sensor_width_mm=2.4)
+    frame = lenspath.render("cornell-spheres", camera, spp=2, resolution=(48, 32), sensor=Sensor(iso=400))
+    assert isinstance(frame, RawFrame)
+    assert frame.mosaic.dtype == np.uint16 and frame.mosaic.shape == (32, 48)
+    assert (frame.cfa, frame.black_level_dn, frame.white_level_dn) == ("rggb", 64, 1023)
+    assert frame.xyz_to_camera.shape == (3, 3) and max(frame.as_shot_neutral) == 1.0
+    developed = frame.develop()
+    assert developed.shape == (32, 48, 3) and developed.dtype == np.float32
+    assert not np.array_equal(developed, frame.develop(demosaic="bilinear"))
+    frame.write(tmp_path / "frame.dng")
+    with rawpy.imread(str(tmp_path / "frame.dng")) as raw:
+        np.testing.assert_array_equal(raw.raw_image, frame.mosaic)
+    with pytest.raises(ValueError, match="through a lens"):
+        lenspath.render("cornell-spheres", lenspath.Camera.pinhole(), spp=1, resolution=(8, 8), sensor=Sensor())
+    with pytest.raises(ValueError, match="without AOVs"):
+        lenspath.render("cornell-spheres", spp=1, resolution=(8, 8), sensor=Sensor(), aovs=["depth"])  # type: ignore[call-overload]

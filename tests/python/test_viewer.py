@@ -167,6 +167,36 @@ def test_f_stop_changes_the_image_and_back_gives_the_same_pixels(chromium, viewe
     assert page.errors == []
 
 
+def test_the_sensor_panel_records_through_a_sensor_and_back(chromium, viewer: Viewer) -> None:
+    page = open_page(chromium, viewer, max_spp=2)
+    wait_for_spp(page, 2)
+    radiance = canvas_pixels(page)
+    assert page.locator("#sensor-iso").is_disabled()
+
+    g = generation(page)
+    page.locator("#sensor-on").check()
+    wait_for_spp(page, 2, after_generation=g)
+    sensor = viewer.state()["settings"]["sensor"]
+    assert sensor["model"] == "sony_ilce_7m3" and sensor["iso"] == 55.0
+    developed = canvas_pixels(page)
+    assert developed != radiance, "the developed frame is another image"
+
+    # Four stops more gain: brighter, with the noise of a short exposure.
+    g = generation(page)
+    set_number(page, "#sensor-iso", 880)
+    wait_for_spp(page, 2, after_generation=g)
+    assert viewer.state()["settings"]["sensor"]["iso"] == 880.0
+    brighter = canvas_pixels(page)
+    assert sum(brighter) > 1.5 * sum(developed)
+
+    g = generation(page)
+    page.locator("#sensor-on").uncheck()
+    wait_for_spp(page, 2, after_generation=g)
+    assert viewer.state()["settings"]["sensor"] is None
+    assert canvas_pixels(page) == radiance, "without the sensor the image is the radiance again"
+    assert page.errors == []
+
+
 def test_click_autofocuses_where_the_cli_does(chromium, viewer: Viewer, cli: Path, tmp_path: Path) -> None:
     page = open_page(chromium, viewer, max_spp=2)
     box = page.locator("#frame").bounding_box()
@@ -337,6 +367,9 @@ def test_a_dropped_lens_table_is_offered_drawn_and_saved(chromium, viewer: Viewe
         ("api/settings", {"focus": {"by": "distance", "distance_m": 0}}, "focus must be a positive"),
         ("api/settings", {"lens": "/etc/passwd"}, "outside the scene's folder"),
         ("api/settings", {"eye": [0, 1, 0], "target": [0, 1, 0]}, "eye away from the target"),
+        ("api/settings", {"sensor": {"iso": -5}}, "sensor: the sensor's ISO must be positive"),
+        ("api/settings", {"sensor": {"cfa": "rgbw"}}, "sensor: unknown colour filter array 'rgbw'"),
+        ("api/settings", {"sensor": {"gain": 2}}, "bad setting"),
         ("api/settings", b"{not json", "not JSON"),
         ("api/autofocus", {"patch": [0.9, 0.9, 0.5, 0.5]}, "inside"),
         ("api/autofocus", {"patch": [0.4, 0.4, 0.1, 0.1], "metric": "sharpness"}, "unknown focus measure"),

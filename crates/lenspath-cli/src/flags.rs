@@ -14,8 +14,8 @@ use lenspath::lens::LensPrescription;
 use lenspath::options::SceneOptions;
 use lenspath::sampling::SamplerKind;
 use lenspath::scene::Scene;
-use lenspath::sensor::Cfa;
-use lenspath::setup::{RealisticDescription, SensorDescription};
+use lenspath::sensor::{Cfa, Demosaic, SensorDescription, ToneCurve, WhiteBalance};
+use lenspath::setup::RealisticDescription;
 use lenspath::{Error, Result};
 
 /// Camera models.
@@ -211,9 +211,44 @@ pub struct SensorFlags {
     /// Sensor: read noise, electrons RMS.
     #[arg(long, value_name = "E")]
     pub read_noise: Option<f64>,
+    /// Sensor: full-well capacity per µm² of pixel, electrons (a pixel's is this times its area,
+    /// the sensor's size over the image's squared).
+    #[arg(long, value_name = "E")]
+    pub full_well_per_um2: Option<f64>,
+    /// Sensor: dark current per µm² of pixel, electrons per second.
+    #[arg(long, value_name = "E_PER_S")]
+    pub dark_current_per_um2: Option<f64>,
+    /// Sensor: dark signal non-uniformity, electrons RMS (a fixed offset per pixel).
+    #[arg(long, value_name = "E")]
+    pub dsnu: Option<f64>,
+    /// Sensor: photo-response non-uniformity, RMS of the pixels' relative gains (0.01 is 1%).
+    #[arg(long, value_name = "FRACTION")]
+    pub prnu: Option<f64>,
+    /// Sensor: bits per digital number, 1 to 16.
+    #[arg(long, value_name = "BITS")]
+    pub bit_depth: Option<u32>,
+    /// Sensor: digital number of no light.
+    #[arg(long, value_name = "DN")]
+    pub black_level: Option<u32>,
+    /// Sensor: quantum efficiency at the most sensitive channel's peak, 0 to 1.
+    #[arg(long, value_name = "QE")]
+    pub peak_qe: Option<f64>,
     /// Sensor: seed of the temporal noise; another seed is another frame of the same sensor.
     #[arg(long)]
     pub frame_seed: Option<u64>,
+    /// Sensor: seed of the fixed patterns (PRNU, DSNU); another seed is another sensor of the model.
+    #[arg(long)]
+    pub fixed_pattern_seed: Option<u64>,
+    /// Sensor: the light the camera is balanced for: daylight (D65), grey-world, or a black body
+    /// such as 2856K (tungsten).
+    #[arg(long, value_name = "WB")]
+    pub white_balance: Option<String>,
+    /// Sensor: how the developed image is demosaicked: mhc (Malvar-He-Cutler) or bilinear.
+    #[arg(long, value_name = "METHOD")]
+    pub demosaic: Option<String>,
+    /// Sensor: the developed image's tone curve: linear or filmic.
+    #[arg(long, value_name = "CURVE")]
+    pub tone_curve: Option<String>,
     /// Sensor: write the raw frame here: .dng (readable by raw developers), or .png / .tif (the
     /// 16-bit mosaic of digital numbers).
     #[arg(long, value_name = "FILE")]
@@ -230,8 +265,18 @@ impl SensorFlags {
             iso: self.iso,
             white_luminance_cd_m2: self.white_luminance,
             read_noise_e: self.read_noise,
+            full_well_e_per_um2: self.full_well_per_um2,
+            dark_current_e_per_s_um2: self.dark_current_per_um2,
+            dsnu_e: self.dsnu,
+            prnu: self.prnu,
+            bit_depth: self.bit_depth,
+            black_level_dn: self.black_level,
+            peak_qe: self.peak_qe,
             frame_seed: self.frame_seed,
-            ..SensorDescription::default()
+            fixed_pattern_seed: self.fixed_pattern_seed,
+            white_balance: self.white_balance.as_deref().map(WhiteBalance::parse).transpose()?,
+            demosaic: self.demosaic.as_deref().map(Demosaic::parse).transpose()?,
+            tone_curve: self.tone_curve.as_deref().map(ToneCurve::parse).transpose()?,
         };
         let asked = described != SensorDescription::default() || self.raw.is_some();
         Ok(asked.then_some(described))

@@ -85,7 +85,7 @@ fn command() -> clap::Command {
         ("radiometry", "normalized".to_string()),
         (
             "sensor_model",
-            format!("{} when another sensor flag is given", d::SENSOR_RESPONSE),
+            scene_file_else(format!("{} when another sensor flag is given", d::SENSOR_RESPONSE)),
         ),
         ("cfa", d::SENSOR_CFA.name().to_string()),
         ("exposure_time", format!("1/{:.0} s", 1.0 / d::SENSOR_EXPOSURE_TIME_S)),
@@ -95,6 +95,16 @@ fn command() -> clap::Command {
         ),
         ("white_luminance", d::SENSOR_WHITE_LUMINANCE_CD_M2.to_string()),
         ("read_noise", d::SENSOR_READ_NOISE_E.to_string()),
+        ("full_well_per_um2", format!("{:.0}", d::SENSOR_FULL_WELL_E_PER_UM2)),
+        ("dark_current_per_um2", d::SENSOR_DARK_CURRENT_E_PER_S_UM2.to_string()),
+        ("dsnu", d::SENSOR_DSNU_E.to_string()),
+        ("prnu", d::SENSOR_PRNU.to_string()),
+        ("bit_depth", d::SENSOR_BIT_DEPTH.to_string()),
+        ("black_level", d::SENSOR_BLACK_LEVEL_DN.to_string()),
+        ("peak_qe", d::SENSOR_PEAK_QE.to_string()),
+        ("white_balance", d::SENSOR_WHITE_BALANCE.spelling()),
+        ("demosaic", d::SENSOR_DEMOSAIC.name().to_string()),
+        ("tone_curve", d::SENSOR_TONE_CURVE.name().to_string()),
     ];
     let with_defaults = |mut c: clap::Command| {
         for (id, value) in &defaults {

@@ -342,7 +342,8 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
             if let Some(raw) = &args.sensor.raw {
                 write_raw(raw, &frame)?;
             }
-            write_image(&args.out, &develop(&frame), args.exposure)?;
+            let development = setup.sensor.as_ref().map(|s| s.development).unwrap_or_default();
+            write_image(&args.out, &develop(&frame, &development), args.exposure)?;
             eprintln!("{}", exposure_line(&frame));
         }
         None => write_image(&args.out, &output.image, args.exposure)?,

@@ -8,7 +8,7 @@
 //! poll for Ctrl-C (see [`render::render`]).
 //!
 //! One module per concept, as the library: `error` (exceptions), `scene`,
-//! `emission` (light spectra), `glass`, `lens`, `camera`, `render`, `autofocus`, `image`; this file only
+//! `emission` (light spectra), `glass`, `lens`, `camera`, `sensor`, `render`, `autofocus`, `image`; this file only
 //! registers them.
 
 mod autofocus;
@@ -20,6 +20,7 @@ mod image;
 mod lens;
 mod render;
 mod scene;
+mod sensor;
 
 use pyo3::prelude::*;
 
@@ -37,6 +38,10 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<emission::Emission>()?;
     m.add_class::<lens::Lens>()?;
     m.add_class::<camera::Camera>()?;
+    m.add_class::<sensor::Sensor>()?;
+    m.add_class::<sensor::RawFrame>()?;
+    m.add_function(wrap_pyfunction!(sensor::sensor_models, m)?)?;
+    m.add_function(wrap_pyfunction!(sensor::_sensor_from_settings, m)?)?;
     m.add_function(wrap_pyfunction!(scene::load, m)?)?;
     m.add_function(wrap_pyfunction!(scene::builtin_scenes, m)?)?;
     m.add_function(wrap_pyfunction!(scene::defaults, m)?)?;

@@ -7,6 +7,7 @@ use lenspath::film::Image;
 use lenspath::film::PixelRect;
 use lenspath::render::render as render_scene;
 use lenspath::sampling::SamplerKind;
+use lenspath::sensor::develop::develop;
 use lenspath::setup::{resolve, RenderOverrides};
 use numpy::ndarray::{Array2, Array3};
 use numpy::{IntoPyArray, PyArray3};
@@ -16,6 +17,7 @@ use pyo3::types::PyDict;
 use crate::camera::Camera;
 use crate::error::{to_py, value_error};
 use crate::scene::Scene;
+use crate::sensor::{RawFrame, Sensor};
 
 /// `rgb` (`width` × `height` × 3, row-major) as a float32 (H, W, 3) array.
 pub(crate) fn rgb_array<'py>(py: Python<'py>, image: &Image) -> Bound<'py, PyArray3<f32>> {
@@ -29,7 +31,7 @@ pub(crate) fn rgb_array<'py>(py: Python<'py>, image: &Image) -> Bound<'py, PyArr
 #[pyfunction]
 #[pyo3(signature = (scene, camera = None, *, spp = None, resolution = None, seed = None, max_depth = None,
                     light_samples = None, threads = None, aovs = None, crop = None, progress = None,
-                    sampler = None, wavelength_nm = None))]
+                    sampler = None, wavelength_nm = None, sensor = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn render<'py>(
     py: Python<'py>,
@@ -46,6 +48,7 @@ pub(crate) fn render<'py>(
     progress: Option<Bound<'py, PyAny>>,
     sampler: Option<&str>,
     wavelength_nm: Option<f32>,
+    sensor: Option<&Sensor>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let sampler = sampler
         .map(|name| {
@@ -79,9 +82,13 @@ pub(crate) fn render<'py>(
         depth: Some(want_depth),
         wavelength_nm,
         camera: camera.map(|c| c.description.clone()).unwrap_or_default(),
-        // The sensor is not in the Python API yet (issue 32): linear sRGB.
-        sensor: None,
+        sensor: sensor.map(|s| s.description.clone()),
     };
+    if sensor.is_some() && want_depth {
+        return Err(value_error(
+            "a sensor render gives a raw frame, without AOVs: render the depth without the sensor",
+        ));
+    }
     let setup = resolve(&scene.options, &scene.view()?, &overrides).map_err(to_py)?;
     let camera = match camera {
         Some(c) => c.built_for(&setup)?,
@@ -139,6 +146,15 @@ pub(crate) fn render<'py>(
     let output = output.map_err(to_py)?;
     if let Some(callback) = &progress {
         callback.call1((output.stats.samples, output.stats.samples))?;
+    }
+    // Through a sensor: the raw frame when one was asked for, else (a scene
+    // file's `[sensor]`) the developed image, as `lenspath render --out`.
+    if let Some(frame) = setup.capture(camera.as_ref(), &output.image).map_err(to_py)? {
+        let development = setup.sensor.as_ref().map(|s| s.development).unwrap_or_default();
+        if sensor.is_some() {
+            return Ok(Bound::new(py, RawFrame::new(frame, development))?.into_any());
+        }
+        return Ok(rgb_array(py, &develop(&frame, &development)).into_any());
     }
     let rgb = rgb_array(py, &output.image);
     if !want_depth {

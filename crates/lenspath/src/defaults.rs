@@ -99,3 +99,11 @@ pub const SENSOR_BLACK_LEVEL_DN: u32 = 64;
 /// Luminance of a white emitter of value 1, cd/m² (ISETCam's scenes
 /// default to a mean luminance of 100 cd/m²).
 pub const SENSOR_WHITE_LUMINANCE_CD_M2: f64 = 100.0;
+/// The light the camera is balanced for: daylight, the scenes' own white
+/// (an RGB emitter's white is D65).
+pub const SENSOR_WHITE_BALANCE: crate::sensor::WhiteBalance = crate::sensor::WhiteBalance::Daylight;
+/// The development's demosaicking: Malvar–He–Cutler, the best linear one.
+pub const SENSOR_DEMOSAIC: crate::sensor::Demosaic = crate::sensor::Demosaic::MalvarHeCutler;
+/// The development's tone curve: none, so developed values stay
+/// proportional to the light (as a render's image is).
+pub const SENSOR_TONE_CURVE: crate::sensor::ToneCurve = crate::sensor::ToneCurve::Linear;

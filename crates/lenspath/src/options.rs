@@ -5,6 +5,7 @@
 
 use crate::camera::ApertureShape;
 use crate::sampling::SamplerKind;
+use crate::sensor::SensorDescription;
 
 /// Render settings a scene file may give; every field is optional.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -25,6 +26,8 @@ pub struct SceneOptions {
     pub scene_unit_m: Option<f64>,
     /// Lens settings for the realistic camera.
     pub lens: Option<LensOptions>,
+    /// The image sensor the scene is recorded through (`[sensor]`).
+    pub sensor: Option<SensorDescription>,
 }
 
 /// A file's lens settings for the realistic camera.

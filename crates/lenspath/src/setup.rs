@@ -27,7 +27,7 @@ use crate::options::SceneOptions;
 use crate::render::{FilmResponse, RenderSettings};
 use crate::sampling::SamplerKind;
 use crate::scene::SceneView;
-use crate::sensor::{capture, needs_a_lens, Cfa, RawFrame, SensorSettings, SpectralResponse};
+use crate::sensor::{capture, needs_a_lens, RawFrame, SensorDescription, SensorSettings};
 
 // ---------------------------------------------------------------------------
 // What a caller asks for
@@ -60,71 +60,10 @@ pub struct RenderOverrides {
     pub wavelength_nm: Option<f32>,
     /// The camera (default: the realistic camera with the scene's lens settings).
     pub camera: CameraDescription,
-    /// Record the light through an image sensor (`None`: linear sRGB radiance).
+    /// Record the light through an image sensor, these settings over the
+    /// scene file's `[sensor]` (`None` and no `[sensor]`: linear sRGB
+    /// radiance).
     pub sensor: Option<SensorDescription>,
-}
-
-/// An image sensor as a caller describes it: each field left `None` is the
-/// default's ([`crate::defaults`], ISETCam's Sony IMX363).
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct SensorDescription {
-    /// The spectral response by name ([`crate::sensor::response::names`]).
-    pub model: Option<String>,
-    /// Peak quantum efficiency.
-    pub peak_qe: Option<f64>,
-    /// The colour filter array.
-    pub cfa: Option<Cfa>,
-    /// Exposure time, s.
-    pub exposure_time_s: Option<f64>,
-    /// ISO speed.
-    pub iso: Option<f64>,
-    /// Luminance of a white emitter of value 1, cd/m².
-    pub white_luminance_cd_m2: Option<f64>,
-    /// Read noise, e⁻ RMS.
-    pub read_noise_e: Option<f64>,
-    /// Full-well capacity per µm², e⁻.
-    pub full_well_e_per_um2: Option<f64>,
-    /// Dark current per µm², e⁻/s.
-    pub dark_current_e_per_s_um2: Option<f64>,
-    /// Dark signal non-uniformity, e⁻ RMS.
-    pub dsnu_e: Option<f64>,
-    /// Photo-response non-uniformity, RMS gain.
-    pub prnu: Option<f64>,
-    /// Bits per digital number.
-    pub bit_depth: Option<u32>,
-    /// Black level, DN.
-    pub black_level_dn: Option<u32>,
-    /// Seed of the temporal noise (a new one is a new frame).
-    pub frame_seed: Option<u64>,
-    /// Seed of the fixed patterns (a new one is another sensor of the model).
-    pub fixed_pattern_seed: Option<u64>,
-}
-
-impl SensorDescription {
-    /// The sensor it describes, defaults filled in and checked.
-    pub fn resolve(&self) -> Result<SensorSettings> {
-        let response = SpectralResponse::named(self.model.as_deref().unwrap_or(defaults::SENSOR_RESPONSE))?;
-        let d = SensorSettings::new(response);
-        let sensor = SensorSettings {
-            peak_qe: self.peak_qe.unwrap_or(d.peak_qe),
-            cfa: self.cfa.unwrap_or(d.cfa),
-            exposure_time_s: self.exposure_time_s.unwrap_or(d.exposure_time_s),
-            iso: self.iso.unwrap_or(d.iso),
-            white_luminance_cd_m2: self.white_luminance_cd_m2.unwrap_or(d.white_luminance_cd_m2),
-            read_noise_e: self.read_noise_e.unwrap_or(d.read_noise_e),
-            full_well_e_per_um2: self.full_well_e_per_um2.unwrap_or(d.full_well_e_per_um2),
-            dark_current_e_per_s_um2: self.dark_current_e_per_s_um2.unwrap_or(d.dark_current_e_per_s_um2),
-            dsnu_e: self.dsnu_e.unwrap_or(d.dsnu_e),
-            prnu: self.prnu.unwrap_or(d.prnu),
-            bit_depth: self.bit_depth.unwrap_or(d.bit_depth),
-            black_level_dn: self.black_level_dn.unwrap_or(d.black_level_dn),
-            frame_seed: self.frame_seed.unwrap_or(d.frame_seed),
-            fixed_pattern_seed: self.fixed_pattern_seed.unwrap_or(d.fixed_pattern_seed),
-            ..d
-        };
-        sensor.validate()?;
-        Ok(sensor)
-    }
 }
 
 /// A camera as a caller describes it; what it leaves out comes from the
@@ -285,7 +224,12 @@ impl RenderSetup {
 pub fn resolve(options: &SceneOptions, view: &SceneView, overrides: &RenderOverrides) -> Result<RenderSetup> {
     let mut settings = resolve_settings(options, overrides)?;
     let camera = resolve_camera(options, view, &overrides.camera, settings.width, settings.height)?;
-    let sensor = overrides.sensor.as_ref().map(SensorDescription::resolve).transpose()?;
+    // The caller's sensor settings over the scene file's, field by field.
+    let described = match (&overrides.sensor, &options.sensor) {
+        (Some(asked), Some(file)) => Some(asked.over(file)),
+        (asked, file) => asked.clone().or_else(|| file.clone()),
+    };
+    let sensor = described.as_ref().map(SensorDescription::resolve).transpose()?;
     if let Some(sensor) = &sensor {
         if !matches!(camera, CameraSettings::Realistic(_)) {
             return Err(needs_a_lens());

@@ -380,6 +380,7 @@ fn settings_file_reads_back_exactly() {
     use glam::Vec3;
     use lenspath::camera::{CameraPose, LensFocus};
     use lenspath::io::scene_file::{SceneBase, SceneSettingsFile};
+    use lenspath::sensor::{Cfa, Demosaic, SensorDescription, ToneCurve, WhiteBalance};
     let dir = tempfile::tempdir().unwrap();
     let mut written = SceneSettingsFile {
         base: SceneBase::Builtin {
@@ -402,6 +403,19 @@ fn settings_file_reads_back_exactly() {
         light_samples: 3,
         seed: 4_000_000_000,
         sampler: SamplerKind::Independent,
+        sensor: Some(SensorDescription {
+            model: Some("nikon_d850".into()),
+            cfa: Some(Cfa::Gbrg),
+            exposure_time_s: Some(1.0 / 3.0),
+            iso: Some(400.0),
+            prnu: Some(0.1 + 0.2),
+            bit_depth: Some(14),
+            frame_seed: Some(1 << 62),
+            white_balance: Some(WhiteBalance::Kelvin(3200.5)),
+            demosaic: Some(Demosaic::Bilinear),
+            tone_curve: Some(ToneCurve::Filmic),
+            ..SensorDescription::default()
+        }),
     };
     let base_file = dir.path().join("base.toml");
     std::fs::write(
@@ -435,6 +449,7 @@ fn settings_file_reads_back_exactly() {
         assert_eq!(camera.aperture, written.aperture);
         assert_eq!(camera.lens.name(), "wide22");
         assert!(!camera.dispersion);
+        assert_eq!(o.sensor, written.sensor);
     }
     // A mask cannot be spelt; a file with both bases, or both focus keys, is an error.
     written.aperture = ApertureShape::mask(2, 2, vec![1.0; 4]).unwrap();

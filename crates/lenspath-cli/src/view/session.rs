@@ -12,12 +12,13 @@ use axum::body::Bytes;
 use glam::Vec3;
 use lenspath::camera::{ApertureShape, CameraPose, LensFocus, RealisticCamera, RealisticCameraSettings};
 use lenspath::film::Image;
-use lenspath::io::scene_file::{SceneBase, SceneSettingsFile};
+use lenspath::io::scene_file::{SceneBase, SceneSettingsFile, SensorTable};
 use lenspath::lens::{AnalysisSettings, LensAnalysis, LensPrescription, TableConvention};
 use lenspath::options::SceneOptions;
-use lenspath::render::{NormalizedRect, RenderSettings};
+use lenspath::render::{FilmResponse, NormalizedRect, RenderSettings};
 use lenspath::sampling::SamplerKind;
 use lenspath::scene::{CompiledScene, SceneView};
+use lenspath::sensor::{capture, develop::develop, SensorSettings};
 use lenspath::setup::{
     realistic_settings, resolve, resolve_settings, CameraSettings, RealisticDescription, RenderOverrides,
 };
@@ -73,6 +74,10 @@ pub struct ViewSettings {
     pub seed: u32,
     /// `sobol` or `independent`.
     pub sampler: String,
+    /// Record through an image sensor (`None`: linear radiance): a scene
+    /// file's `[sensor]` table, the same names and spellings.
+    #[serde(default)]
+    pub sensor: Option<SensorTable>,
 }
 
 /// The autofocus request of a click or a dragged rectangle.
@@ -128,6 +133,27 @@ pub struct View {
     pub longitudinal_color_mm: f64,
     /// The lens layout with the sensor where it is, as SVG.
     pub layout_svg: String,
+    /// The image sensor, resolved (`None`: the image is the film's radiance).
+    pub sensor: Option<SensorSettings>,
+}
+
+impl View {
+    /// What the page shows of a render's `film`: the film itself, or
+    /// through a sensor the raw frame it reads out, developed (its samples
+    /// per pixel the film's). `camera` is the camera it was rendered with.
+    pub fn shown(&self, camera: &RealisticCamera, film: Image) -> Result<Image> {
+        let Some(sensor) = &self.sensor else {
+            return Ok(film);
+        };
+        let optics = lenspath::camera::Camera::film_radiometry(camera)
+            .ok_or_else(|| Error::InvalidArgument("the realistic camera reports its radiometry".into()))?;
+        let frame = capture(&film, (0, 0), &optics, sensor)?;
+        Ok(Image {
+            spp_min: film.spp_min,
+            spp_requested: film.spp_requested,
+            ..develop(&frame, &sensor.development)
+        })
+    }
 }
 
 /// A finished refinement step: the image every pixel of which has `spp` samples.
@@ -382,6 +408,7 @@ impl Session {
             light_samples: s.light_samples,
             seed: s.seed,
             sampler: view.render.sampler,
+            sensor: s.sensor.as_ref().map(SensorTable::description).transpose()?,
         }
         .to_toml()?;
         Ok(if view.lens_dropped {
@@ -415,6 +442,11 @@ impl Session {
             "longitudinal_color_mm": v.longitudinal_color_mm,
             "lens_disperses": v.lens_settings.lens.is_dispersive(),
             "sensor_mm": [v.lens_settings.sensor_mm.0, v.lens_settings.sensor_mm.1],
+            "sensor_models": lenspath::sensor::response::names().collect::<Vec<_>>(),
+            "sensor_defaults": lenspath::sensor::SensorDescription::default()
+                .resolve()
+                .map(|d| SensorTable::of(&d.description()))
+                .ok(),
         })
     }
 }
@@ -553,7 +585,13 @@ impl Config {
         } else {
             CameraPose::look_at(eye, target, up)
         };
-        let render = resolve_settings(
+        let sensor = settings
+            .sensor
+            .as_ref()
+            .map(|table| table.description().and_then(|d| d.resolve()))
+            .transpose()
+            .map_err(|e| Error::InvalidArgument(format!("sensor: {e}")))?;
+        let mut render = resolve_settings(
             &self.options,
             &RenderOverrides {
                 resolution: Some(self.resolution),
@@ -568,6 +606,9 @@ impl Config {
                 ..RenderOverrides::default()
             },
         )?;
+        if let Some(sensor) = &sensor {
+            render.film = FilmResponse::Sensor(sensor.response);
+        }
         // The same optics (a move, or render settings): the camera moves, nothing is built again.
         if let Some(p) = previous.filter(|p| {
             let (a, b) = (&p.settings, &settings);
@@ -580,6 +621,7 @@ impl Config {
                 settings,
                 render,
                 pose,
+                sensor,
                 ..p.clone()
             });
         }
@@ -627,6 +669,7 @@ impl Config {
             render,
             pose,
             sensor_depth_mm,
+            sensor,
         })
     }
 
@@ -676,6 +719,7 @@ fn initial_settings(options: &SceneOptions, view: &SceneView, resolution: (u32, 
         light_samples: s.integrator.light_samples(),
         seed: s.seed,
         sampler: s.sampler.name().into(),
+        sensor: options.sensor.as_ref().map(SensorTable::of),
     })
 }
 

@@ -152,10 +152,11 @@ fn step(session: &Session, progress: &mut Progress, view: &Arc<View>, changed_at
     if output.stats.cancelled {
         return Ok(());
     }
-    let jpeg = Bytes::from(encode_jpeg(&output.image, 0.0)?);
+    let image = view.shown(&view.camera, output.image)?;
+    let jpeg = Bytes::from(encode_jpeg(&image, 0.0)?);
     let frame = Arc::new(Frame {
         generation: progress.generation,
-        image: output.image,
+        image,
         jpeg,
         view: view.clone(),
     });
@@ -199,7 +200,7 @@ fn preview(session: &Session, generation: u64, view: &View, changed_at: Instant)
     if output.stats.cancelled || session.lock().generation != generation {
         return Ok(false);
     }
-    let jpeg = encode_jpeg(&output.image, 0.0)?;
+    let jpeg = encode_jpeg(&view.shown(&camera, output.image)?, 0.0)?;
     session.send(json!({
         "type": "frame",
         "preview": true,

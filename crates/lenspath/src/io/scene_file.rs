@@ -2,7 +2,8 @@
 //! integrator settings, named materials, lights, and shapes that are spheres,
 //! quads or mesh files in any format lenspath reads, each with a transform. A
 //! `base` scene file (say a CS184 Cornell box) or a `builtin` scene can be
-//! extended. The schema, with examples, is docs/scene-format.md; unknown keys
+//! extended, and a `[sensor]` records it through an image sensor. The
+//! schema, with examples, is docs/scene-format.md; unknown keys
 //! are errors, so a typo never passes silently. [`SceneSettingsFile`] writes
 //! the camera and render settings over a base scene (what `lenspath view`
 //! saves).
@@ -26,6 +27,7 @@ use crate::materials::Material;
 use crate::math::Rgb;
 use crate::sampling::SamplerKind;
 use crate::scene::{Scene, SceneView};
+use crate::sensor::{Cfa, Demosaic, SensorDescription, ToneCurve, WhiteBalance};
 use crate::shapes::{Sphere, TriangleMesh};
 use crate::spectrum::Emission;
 
@@ -95,6 +97,8 @@ struct SceneFile {
     camera: Option<CameraSpec>,
     film: Option<FilmSpec>,
     integrator: Option<IntegratorSpec>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    sensor: Option<SensorTable>,
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     materials: BTreeMap<String, MaterialSpec>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -135,6 +139,101 @@ fn y_up() -> [f32; 3] {
 struct FilmSpec {
     width: u32,
     height: u32,
+}
+
+/// A scene file's `[sensor]` table (and `lenspath view`'s sensor settings):
+/// [`SensorDescription`]'s fields with the same names and units, its
+/// choices spelt as the CLI spells them; an absent field is the default.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)] // The fields are SensorDescription's, documented there.
+pub struct SensorTable {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub model: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cfa: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub exposure_time_s: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub iso: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub white_luminance_cd_m2: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub peak_qe: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub read_noise_e: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub full_well_e_per_um2: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dark_current_e_per_s_um2: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dsnu_e: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub prnu: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bit_depth: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub black_level_dn: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub frame_seed: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fixed_pattern_seed: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub white_balance: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub demosaic: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub tone_curve: Option<String>,
+}
+
+impl SensorTable {
+    /// The sensor the table describes (its choices read, not yet resolved).
+    pub fn description(&self) -> Result<SensorDescription> {
+        Ok(SensorDescription {
+            model: self.model.clone(),
+            peak_qe: self.peak_qe,
+            cfa: self.cfa.as_deref().map(Cfa::parse).transpose()?,
+            exposure_time_s: self.exposure_time_s,
+            iso: self.iso,
+            white_luminance_cd_m2: self.white_luminance_cd_m2,
+            read_noise_e: self.read_noise_e,
+            full_well_e_per_um2: self.full_well_e_per_um2,
+            dark_current_e_per_s_um2: self.dark_current_e_per_s_um2,
+            dsnu_e: self.dsnu_e,
+            prnu: self.prnu,
+            bit_depth: self.bit_depth,
+            black_level_dn: self.black_level_dn,
+            frame_seed: self.frame_seed,
+            fixed_pattern_seed: self.fixed_pattern_seed,
+            white_balance: self.white_balance.as_deref().map(WhiteBalance::parse).transpose()?,
+            demosaic: self.demosaic.as_deref().map(Demosaic::parse).transpose()?,
+            tone_curve: self.tone_curve.as_deref().map(ToneCurve::parse).transpose()?,
+        })
+    }
+
+    /// The table that reads back as `d`.
+    pub fn of(d: &SensorDescription) -> SensorTable {
+        SensorTable {
+            model: d.model.clone(),
+            cfa: d.cfa.map(|c| c.name().into()),
+            exposure_time_s: d.exposure_time_s,
+            iso: d.iso,
+            white_luminance_cd_m2: d.white_luminance_cd_m2,
+            peak_qe: d.peak_qe,
+            read_noise_e: d.read_noise_e,
+            full_well_e_per_um2: d.full_well_e_per_um2,
+            dark_current_e_per_s_um2: d.dark_current_e_per_s_um2,
+            dsnu_e: d.dsnu_e,
+            prnu: d.prnu,
+            bit_depth: d.bit_depth,
+            black_level_dn: d.black_level_dn,
+            frame_seed: d.frame_seed,
+            fixed_pattern_seed: d.fixed_pattern_seed,
+            white_balance: d.white_balance.map(|w| w.spelling()),
+            demosaic: d.demosaic.map(|m| m.name().into()),
+            tone_curve: d.tone_curve.map(|t| t.name().into()),
+        }
+    }
 }
 
 #[derive(Debug, Deserialize, Serialize)]
@@ -534,6 +633,16 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
             });
         }
     }
+    if let Some(spec) = &file.sensor {
+        // Over the base file's sensor, and checked now so the error names this file.
+        let described = spec.description().map_err(|e| fail(format!("[sensor]: {e}")))?;
+        let described = match &options.sensor {
+            Some(base) => described.over(base),
+            None => described,
+        };
+        described.resolve().map_err(|e| fail(format!("[sensor]: {e}")))?;
+        options.sensor = Some(described);
+    }
     scene.validate().map_err(|e| fail(e.to_string()))?;
     Ok(LoadedScene::completed(
         scene,
@@ -598,6 +707,8 @@ pub struct SceneSettingsFile {
     pub seed: u32,
     /// The sample sequence.
     pub sampler: SamplerKind,
+    /// The image sensor (`None`: none).
+    pub sensor: Option<SensorDescription>,
 }
 
 impl SceneSettingsFile {
@@ -648,6 +759,7 @@ impl SceneSettingsFile {
                 seed: Some(self.seed),
                 sampler: Some(self.sampler.name().into()),
             }),
+            sensor: self.sensor.as_ref().map(SensorTable::of),
             materials: BTreeMap::new(),
             lights: Vec::new(),
             shapes: Vec::new(),

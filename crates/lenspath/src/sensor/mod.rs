@@ -27,22 +27,19 @@
 //! Every default is a real sensor's: ISETCam's model of the Sony IMX363
 //! (`sensorCreate('IMX363')`, MIT licence), see [`crate::defaults`].
 
+mod capture;
 pub mod develop;
 pub mod raw_file;
 pub mod response;
+mod white_balance;
 
-use glam::{DMat3, DVec3};
-use rand::{Rng, SeedableRng};
-use rand_distr::{Distribution, Poisson, StandardNormal};
-use rand_pcg::Pcg64Mcg;
-use rayon::prelude::*;
-
+pub use capture::{capture, RawFrame};
+pub use develop::{Demosaic, Development, ToneCurve};
 pub use response::SpectralResponse;
+pub use white_balance::WhiteBalance;
 
 use crate::camera::FilmRadiometry;
 use crate::defaults;
-use crate::film::Image;
-use crate::sampling::mix64;
 use crate::spectrum::cie;
 use crate::{Error, Result};
 
@@ -152,6 +149,10 @@ pub struct SensorSettings {
     pub fixed_pattern_seed: u64,
     /// Seed of the temporal noise: a new one is a new frame.
     pub frame_seed: u64,
+    /// The light the camera is balanced for (the raw file's as-shot neutral).
+    pub white_balance: WhiteBalance,
+    /// How the raw frame is developed into an image.
+    pub development: Development,
 }
 
 impl SensorSettings {
@@ -175,6 +176,8 @@ impl SensorSettings {
             white_luminance_cd_m2: defaults::SENSOR_WHITE_LUMINANCE_CD_M2,
             fixed_pattern_seed: 0,
             frame_seed: 0,
+            white_balance: defaults::SENSOR_WHITE_BALANCE,
+            development: Development::default(),
         }
     }
 
@@ -213,6 +216,7 @@ impl SensorSettings {
                 )));
             }
         }
+        self.white_balance.validate()?;
         if !(1..=16).contains(&self.bit_depth) {
             return Err(Error::InvalidArgument(format!(
                 "the sensor's bit depth must be 1 to 16, not {}",
@@ -228,6 +232,30 @@ impl SensorSettings {
             )));
         }
         Ok(())
+    }
+
+    /// The description that resolves to these settings, every field given.
+    pub fn description(&self) -> SensorDescription {
+        SensorDescription {
+            model: Some(self.response.name().to_string()),
+            peak_qe: Some(self.peak_qe),
+            cfa: Some(self.cfa),
+            exposure_time_s: Some(self.exposure_time_s),
+            iso: Some(self.iso),
+            white_luminance_cd_m2: Some(self.white_luminance_cd_m2),
+            read_noise_e: Some(self.read_noise_e),
+            full_well_e_per_um2: Some(self.full_well_e_per_um2),
+            dark_current_e_per_s_um2: Some(self.dark_current_e_per_s_um2),
+            dsnu_e: Some(self.dsnu_e),
+            prnu: Some(self.prnu),
+            bit_depth: Some(self.bit_depth),
+            black_level_dn: Some(self.black_level_dn),
+            frame_seed: Some(self.frame_seed),
+            fixed_pattern_seed: Some(self.fixed_pattern_seed),
+            white_balance: Some(self.white_balance),
+            demosaic: Some(self.development.demosaic),
+            tone_curve: Some(self.development.tone_curve),
+        }
     }
 
     /// The largest digital number, 2^bits − 1.
@@ -264,113 +292,104 @@ impl SensorSettings {
     }
 }
 
-/// A raw frame: the mosaic of digital numbers and what a raw developer
-/// needs to read it.
-#[derive(Clone, Debug, PartialEq)]
-pub struct RawFrame {
-    /// Width in pixels.
-    pub width: u32,
-    /// Height in pixels.
-    pub height: u32,
-    /// Digital numbers, row-major from the top left.
-    pub dn: Vec<u16>,
-    /// The colour filter array, its phase at this frame's top-left pixel.
-    pub cfa: Cfa,
-    /// Digital number of no light.
-    pub black_level_dn: u32,
-    /// Largest digital number.
-    pub white_level_dn: u32,
-    /// Electrons per digital number.
-    pub electrons_per_dn: f64,
-    /// CIE XYZ to the sensor's channels (DNG `ColorMatrix1`, under D65).
-    pub xyz_to_camera: DMat3,
-    /// The channels' reading of D65 white, largest 1 (DNG `AsShotNeutral`).
-    pub neutral: DVec3,
-    /// The spectral response's name (DNG `UniqueCameraModel`).
-    pub sensor_name: String,
+/// An image sensor as a caller or a scene file describes it: each field
+/// left `None` is the default's ([`crate::defaults`], ISETCam's Sony
+/// IMX363). Every front end maps its own spelling onto this.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SensorDescription {
+    /// The spectral response by name ([`response::names`]).
+    pub model: Option<String>,
+    /// Peak quantum efficiency.
+    pub peak_qe: Option<f64>,
+    /// The colour filter array.
+    pub cfa: Option<Cfa>,
+    /// Exposure time, s.
+    pub exposure_time_s: Option<f64>,
+    /// ISO speed.
+    pub iso: Option<f64>,
+    /// Luminance of a white emitter of value 1, cd/m².
+    pub white_luminance_cd_m2: Option<f64>,
+    /// Read noise, e⁻ RMS.
+    pub read_noise_e: Option<f64>,
+    /// Full-well capacity per µm², e⁻.
+    pub full_well_e_per_um2: Option<f64>,
+    /// Dark current per µm², e⁻/s.
+    pub dark_current_e_per_s_um2: Option<f64>,
+    /// Dark signal non-uniformity, e⁻ RMS.
+    pub dsnu_e: Option<f64>,
+    /// Photo-response non-uniformity, RMS gain.
+    pub prnu: Option<f64>,
+    /// Bits per digital number.
+    pub bit_depth: Option<u32>,
+    /// Black level, DN.
+    pub black_level_dn: Option<u32>,
+    /// Seed of the temporal noise (a new one is a new frame).
+    pub frame_seed: Option<u64>,
+    /// Seed of the fixed patterns (a new one is another sensor of the model).
+    pub fixed_pattern_seed: Option<u64>,
+    /// The light the camera is balanced for.
+    pub white_balance: Option<WhiteBalance>,
+    /// The demosaicking method of the development.
+    pub demosaic: Option<Demosaic>,
+    /// The development's tone curve.
+    pub tone_curve: Option<ToneCurve>,
 }
 
-/// A frame read out from `image`, a sensor render's film (its pixel (0, 0)
-/// at `origin` on the full sensor: a crop keeps the full frame's mosaic and
-/// noise), behind `optics`, by the sensor `settings`.
-pub fn capture(
-    image: &Image,
-    origin: (u32, u32),
-    optics: &FilmRadiometry,
-    settings: &SensorSettings,
-) -> Result<RawFrame> {
-    settings.validate()?;
-    if !(optics.irradiance_per_reading_sr > 0.0 && optics.pixel_area_um2() > 0.0) {
-        return Err(Error::InvalidArgument(format!(
-            "the sensor needs light and pixels: irradiance per reading {} sr, pixel {} µm²",
-            optics.irradiance_per_reading_sr,
-            optics.pixel_area_um2()
-        )));
+impl SensorDescription {
+    /// This description's fields, else `under`'s (a caller's over a scene
+    /// file's, a scene file's over its base's).
+    pub fn over(&self, under: &SensorDescription) -> SensorDescription {
+        SensorDescription {
+            model: self.model.clone().or_else(|| under.model.clone()),
+            peak_qe: self.peak_qe.or(under.peak_qe),
+            cfa: self.cfa.or(under.cfa),
+            exposure_time_s: self.exposure_time_s.or(under.exposure_time_s),
+            iso: self.iso.or(under.iso),
+            white_luminance_cd_m2: self.white_luminance_cd_m2.or(under.white_luminance_cd_m2),
+            read_noise_e: self.read_noise_e.or(under.read_noise_e),
+            full_well_e_per_um2: self.full_well_e_per_um2.or(under.full_well_e_per_um2),
+            dark_current_e_per_s_um2: self.dark_current_e_per_s_um2.or(under.dark_current_e_per_s_um2),
+            dsnu_e: self.dsnu_e.or(under.dsnu_e),
+            prnu: self.prnu.or(under.prnu),
+            bit_depth: self.bit_depth.or(under.bit_depth),
+            black_level_dn: self.black_level_dn.or(under.black_level_dn),
+            frame_seed: self.frame_seed.or(under.frame_seed),
+            fixed_pattern_seed: self.fixed_pattern_seed.or(under.fixed_pattern_seed),
+            white_balance: self.white_balance.or(under.white_balance),
+            demosaic: self.demosaic.or(under.demosaic),
+            tone_curve: self.tone_curve.or(under.tone_curve),
+        }
     }
-    let per_reading = settings.electrons_per_reading(optics);
-    let full_well = settings.full_well_e(optics);
-    let dark = settings.dark_current_e_per_s_um2 * optics.pixel_area_um2() * settings.exposure_time_s;
-    let electrons_per_dn = settings.electrons_per_dn(optics);
-    let (black, white) = (f64::from(settings.black_level_dn), f64::from(settings.white_level_dn()));
-    let (origin_x, origin_y) = origin;
-    let mut dn = vec![0u16; image.width as usize * image.height as usize];
-    dn.par_chunks_mut(image.width as usize)
-        .enumerate()
-        .for_each(|(row, out)| {
-            let y = origin_y + row as u32;
-            for (col, out) in out.iter_mut().enumerate() {
-                let x = origin_x + col as u32;
-                // A pixel's place on the full sensor (images are under 2^20 wide).
-                let site = (u64::from(y) << 20) + u64::from(x);
-                let mut fixed = Pcg64Mcg::seed_from_u64(mix(settings.fixed_pattern_seed, site));
-                let (prnu, dsnu): (f64, f64) = (fixed.sample(StandardNormal), fixed.sample(StandardNormal));
-                let mut temporal = Pcg64Mcg::seed_from_u64(mix(settings.frame_seed ^ 0x9e37_79b9_7f4a_7c15, site));
-                let reading = f64::from(image.pixel(col as u32, row as u32)[settings.cfa.channel(x, y)]);
-                let mean = (reading * per_reading * (1.0 + settings.prnu * prnu)).max(0.0) + dark;
-                let collected = poisson(mean, &mut temporal).min(full_well);
-                let read: f64 = temporal.sample(StandardNormal);
-                let electrons = collected + settings.dsnu_e * dsnu + settings.read_noise_e * read;
-                *out = (electrons / electrons_per_dn + black).round().clamp(0.0, white) as u16;
-            }
-        });
-    Ok(RawFrame {
-        width: image.width,
-        height: image.height,
-        dn,
-        cfa: phase(settings.cfa, origin),
-        black_level_dn: settings.black_level_dn,
-        white_level_dn: settings.white_level_dn(),
-        electrons_per_dn,
-        xyz_to_camera: settings.response.xyz_to_camera(),
-        neutral: settings.response.d65_neutral(),
-        sensor_name: settings.response.name().to_string(),
-    })
-}
 
-/// A Poisson count of mean `mean` (0 for none).
-fn poisson(mean: f64, rng: &mut Pcg64Mcg) -> f64 {
-    match Poisson::new(mean) {
-        Ok(p) => p.sample(rng),
-        Err(_) => 0.0,
+    /// The sensor it describes, defaults filled in and checked.
+    pub fn resolve(&self) -> Result<SensorSettings> {
+        let response = SpectralResponse::named(self.model.as_deref().unwrap_or(defaults::SENSOR_RESPONSE))?;
+        let d = SensorSettings::new(response);
+        let sensor = SensorSettings {
+            peak_qe: self.peak_qe.unwrap_or(d.peak_qe),
+            cfa: self.cfa.unwrap_or(d.cfa),
+            exposure_time_s: self.exposure_time_s.unwrap_or(d.exposure_time_s),
+            iso: self.iso.unwrap_or(d.iso),
+            white_luminance_cd_m2: self.white_luminance_cd_m2.unwrap_or(d.white_luminance_cd_m2),
+            read_noise_e: self.read_noise_e.unwrap_or(d.read_noise_e),
+            full_well_e_per_um2: self.full_well_e_per_um2.unwrap_or(d.full_well_e_per_um2),
+            dark_current_e_per_s_um2: self.dark_current_e_per_s_um2.unwrap_or(d.dark_current_e_per_s_um2),
+            dsnu_e: self.dsnu_e.unwrap_or(d.dsnu_e),
+            prnu: self.prnu.unwrap_or(d.prnu),
+            bit_depth: self.bit_depth.unwrap_or(d.bit_depth),
+            black_level_dn: self.black_level_dn.unwrap_or(d.black_level_dn),
+            frame_seed: self.frame_seed.unwrap_or(d.frame_seed),
+            fixed_pattern_seed: self.fixed_pattern_seed.unwrap_or(d.fixed_pattern_seed),
+            white_balance: self.white_balance.unwrap_or(d.white_balance),
+            development: Development {
+                demosaic: self.demosaic.unwrap_or(d.development.demosaic),
+                tone_curve: self.tone_curve.unwrap_or(d.development.tone_curve),
+            },
+            ..d
+        };
+        sensor.validate()?;
+        Ok(sensor)
     }
-}
-
-/// The pattern as it starts at `origin` of the full sensor's pattern `cfa`.
-fn phase(cfa: Cfa, origin: (u32, u32)) -> Cfa {
-    let at = |dx, dy| cfa.channel(origin.0 + dx, origin.1 + dy);
-    let block = [at(0, 0), at(1, 0), at(0, 1), at(1, 1)];
-    // Every pattern's block is its own (mono's is all green).
-    Cfa::ALL
-        .iter()
-        .map(|(c, _)| *c)
-        .find(|c| c.block() == block)
-        .unwrap_or(cfa)
-}
-
-/// A 64-bit seed from a seed and a pixel's place: SplitMix64's finaliser
-/// of the seed's golden-ratio multiple plus the place.
-fn mix(seed: u64, site: u64) -> u64 {
-    mix64(seed.wrapping_mul(0x9e37_79b9_7f4a_7c15).wrapping_add(site))
 }
 
 /// Why a sensor needs the realistic camera (the ideal ones have no optics

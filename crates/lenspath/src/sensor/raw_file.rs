@@ -135,7 +135,7 @@ fn dng_tags<W: std::io::Write + std::io::Seek, K: tiff::encoder::TiffKind>(
         tags.write_tag(Tag::Unknown(CFA_PLANE_COLOR), &[0u8, 1, 2][..])?;
         tags.write_tag(Tag::Unknown(CFA_LAYOUT), 1u16)?;
         tags.write_tag(Tag::Unknown(COLOR_MATRIX_1), &matrix(frame.xyz_to_camera)[..])?;
-        let n = frame.neutral;
+        let n = frame.as_shot_neutral;
         tags.write_tag(Tag::Unknown(AS_SHOT_NEUTRAL), &[n.x, n.y, n.z].map(rational)[..])?;
     }
     Ok(())

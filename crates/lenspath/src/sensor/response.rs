@@ -24,8 +24,9 @@ const PLANCK_J_S: f64 = 6.626_070_15e-34;
 /// The speed of light, m/s (exact).
 const LIGHT_M_S: f64 = 299_792_458.0;
 
-/// The name of the ideal sensor: channels x̄, ȳ, z̄ (the Luther condition met
-/// exactly), z̄, the tallest, peaking at the peak quantum efficiency.
+/// The name of the ideal sensor: its channels count x̄, ȳ, z̄ of the light
+/// (quantum efficiency x̄ȳz̄ over λ: the Luther condition met exactly), the
+/// tallest peaking at the peak quantum efficiency.
 pub const IDEAL_SENSOR: &str = "ideal";
 
 /// The measured cameras: (name, their r, g, b sensitivities as
@@ -187,22 +188,33 @@ impl SpectralResponse {
         *self.colour.get_or_init(|| self.fit_colour())
     }
 
+    /// Each channel's photoelectron rate at peak quantum efficiency 1,
+    /// e⁻ s⁻¹ µm⁻² sr⁻¹, from the spectral radiance `radiance_at(nm)`
+    /// (W·m⁻²·sr⁻¹·nm⁻¹), integrated at 1 nm by the trapezoid rule (as
+    /// [`cie::CieTables::spectrum_to_xyz`]): what [`Self::electron_rate`]
+    /// estimates.
+    pub fn reading(&self, radiance_at: impl Fn(f64) -> f64) -> DVec3 {
+        let last = self.yield_per_nm.len() - 1;
+        self.yield_per_nm
+            .iter()
+            .enumerate()
+            .map(|(i, y)| {
+                let weight = if i == 0 || i == last { 0.5 } else { 1.0 };
+                y.as_dvec3() * (weight * radiance_at(LAMBDA_MIN_NM as f64 + i as f64))
+            })
+            .sum()
+    }
+
     fn fit_colour(&self) -> Colour {
         let t = cie::tables();
-        let nm = |i: usize| LAMBDA_MIN_NM as f64 + i as f64;
-        // Under D65, per unit reflectance at each wavelength.
-        let lit = |i: usize| f64::from(t.d65(nm(i) as f32));
-        let camera_of = |reflectance: &dyn Fn(f64) -> f64| -> DVec3 {
-            (0..self.qe.len())
-                .map(|i| self.qe[i] * (lit(i) * reflectance(nm(i))))
-                .sum()
-        };
+        // Under D65, per unit reflectance; the camera counts photons as
+        // it does in a render.
         let xyz_of = |reflectance: &dyn Fn(f64) -> f64| -> DVec3 {
-            (0..self.qe.len())
-                .map(|i| t.xyz_bar(nm(i) as f32).as_dvec3() * (lit(i) * reflectance(nm(i))))
-                .sum::<DVec3>()
-                / f64::from(t.y_integral)
+            t.spectrum_to_xyz(|nm| t.d65(nm) * reflectance(f64::from(nm)) as f32)
+                .as_dvec3()
         };
+        let camera_of =
+            |reflectance: &dyn Fn(f64) -> f64| self.reading(|nm| f64::from(t.d65(nm as f32)) * reflectance(nm));
         // Normal equations of camera ≈ M · xyz over the training colours.
         let (mut xx, mut cx) = (DMat3::ZERO, DMat3::ZERO);
         for rgb in training_colours() {
@@ -241,8 +253,12 @@ fn relative_curves(name: &str) -> Vec<DVec3> {
     let csv = match CAMERAS.iter().find(|(n, _)| *n == name) {
         Some((_, csv)) => csv,
         None => {
+            // The ideal sensor counts photons, so its quantum efficiency is
+            // x̄ȳz̄ over λ: its electrons are then proportional to XYZ.
             let t = cie::tables();
-            return wavelengths.map(|nm| t.xyz_bar(nm).as_dvec3()).collect();
+            return wavelengths
+                .map(|nm| t.xyz_bar(nm).as_dvec3() * (555.0 / f64::from(nm)))
+                .collect();
         }
     };
     let rows: Vec<[f32; 4]> = csv

@@ -110,7 +110,11 @@ function showState(s) {
   state = s;
   const settings = s.settings;
   $("scene").textContent = `${s.scene}, ${s.resolution[0]}×${s.resolution[1]}`;
-  [canvas.width, canvas.height] = s.resolution;
+  // Setting a canvas's size clears it, even to the size it has: only when it changes,
+  // or a state message would blank the image until the next frame (none, once refined).
+  if (canvas.width !== s.resolution[0] || canvas.height !== s.resolution[1]) {
+    [canvas.width, canvas.height] = s.resolution;
+  }
   fillSelect($("lens"), s.lenses, settings.lens);
   fillSelect($("af-metric"), s.metrics, $("af-metric").value || "tenengrad");
   fillSelect($("af-strategy"), s.strategies, $("af-strategy").value || "fast");
@@ -142,8 +146,40 @@ function showState(s) {
   $("sensor-depth-value").textContent = `${s.sensor_depth_mm.toFixed(3)} mm`;
   setValue($("focus-distance"), s.focus_distance_m == null ? "" : s.focus_distance_m.toFixed(3));
   setValue($("max-spp"), settings.max_spp);
+  showSensor(s);
   $("layout").src = `/api/layout.svg?generation=${s.generation}`;
   $("layout-caption").textContent = `sensor ${s.sensor_depth_mm.toFixed(3)} mm behind the stop`;
+}
+
+const SENSOR_CONTROLS = ["sensor-model", "sensor-iso", "sensor-exposure", "sensor-wb"];
+
+/** The sensor's settings: the scene's or the page's, the library's defaults where they say nothing. */
+function showSensor(s) {
+  const on = s.settings.sensor != null;
+  $("sensor-on").checked = on;
+  const shown = { ...s.sensor_defaults, ...(s.settings.sensor ?? {}) };
+  fillSelect($("sensor-model"), s.sensor_models, shown.model);
+  setValue($("sensor-iso"), shown.iso);
+  setValue($("sensor-exposure"), shown.exposure_time_s);
+  setValue($("sensor-wb"), shown.white_balance);
+  for (const id of SENSOR_CONTROLS) $(id).disabled = !on;
+}
+
+/** Sends the sensor controls: the table the settings file will carry, or none. */
+function sendSensor() {
+  if (!$("sensor-on").checked) {
+    change({ sensor: null });
+    return;
+  }
+  change({
+    sensor: {
+      ...(state.settings.sensor ?? {}),
+      model: $("sensor-model").value,
+      iso: Number($("sensor-iso").value),
+      exposure_time_s: Number($("sensor-exposure").value),
+      white_balance: $("sensor-wb").value,
+    },
+  });
 }
 
 /** Shows a value in a control, unless the control has the focus: what is being typed or dragged wins. */
@@ -430,6 +466,7 @@ $("focus-distance").addEventListener("change", (e) => {
   change({ focus: { by: "distance", distance_m: Number(e.target.value) } });
 });
 $("max-spp").addEventListener("change", (e) => change({ max_spp: Number(e.target.value) }));
+for (const id of ["sensor-on", ...SENSOR_CONTROLS]) $(id).addEventListener("change", sendSensor);
 
 let initial = null;
 $("reset-view").addEventListener("click", () => {
