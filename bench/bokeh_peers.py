@@ -15,8 +15,8 @@ Cases (docs/bokeh.md, BENCHMARKS.md):
 lenspath's times are the convolution alone (it prints them), without reading or
 writing files; OpenCV's are of filter2D on arrays in memory. Both use every core. That the two
 compute the same (black borders, kernel flipped for OpenCV, which correlates) is
-checked by crates/lenspath/tests/opencv_agreement.rs:
-LENSPATH_PYTHON=$PWD/bench/.venv-bokeh/bin/python cargo test --test opencv_agreement
+checked by crates/lenspath/tests/integration/opencv_agreement.rs:
+LENSPATH_PYTHON=$PWD/bench/.venv-bokeh/bin/python cargo test -p lenspath --test integration opencv_agreement::
 """
 
 import argparse

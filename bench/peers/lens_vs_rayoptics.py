@@ -13,7 +13,7 @@ lenspath's lens tests:
 - `lens::lentil::tests::the_anamorphic_prime_traces_as_rayoptics_does`: lentil's
   2004, whose cylinders rayoptics models as toroids; skew rays, and each meridian's
   focal length.
-- `tests/lens_files.rs`: Zemax files, and ISET3d files whose stop sits on a
+- `tests/integration/lens_files.rs`: Zemax files, and ISET3d files whose stop sits on a
   curved surface's vertex, read by both tools.
 - `crates/lenspath/lenses/README.md`: the shipped tables taken from rayoptics'
   own files (triplet50, nikon-z14, achromat100), their EFL and BFL there.
@@ -149,7 +149,7 @@ for height, angle in [(0.5, 0.0), (2.0, 0.0), (-4.0, 20.0), (-12.0, 40.0), (-8.0
     print(f"  ray at {height} mm, {angle} deg: height {behind!r} 10 mm behind the rear vertex")
 
 # Zemax files (crates/lenspath/tests/data/lenses), as rayoptics reads them, at the d
-# line; `tests/lens_files.rs::zemax_files_trace_as_rayoptics_reads_them`. rayoptics
+# line; `tests/integration/lens_files.rs::zemax_files_trace_as_rayoptics_reads_them`. rayoptics
 # has no L-TIM28 (it substitutes S-TIM28), so that glass gets lenspath's n_d.
 from opticalglass.opticalmedium import ConstantIndex  # noqa: E402
 from rayoptics.environment import open_model  # noqa: E402
@@ -173,7 +173,7 @@ for name in ("US08427765-1.ZMX", "US00583336-2-scaled.zmx"):
 
 # ISET3d lens files (crates/lenspath/tests/data/lenses/iset3d-*.json) given to rayoptics
 # surface by surface, constant indices, the stop where ior and radius are 0;
-# `tests/lens_files.rs::a_stop_on_a_curved_vertex_clips_at_the_entrance_pupil`.
+# `tests/integration/lens_files.rs::a_stop_on_a_curved_vertex_clips_at_the_entrance_pupil`.
 for name in ("iset3d-cooke40deg-zemax.json", "iset3d-petzval-zemax.json"):
     opm = OpticalModel()
     sm, osp = opm["seq_model"], opm["optical_spec"]

@@ -447,6 +447,9 @@ class Sensor:
         white_balance: str | None = None,
         demosaic: Literal["mhc", "bilinear"] | None = None,
         tone_curve: Literal["linear", "filmic"] | None = None,
+        auto_exposure: bool | None = None,
+        max_exposure_time_s: float | None = None,
+        max_iso: float | None = None,
     ) -> Sensor: ...
     def settings(self) -> dict[str, Any]:
         """Every setting with the defaults filled in (a scene file's ``[sensor]`` aside)."""
@@ -485,6 +488,12 @@ class RawFrame:
     @property
     def sensor_name(self) -> str:
         """The spectral response's name."""
+    @property
+    def exposure_time_s(self) -> float:
+        """The exposure time, s (metered, with auto exposure)."""
+    @property
+    def iso(self) -> float:
+        """The ISO speed (metered, with auto exposure)."""
     def develop(
         self,
         *,

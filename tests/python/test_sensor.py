@@ -96,6 +96,8 @@ def test_a_sensor_fills_in_the_librarys_defaults_and_pickles() -> None:
     defaults = Sensor().settings()
     assert (defaults["model"], defaults["bit_depth"], defaults["black_level_dn"]) == ("sony_ilce_7m3", 10, 64)
     assert (defaults["white_balance"], defaults["demosaic"], defaults["tone_curve"]) == ("daylight", "mhc", "linear")
+    assert (defaults["auto_exposure"], defaults["max_iso"]) == (False, 3520.0)
+    assert repr(Sensor(auto_exposure=True)) == "Sensor(auto_exposure=True)"
     assert repr(sensor) == "Sensor(cfa='bggr', iso=400.0, model='ideal')"
     assert pickle.loads(pickle.dumps(sensor)).settings() == settings
     assert "ideal" in models() and "nikon_d850" in models() and len(models()) == 18
@@ -127,6 +129,9 @@ def test_a_sensor_render_gives_a_raw_frame_raw_developers_read(tmp_path) -> None
     developed = frame.develop()
     assert developed.shape == (32, 48, 3) and developed.dtype == np.float32
     assert not np.array_equal(developed, frame.develop(demosaic="bilinear"))
+    assert (frame.exposure_time_s, frame.iso) == (pytest.approx(1 / 60), 400.0)
+    metered = lenspath.render("cornell-spheres", camera, spp=2, resolution=(48, 32), sensor=Sensor(auto_exposure=True))
+    assert metered.exposure_time_s <= 1 / 30 and metered.iso >= 55.0
     frame.write(tmp_path / "frame.dng")
     with rawpy.imread(str(tmp_path / "frame.dng")) as raw:
         np.testing.assert_array_equal(raw.raw_image, frame.mosaic)

@@ -180,6 +180,7 @@ def test_the_sensor_panel_records_through_a_sensor_and_back(chromium, viewer: Vi
     assert sensor["model"] == "sony_ilce_7m3" and sensor["iso"] == 55.0
     developed = canvas_pixels(page)
     assert developed != radiance, "the developed frame is another image"
+    assert page.locator("#sensor-exposure-taken").inner_text() == "taken at 1/60 s, ISO 55"
 
     # Four stops more gain: brighter, with the noise of a short exposure.
     g = generation(page)
@@ -188,6 +189,13 @@ def test_the_sensor_panel_records_through_a_sensor_and_back(chromium, viewer: Vi
     assert viewer.state()["settings"]["sensor"]["iso"] == 880.0
     brighter = canvas_pixels(page)
     assert sum(brighter) > 1.5 * sum(developed)
+
+    # Metered: the camera chooses, and the default scene is dim enough to need the gain.
+    g = generation(page)
+    page.locator("#sensor-auto").check()
+    wait_for_spp(page, 2, after_generation=g)
+    assert page.locator("#sensor-iso").is_disabled()
+    assert page.locator("#sensor-exposure-taken").inner_text().startswith("taken at 1/30 s, ISO ")
 
     g = generation(page)
     page.locator("#sensor-on").uncheck()

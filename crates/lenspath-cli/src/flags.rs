@@ -239,6 +239,17 @@ pub struct SensorFlags {
     /// Sensor: seed of the fixed patterns (PRNU, DSNU); another seed is another sensor of the model.
     #[arg(long)]
     pub fixed_pattern_seed: Option<u64>,
+    /// Sensor: meter the exposure time and ISO from the render (a camera's program mode: the mean
+    /// green to 18% of the full well at the base ISO; past --max-exposure-time the ISO rises, up to
+    /// --max-iso).
+    #[arg(long)]
+    pub auto_exposure: bool,
+    /// Sensor, auto exposure: the longest exposure time, s.
+    #[arg(long, value_name = "S")]
+    pub max_exposure_time: Option<f64>,
+    /// Sensor, auto exposure: the highest ISO.
+    #[arg(long, value_name = "ISO")]
+    pub max_iso: Option<f64>,
     /// Sensor: the light the camera is balanced for: daylight (D65), grey-world, or a black body
     /// such as 2856K (tungsten).
     #[arg(long, value_name = "WB")]
@@ -277,6 +288,9 @@ impl SensorFlags {
             white_balance: self.white_balance.as_deref().map(WhiteBalance::parse).transpose()?,
             demosaic: self.demosaic.as_deref().map(Demosaic::parse).transpose()?,
             tone_curve: self.tone_curve.as_deref().map(ToneCurve::parse).transpose()?,
+            auto_exposure: self.auto_exposure.then_some(true),
+            max_exposure_time_s: self.max_exposure_time,
+            max_iso: self.max_iso,
         };
         let asked = described != SensorDescription::default() || self.raw.is_some();
         Ok(asked.then_some(described))

@@ -105,6 +105,11 @@ fn command() -> clap::Command {
         ("white_balance", d::SENSOR_WHITE_BALANCE.spelling()),
         ("demosaic", d::SENSOR_DEMOSAIC.name().to_string()),
         ("tone_curve", d::SENSOR_TONE_CURVE.name().to_string()),
+        (
+            "max_exposure_time",
+            format!("1/{:.0} s", 1.0 / d::SENSOR_MAX_EXPOSURE_TIME_S),
+        ),
+        ("max_iso", d::SENSOR_MAX_ISO.to_string()),
     ];
     let with_defaults = |mut c: clap::Command| {
         for (id, value) in &defaults {

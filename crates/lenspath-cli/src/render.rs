@@ -392,6 +392,15 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
 }
 
 /// How the frame is exposed: its median and the share of clipped pixels.
+/// An exposure time as a photographer writes it: 1/250, 0.5, 2.
+fn exposure_time(seconds: f64) -> String {
+    if seconds < 0.5 {
+        format!("1/{:.0}", 1.0 / seconds)
+    } else {
+        format!("{seconds:.3}")
+    }
+}
+
 fn exposure_line(frame: &RawFrame) -> String {
     let mut sorted = frame.dn.clone();
     sorted.sort_unstable();
@@ -402,8 +411,10 @@ fn exposure_line(frame: &RawFrame) -> String {
         .filter(|&&v| u32::from(v) >= frame.white_level_dn)
         .count();
     format!(
-        "sensor {}: median {} DN (black {}, white {}), {:.1}% of pixels clipped, {:.3} e-/DN",
+        "sensor {}: {} s at ISO {:.0}, median {} DN (black {}, white {}), {:.1}% of pixels clipped, {:.3} e-/DN",
         frame.sensor_name,
+        exposure_time(frame.exposure_time_s),
+        frame.iso,
         median,
         frame.black_level_dn,
         frame.white_level_dn,

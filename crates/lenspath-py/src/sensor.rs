@@ -32,7 +32,8 @@ impl Sensor {
                         peak_qe = None, read_noise_e = None, full_well_e_per_um2 = None,
                         dark_current_e_per_s_um2 = None, dsnu_e = None, prnu = None, bit_depth = None,
                         black_level_dn = None, frame_seed = None, fixed_pattern_seed = None, white_balance = None,
-                        demosaic = None, tone_curve = None))]
+                        demosaic = None, tone_curve = None, auto_exposure = None, max_exposure_time_s = None,
+                        max_iso = None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         model: Option<String>,
@@ -53,6 +54,9 @@ impl Sensor {
         white_balance: Option<String>,
         demosaic: Option<String>,
         tone_curve: Option<String>,
+        auto_exposure: Option<bool>,
+        max_exposure_time_s: Option<f64>,
+        max_iso: Option<f64>,
     ) -> PyResult<Sensor> {
         let table = SensorTable {
             model,
@@ -73,6 +77,9 @@ impl Sensor {
             white_balance,
             demosaic,
             tone_curve,
+            auto_exposure,
+            max_exposure_time_s,
+            max_iso,
         };
         let description = table.description().map_err(to_py)?;
         // Checked now, as a camera's settings are, though the scene file's
@@ -93,6 +100,7 @@ impl Sensor {
             .into_iter()
             .map(|(k, v)| match v {
                 serde_json::Value::String(s) => format!("{k}='{s}'"),
+                serde_json::Value::Bool(b) => format!("{k}={}", if b { "True" } else { "False" }),
                 other => format!("{k}={other}"),
             })
             .collect();
@@ -126,6 +134,7 @@ fn table_dict<'py>(py: Python<'py>, table: &SensorTable) -> PyResult<Bound<'py, 
     for (k, v) in table_fields(table) {
         match v {
             serde_json::Value::String(s) => d.set_item(k, s)?,
+            serde_json::Value::Bool(b) => d.set_item(k, b)?,
             serde_json::Value::Number(n) => match n.as_u64() {
                 Some(i) => d.set_item(k, i)?,
                 None => d.set_item(k, n.as_f64())?,
@@ -210,6 +219,18 @@ impl RawFrame {
     #[getter]
     fn sensor_name(&self) -> &str {
         &self.frame.sensor_name
+    }
+
+    /// The exposure time, s (metered, with auto exposure).
+    #[getter]
+    fn exposure_time_s(&self) -> f64 {
+        self.frame.exposure_time_s
+    }
+
+    /// The ISO speed (metered, with auto exposure).
+    #[getter]
+    fn iso(&self) -> f64 {
+        self.frame.iso
     }
 
     /// The frame developed (white balance, demosaic, colour matrix, tone

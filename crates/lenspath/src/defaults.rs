@@ -102,6 +102,15 @@ pub const SENSOR_WHITE_LUMINANCE_CD_M2: f64 = 100.0;
 /// The light the camera is balanced for: daylight, the scenes' own white
 /// (an RGB emitter's white is D65).
 pub const SENSOR_WHITE_BALANCE: crate::sensor::WhiteBalance = crate::sensor::WhiteBalance::Daylight;
+/// Whether the exposure time and ISO are metered from the film (a
+/// camera's program mode; off: the given ones).
+pub const SENSOR_AUTO_EXPOSURE: bool = false;
+/// Auto exposure's longest exposure time, s: 1/30, a phone camera's
+/// preview and autofocus frame rate.
+pub const SENSOR_MAX_EXPOSURE_TIME_S: f64 = 1.0 / 30.0;
+/// Auto exposure's highest ISO: 64× the base gain (an assumption of a
+/// phone sensor's range; ISETCam's IMX363 model gives none).
+pub const SENSOR_MAX_ISO: f64 = 3520.0;
 /// The development's demosaicking: Malvar–He–Cutler, the best linear one.
 pub const SENSOR_DEMOSAIC: crate::sensor::Demosaic = crate::sensor::Demosaic::MalvarHeCutler;
 /// The development's tone curve: none, so developed values stay

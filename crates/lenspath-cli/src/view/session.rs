@@ -140,19 +140,21 @@ pub struct View {
 impl View {
     /// What the page shows of a render's `film`: the film itself, or
     /// through a sensor the raw frame it reads out, developed (its samples
-    /// per pixel the film's). `camera` is the camera it was rendered with.
-    pub fn shown(&self, camera: &RealisticCamera, film: Image) -> Result<Image> {
+    /// per pixel the film's), with the exposure time and ISO it was taken
+    /// at. `camera` is the camera it was rendered with.
+    pub fn shown(&self, camera: &RealisticCamera, film: Image) -> Result<(Image, Option<(f64, f64)>)> {
         let Some(sensor) = &self.sensor else {
-            return Ok(film);
+            return Ok((film, None));
         };
         let optics = lenspath::camera::Camera::film_radiometry(camera)
             .ok_or_else(|| Error::InvalidArgument("the realistic camera reports its radiometry".into()))?;
         let frame = capture(&film, (0, 0), &optics, sensor)?;
-        Ok(Image {
+        let image = Image {
             spp_min: film.spp_min,
             spp_requested: film.spp_requested,
             ..develop(&frame, &sensor.development)
-        })
+        };
+        Ok((image, Some((frame.exposure_time_s, frame.iso))))
     }
 }
 

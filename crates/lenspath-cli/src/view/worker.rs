@@ -152,7 +152,7 @@ fn step(session: &Session, progress: &mut Progress, view: &Arc<View>, changed_at
     if output.stats.cancelled {
         return Ok(());
     }
-    let image = view.shown(&view.camera, output.image)?;
+    let (image, exposure) = view.shown(&view.camera, output.image)?;
     let jpeg = Bytes::from(encode_jpeg(&image, 0.0)?);
     let frame = Arc::new(Frame {
         generation: progress.generation,
@@ -180,6 +180,7 @@ fn step(session: &Session, progress: &mut Progress, view: &Arc<View>, changed_at
         "samples_per_second": s.samples as f64 / s.seconds.max(1e-9),
         "full_latency_ms": full_latency_ms,
         "sensor_depth_mm": view.sensor_depth_mm,
+        "exposure": exposure.map(|(time_s, iso)| json!({"time_s": time_s, "iso": iso})),
     }));
     let _ = session.events.send(Event::Frame(frame.jpeg.clone()));
     Ok(())
@@ -200,7 +201,7 @@ fn preview(session: &Session, generation: u64, view: &View, changed_at: Instant)
     if output.stats.cancelled || session.lock().generation != generation {
         return Ok(false);
     }
-    let jpeg = encode_jpeg(&view.shown(&camera, output.image)?, 0.0)?;
+    let jpeg = encode_jpeg(&view.shown(&camera, output.image)?.0, 0.0)?;
     session.send(json!({
         "type": "frame",
         "preview": true,

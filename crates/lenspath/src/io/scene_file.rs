@@ -184,6 +184,12 @@ pub struct SensorTable {
     pub demosaic: Option<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub tone_curve: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub auto_exposure: Option<bool>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_exposure_time_s: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_iso: Option<f64>,
 }
 
 impl SensorTable {
@@ -208,6 +214,9 @@ impl SensorTable {
             white_balance: self.white_balance.as_deref().map(WhiteBalance::parse).transpose()?,
             demosaic: self.demosaic.as_deref().map(Demosaic::parse).transpose()?,
             tone_curve: self.tone_curve.as_deref().map(ToneCurve::parse).transpose()?,
+            auto_exposure: self.auto_exposure,
+            max_exposure_time_s: self.max_exposure_time_s,
+            max_iso: self.max_iso,
         })
     }
 
@@ -232,6 +241,9 @@ impl SensorTable {
             white_balance: d.white_balance.map(|w| w.spelling()),
             demosaic: d.demosaic.map(|m| m.name().into()),
             tone_curve: d.tone_curve.map(|t| t.name().into()),
+            auto_exposure: d.auto_exposure,
+            max_exposure_time_s: d.max_exposure_time_s,
+            max_iso: d.max_iso,
         }
     }
 }

@@ -38,6 +38,10 @@ pub struct RawFrame {
     pub as_shot_neutral: DVec3,
     /// The spectral response's name (DNG `UniqueCameraModel`).
     pub sensor_name: String,
+    /// The exposure time, s (metered, with auto exposure).
+    pub exposure_time_s: f64,
+    /// The ISO speed (metered, with auto exposure).
+    pub iso: f64,
 }
 
 /// A frame read out from `image`, a sensor render's film (its pixel (0, 0)
@@ -50,6 +54,7 @@ pub fn capture(
     settings: &SensorSettings,
 ) -> Result<RawFrame> {
     settings.validate()?;
+    let settings = &settings.metered(image, optics);
     if !(optics.irradiance_per_reading_sr > 0.0 && optics.pixel_area_um2() > 0.0) {
         return Err(Error::InvalidArgument(format!(
             "the sensor needs light and pixels: irradiance per reading {} sr, pixel {} µm²",
@@ -114,6 +119,8 @@ pub fn capture(
         xyz_to_camera: settings.response.xyz_to_camera(),
         as_shot_neutral: settings.white_balance.neutral(settings.response, image),
         sensor_name: settings.response.name().to_string(),
+        exposure_time_s: settings.exposure_time_s,
+        iso: settings.iso,
     })
 }
 

@@ -40,6 +40,7 @@ pub use white_balance::WhiteBalance;
 
 use crate::camera::FilmRadiometry;
 use crate::defaults;
+use crate::film::Image;
 use crate::spectrum::cie;
 use crate::{Error, Result};
 
@@ -153,6 +154,28 @@ pub struct SensorSettings {
     pub white_balance: WhiteBalance,
     /// How the raw frame is developed into an image.
     pub development: Development,
+    /// Set the exposure time and ISO from the film, within these limits,
+    /// instead of taking them as given (`None`).
+    pub auto_exposure: Option<AutoExposure>,
+}
+
+/// A camera's program exposure: the exposure time that brings the frame's
+/// mean green to [`AutoExposure::MID_GREY`] of the full well at the base
+/// ISO; past the longest exposure time, the gain makes up the rest, up to
+/// the highest ISO (below that the frame is dark, as a camera's is).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AutoExposure {
+    /// The longest exposure time, s.
+    pub max_exposure_time_s: f64,
+    /// The highest ISO speed.
+    pub max_iso: f64,
+}
+
+impl AutoExposure {
+    /// The fraction of the full well a frame's mean green is exposed to:
+    /// 18% grey, what a reflected-light meter renders a scene's average as
+    /// (ISO 2720's calibration).
+    pub const MID_GREY: f64 = 0.18;
 }
 
 impl SensorSettings {
@@ -178,6 +201,7 @@ impl SensorSettings {
             frame_seed: 0,
             white_balance: defaults::SENSOR_WHITE_BALANCE,
             development: Development::default(),
+            auto_exposure: None,
         }
     }
 
@@ -217,6 +241,20 @@ impl SensorSettings {
             }
         }
         self.white_balance.validate()?;
+        if let Some(auto) = &self.auto_exposure {
+            if !(auto.max_exposure_time_s > 0.0 && auto.max_exposure_time_s.is_finite()) {
+                return Err(Error::InvalidArgument(format!(
+                    "the sensor's longest exposure time must be positive, not {}",
+                    auto.max_exposure_time_s
+                )));
+            }
+            if !(auto.max_iso >= self.unity_gain_iso && auto.max_iso.is_finite()) {
+                return Err(Error::InvalidArgument(format!(
+                    "the sensor's highest ISO must be at least its base ISO {}, not {}",
+                    self.unity_gain_iso, auto.max_iso
+                )));
+            }
+        }
         if !(1..=16).contains(&self.bit_depth) {
             return Err(Error::InvalidArgument(format!(
                 "the sensor's bit depth must be 1 to 16, not {}",
@@ -255,6 +293,12 @@ impl SensorSettings {
             white_balance: Some(self.white_balance),
             demosaic: Some(self.development.demosaic),
             tone_curve: Some(self.development.tone_curve),
+            auto_exposure: Some(self.auto_exposure.is_some()),
+            max_exposure_time_s: Some(
+                self.auto_exposure
+                    .map_or(defaults::SENSOR_MAX_EXPOSURE_TIME_S, |a| a.max_exposure_time_s),
+            ),
+            max_iso: Some(self.auto_exposure.map_or(defaults::SENSOR_MAX_ISO, |a| a.max_iso)),
         }
     }
 
@@ -289,6 +333,38 @@ impl SensorSettings {
     /// A pixel's full-well capacity behind `optics`, e⁻.
     pub fn full_well_e(&self, optics: &FilmRadiometry) -> f64 {
         self.full_well_e_per_um2 * optics.pixel_area_um2()
+    }
+
+    /// These settings with the exposure time and ISO a program exposure
+    /// chooses for `film` behind `optics` ([`AutoExposure`]); unchanged
+    /// without auto exposure. The film metered is the one given: a crop
+    /// meters itself.
+    pub fn metered(&self, film: &Image, optics: &FilmRadiometry) -> SensorSettings {
+        let Some(auto) = self.auto_exposure else {
+            return self.clone();
+        };
+        let pixels = (film.rgb.len() / 3).max(1) as f64;
+        let mean_green = film.rgb.chunks_exact(3).map(|p| f64::from(p[1])).sum::<f64>() / pixels;
+        let per_second = SensorSettings {
+            exposure_time_s: 1.0,
+            ..self.clone()
+        }
+        .electrons_per_reading(optics)
+            * mean_green;
+        // At the base ISO the full well is the white level.
+        let target = AutoExposure::MID_GREY * self.full_well_e(optics);
+        let wanted_s = if per_second > 0.0 {
+            target / per_second
+        } else {
+            f64::INFINITY
+        };
+        let exposure_time_s = wanted_s.min(auto.max_exposure_time_s);
+        let iso = (self.unity_gain_iso * wanted_s / exposure_time_s).clamp(self.unity_gain_iso, auto.max_iso);
+        SensorSettings {
+            exposure_time_s,
+            iso,
+            ..self.clone()
+        }
     }
 }
 
@@ -333,6 +409,12 @@ pub struct SensorDescription {
     pub demosaic: Option<Demosaic>,
     /// The development's tone curve.
     pub tone_curve: Option<ToneCurve>,
+    /// Whether the exposure time and ISO are metered from the film.
+    pub auto_exposure: Option<bool>,
+    /// Auto exposure's longest exposure time, s.
+    pub max_exposure_time_s: Option<f64>,
+    /// Auto exposure's highest ISO.
+    pub max_iso: Option<f64>,
 }
 
 impl SensorDescription {
@@ -358,6 +440,9 @@ impl SensorDescription {
             white_balance: self.white_balance.or(under.white_balance),
             demosaic: self.demosaic.or(under.demosaic),
             tone_curve: self.tone_curve.or(under.tone_curve),
+            auto_exposure: self.auto_exposure.or(under.auto_exposure),
+            max_exposure_time_s: self.max_exposure_time_s.or(under.max_exposure_time_s),
+            max_iso: self.max_iso.or(under.max_iso),
         }
     }
 
@@ -385,6 +470,13 @@ impl SensorDescription {
                 demosaic: self.demosaic.unwrap_or(d.development.demosaic),
                 tone_curve: self.tone_curve.unwrap_or(d.development.tone_curve),
             },
+            auto_exposure: self
+                .auto_exposure
+                .unwrap_or(defaults::SENSOR_AUTO_EXPOSURE)
+                .then(|| AutoExposure {
+                    max_exposure_time_s: self.max_exposure_time_s.unwrap_or(defaults::SENSOR_MAX_EXPOSURE_TIME_S),
+                    max_iso: self.max_iso.unwrap_or(defaults::SENSOR_MAX_ISO),
+                }),
             ..d
         };
         sensor.validate()?;

@@ -33,6 +33,10 @@ mod dng_tag {
     pub const PHOTOMETRIC_LINEAR_RAW: u16 = 34892;
     /// CalibrationIlluminant: D65 (EXIF LightSource).
     pub const ILLUMINANT_D65: u16 = 21;
+    /// EXIF ExposureTime (TIFF/EP), s.
+    pub const EXPOSURE_TIME: u16 = 33434;
+    /// EXIF ISOSpeedRatings (TIFF/EP).
+    pub const ISO_SPEED_RATINGS: u16 = 34855;
 }
 
 /// The raw formats, by file extension.
@@ -122,6 +126,11 @@ fn dng_tags<W: std::io::Write + std::io::Seek, K: tiff::encoder::TiffKind>(
     tags.write_tag(Tag::Unknown(BLACK_LEVEL), frame.black_level_dn)?;
     tags.write_tag(Tag::Unknown(WHITE_LEVEL), frame.white_level_dn)?;
     tags.write_tag(Tag::Unknown(CALIBRATION_ILLUMINANT_1), ILLUMINANT_D65)?;
+    tags.write_tag(Tag::Unknown(EXPOSURE_TIME), rational(frame.exposure_time_s))?;
+    tags.write_tag(
+        Tag::Unknown(ISO_SPEED_RATINGS),
+        frame.iso.round().clamp(1.0, 65535.0) as u16,
+    )?;
     if mono {
         tags.write_tag(Tag::PhotometricInterpretation, PHOTOMETRIC_LINEAR_RAW)?;
         // One channel: its row of the matrix (green's, what it reads).

@@ -151,7 +151,7 @@ function showState(s) {
   $("layout-caption").textContent = `sensor ${s.sensor_depth_mm.toFixed(3)} mm behind the stop`;
 }
 
-const SENSOR_CONTROLS = ["sensor-model", "sensor-iso", "sensor-exposure", "sensor-wb"];
+const SENSOR_CONTROLS = ["sensor-model", "sensor-auto", "sensor-iso", "sensor-exposure", "sensor-wb"];
 
 /** The sensor's settings: the scene's or the page's, the library's defaults where they say nothing. */
 function showSensor(s) {
@@ -162,7 +162,10 @@ function showSensor(s) {
   setValue($("sensor-iso"), shown.iso);
   setValue($("sensor-exposure"), shown.exposure_time_s);
   setValue($("sensor-wb"), shown.white_balance);
+  $("sensor-auto").checked = shown.auto_exposure;
   for (const id of SENSOR_CONTROLS) $(id).disabled = !on;
+  // Metered, the exposure time and ISO are the camera's to choose.
+  for (const id of ["sensor-iso", "sensor-exposure"]) $(id).disabled ||= shown.auto_exposure;
 }
 
 /** Sends the sensor controls: the table the settings file will carry, or none. */
@@ -175,6 +178,7 @@ function sendSensor() {
     sensor: {
       ...(state.settings.sensor ?? {}),
       model: $("sensor-model").value,
+      auto_exposure: $("sensor-auto").checked,
       iso: Number($("sensor-iso").value),
       exposure_time_s: Number($("sensor-exposure").value),
       white_balance: $("sensor-wb").value,
@@ -206,6 +210,9 @@ function showFrameStats(m) {
     return;
   }
   $("spp").textContent = `${m.spp} / ${m.max_spp} spp`;
+  $("sensor-exposure-taken").textContent = m.exposure
+    ? `taken at ${m.exposure.time_s < 0.5 ? `1/${Math.round(1 / m.exposure.time_s)}` : m.exposure.time_s.toFixed(2)} s, ISO ${Math.round(m.exposure.iso)}`
+    : "";
   $("speed").textContent = `${(m.rays_per_second / 1e6).toFixed(2)} M rays/s`;
 }
 

@@ -368,6 +368,8 @@ fn the_dng_holds_the_mosaic_and_what_a_developer_needs() {
     assert_eq!(tag(50717), vec![1023.0], "WhiteLevel");
     assert_eq!(tag(50778), vec![21.0], "CalibrationIlluminant1: D65");
     assert_eq!(tag(50706), vec![1.0, 4.0, 0.0, 0.0], "DNGVersion");
+    assert!((tag(33434)[0] - sensor.exposure_time_s).abs() < 1e-6, "ExposureTime");
+    assert_eq!(tag(34855), vec![sensor.iso], "ISOSpeedRatings");
     let m = frame.xyz_to_camera;
     for (i, v) in tag(50721).iter().enumerate() {
         assert!((v - m.row(i / 3)[i % 3]).abs() < 1e-6, "ColorMatrix1[{i}] {v}");
@@ -384,6 +386,84 @@ fn the_dng_holds_the_mosaic_and_what_a_developer_needs() {
         "{}",
         frame.as_shot_neutral
     );
+}
+
+/// Auto exposure, a camera's program mode: the frame's mean green lands at
+/// 18% of the full well at the base ISO while the exposure time allows;
+/// past the longest time the ISO makes up the rest, up to the highest.
+#[test]
+fn auto_exposure_meters_mid_grey_and_raises_the_iso_only_past_the_longest_time() {
+    use lenspath::camera::FilmRadiometry;
+    use lenspath::sensor::AutoExposure;
+    let optics = FilmRadiometry {
+        irradiance_per_reading_sr: std::f64::consts::PI / (4.0 * 4.0),
+        pixel_pitch_um: (4.0, 4.0),
+    };
+    let auto = AutoExposure {
+        max_exposure_time_s: 1.0 / 30.0,
+        max_iso: 3520.0,
+    };
+    let sensor = SensorSettings {
+        auto_exposure: Some(auto),
+        bit_depth: 14,
+        ..SensorSettings::new(SpectralResponse::named("sony_ilce_7m3").unwrap())
+    };
+    // The green reading that gives a mid-grey frame at the longest time and base ISO.
+    let at_longest = SensorSettings {
+        exposure_time_s: auto.max_exposure_time_s,
+        ..sensor.clone()
+    };
+    let mid_grey = AutoExposure::MID_GREY * sensor.full_well_e(&optics) / at_longest.electrons_per_reading(&optics);
+    let frame_of = |reading: f64| {
+        let (w, h) = (64, 48);
+        let film = Image {
+            width: w,
+            height: h,
+            rgb: (0..w * h)
+                .flat_map(|_| [0.5, 1.0, 0.7].map(|c| (c * reading) as f32))
+                .collect(),
+            depth: vec![f32::INFINITY; (w * h) as usize],
+            spp_min: 1,
+            spp_requested: 1,
+        };
+        capture(&film, (0, 0), &optics, &sensor).unwrap()
+    };
+    // Mean green over black as a fraction of the white level: the frame's
+    // brightness (at the base ISO the white level is the full well).
+    let green_fraction = |frame: &RawFrame| {
+        let greens: Vec<f64> = (0..frame.height)
+            .flat_map(|y| (0..frame.width).map(move |x| (x, y)))
+            .filter(|&(x, y)| frame.cfa.channel(x, y) == 1)
+            .map(|(x, y)| f64::from(frame.dn[(y * frame.width + x) as usize]) - f64::from(frame.black_level_dn))
+            .collect();
+        greens.iter().sum::<f64>() / greens.len() as f64 / f64::from(frame.white_level_dn)
+    };
+    for (light, expect_time, expect_iso) in [
+        (16.0, auto.max_exposure_time_s / 16.0, 55.0),
+        (1.0, auto.max_exposure_time_s, 55.0),
+        (1.0 / 8.0, auto.max_exposure_time_s, 440.0),
+        (1.0 / 1000.0, auto.max_exposure_time_s, 3520.0),
+    ] {
+        let frame = frame_of(mid_grey * light);
+        eprintln!(
+            "light ×{light}: {:.5} s at ISO {:.0}, mean green {:.4} of the white level",
+            frame.exposure_time_s,
+            frame.iso,
+            green_fraction(&frame)
+        );
+        // The film is f32: the metered reading is the intended one to 1e-7.
+        assert!(
+            (frame.exposure_time_s / expect_time - 1.0).abs() < 1e-6,
+            "{}",
+            frame.exposure_time_s
+        );
+        assert!((frame.iso / expect_iso - 1.0).abs() < 1e-6, "{}", frame.iso);
+        if light >= 1.0 / 8.0 {
+            // Mid-grey (the highest ISO cannot reach it at 1/1000 of the light).
+            let fraction = green_fraction(&frame);
+            assert!((fraction / AutoExposure::MID_GREY - 1.0).abs() < 0.01, "{fraction}");
+        }
+    }
 }
 
 /// The first IFD of a little-endian TIFF: (tag, values) of each entry

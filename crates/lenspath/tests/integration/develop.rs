@@ -52,6 +52,8 @@ fn srgb_frame(width: u32, height: u32, cfa: Cfa, rgb: impl Fn(u32, u32) -> Vec3)
         xyz_to_camera: xyz_to_srgb,
         as_shot_neutral: DVec3::ONE,
         sensor_name: "srgb".into(),
+        exposure_time_s: 0.01,
+        iso: 100.0,
     }
 }
 
