@@ -338,11 +338,10 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
     // Through a sensor the film holds its channels' electron rates: the
     // image written is the raw frame developed.
     match setup.capture(camera.as_ref(), &output.image)? {
-        Some(frame) => {
+        Some((frame, development)) => {
             if let Some(raw) = &args.sensor.raw {
                 write_raw(raw, &frame)?;
             }
-            let development = setup.sensor.as_ref().map(|s| s.development).unwrap_or_default();
             write_image(&args.out, &develop(&frame, &development), args.exposure)?;
             eprintln!("{}", exposure_line(&frame));
         }

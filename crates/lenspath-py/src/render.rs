@@ -149,8 +149,7 @@ pub(crate) fn render<'py>(
     }
     // Through a sensor: the raw frame when one was asked for, else (a scene
     // file's `[sensor]`) the developed image, as `lenspath render --out`.
-    if let Some(frame) = setup.capture(camera.as_ref(), &output.image).map_err(to_py)? {
-        let development = setup.sensor.as_ref().map(|s| s.development).unwrap_or_default();
+    if let Some((frame, development)) = setup.capture(camera.as_ref(), &output.image).map_err(to_py)? {
         if sensor.is_some() {
             return Ok(Bound::new(py, RawFrame::new(frame, development))?.into_any());
         }

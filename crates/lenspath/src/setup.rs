@@ -27,7 +27,7 @@ use crate::options::SceneOptions;
 use crate::render::{FilmResponse, RenderSettings};
 use crate::sampling::SamplerKind;
 use crate::scene::SceneView;
-use crate::sensor::{capture, needs_a_lens, RawFrame, SensorDescription, SensorSettings};
+use crate::sensor::{capture_through, needs_a_lens, Development, RawFrame, SensorDescription, SensorSettings};
 
 // ---------------------------------------------------------------------------
 // What a caller asks for
@@ -204,14 +204,15 @@ impl RenderSetup {
     }
 
     /// The raw frame the sensor reads out of `image`, this setup's render
-    /// through `camera` (`None` without a sensor).
-    pub fn capture(&self, camera: &dyn Camera, image: &Image) -> Result<Option<RawFrame>> {
+    /// through `camera`, and how the setup develops it (`None` without a
+    /// sensor).
+    pub fn capture(&self, camera: &dyn Camera, image: &Image) -> Result<Option<(RawFrame, Development)>> {
         let Some(sensor) = &self.sensor else {
             return Ok(None);
         };
-        let radiometry = camera.film_radiometry().ok_or_else(needs_a_lens)?;
         let origin = self.settings.crop.map_or((0, 0), |c| (c.x0, c.y0));
-        capture(image, origin, &radiometry, sensor).map(Some)
+        let frame = capture_through(camera, image, origin, sensor)?;
+        Ok(Some((frame, sensor.development)))
     }
 }
 

@@ -18,7 +18,7 @@ use lenspath::options::SceneOptions;
 use lenspath::render::{FilmResponse, NormalizedRect, RenderSettings};
 use lenspath::sampling::SamplerKind;
 use lenspath::scene::{CompiledScene, SceneView};
-use lenspath::sensor::{capture, develop::develop, SensorSettings};
+use lenspath::sensor::{capture_through, develop::develop, SensorSettings};
 use lenspath::setup::{
     realistic_settings, resolve, resolve_settings, CameraSettings, RealisticDescription, RenderOverrides,
 };
@@ -146,9 +146,7 @@ impl View {
         let Some(sensor) = &self.sensor else {
             return Ok((film, None));
         };
-        let optics = lenspath::camera::Camera::film_radiometry(camera)
-            .ok_or_else(|| Error::InvalidArgument("the realistic camera reports its radiometry".into()))?;
-        let frame = capture(&film, (0, 0), &optics, sensor)?;
+        let frame = capture_through(camera, &film, (0, 0), sensor)?;
         let image = Image {
             spp_min: film.spp_min,
             spp_requested: film.spp_requested,

@@ -8,7 +8,7 @@ use rand_xoshiro::SplitMix64;
 use rayon::prelude::*;
 
 use super::{Cfa, SensorSettings};
-use crate::camera::FilmRadiometry;
+use crate::camera::{Camera, FilmRadiometry};
 use crate::film::Image;
 use crate::sampling::mix64;
 use crate::{Error, Result};
@@ -42,6 +42,20 @@ pub struct RawFrame {
     pub exposure_time_s: f64,
     /// The ISO speed (metered, with auto exposure).
     pub iso: f64,
+}
+
+/// The frame `settings` read out from `film`, a sensor render's film
+/// through `camera` (its pixel (0, 0) at `origin` on the full sensor): the
+/// camera says what a reading is ([`Camera::film_radiometry`]); only a
+/// camera with optics can.
+pub fn capture_through(
+    camera: &dyn Camera,
+    film: &Image,
+    origin: (u32, u32),
+    settings: &SensorSettings,
+) -> Result<RawFrame> {
+    let optics = camera.film_radiometry().ok_or_else(super::needs_a_lens)?;
+    capture(film, origin, &optics, settings)
 }
 
 /// A frame read out from `image`, a sensor render's film (its pixel (0, 0)

@@ -20,10 +20,10 @@
 use glam::{DMat3, DVec3, Mat3, Vec3};
 use rayon::prelude::*;
 
-use super::{Cfa, RawFrame};
+use super::{by_name, name_in, Cfa, RawFrame};
 use crate::film::Image;
 use crate::spectrum::cie;
-use crate::{Error, Result};
+use crate::Result;
 
 /// How the mosaic's missing channels are filled in.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -47,12 +47,12 @@ impl Demosaic {
         if name.eq_ignore_ascii_case("malvar") {
             return Ok(Demosaic::MalvarHeCutler);
         }
-        find(&Demosaic::ALL, name, "demosaicking method")
+        by_name(&Demosaic::ALL, name, "demosaicking method")
     }
 
     /// The method's name.
     pub fn name(self) -> &'static str {
-        name_of(&Demosaic::ALL, self)
+        name_in(&Demosaic::ALL, self)
     }
 }
 
@@ -74,12 +74,12 @@ impl ToneCurve {
 
     /// The curve called `name` (case-insensitive).
     pub fn parse(name: &str) -> Result<ToneCurve> {
-        find(&ToneCurve::ALL, name, "tone curve")
+        by_name(&ToneCurve::ALL, name, "tone curve")
     }
 
     /// The curve's name.
     pub fn name(self) -> &'static str {
-        name_of(&ToneCurve::ALL, self)
+        name_in(&ToneCurve::ALL, self)
     }
 
     /// The curve at linear value `x`.
@@ -93,20 +93,6 @@ impl ToneCurve {
             }
         }
     }
-}
-
-fn find<T: Copy>(all: &[(T, &'static str)], name: &str, what: &str) -> Result<T> {
-    all.iter()
-        .find(|(_, n)| n.eq_ignore_ascii_case(name))
-        .map(|(t, _)| *t)
-        .ok_or_else(|| {
-            let known: Vec<&str> = all.iter().map(|(_, n)| *n).collect();
-            Error::InvalidArgument(format!("unknown {what} '{name}' (known: {})", known.join(", ")))
-        })
-}
-
-fn name_of<T: PartialEq>(all: &[(T, &'static str)], t: T) -> &'static str {
-    all.iter().find(|(x, _)| *x == t).map_or("", |(_, n)| n)
 }
 
 /// How a raw frame is developed.
@@ -166,12 +152,7 @@ fn camera_to_srgb(frame: &RawFrame) -> Mat3 {
     let white = tables.white_xyz.as_dvec3();
     let d65_neutral = frame.xyz_to_camera * white;
     let camera_to_xyz = frame.xyz_to_camera.inverse() * DMat3::from_diagonal(d65_neutral);
-    // XYZ to sRGB scaled so D65 white (Y = 1) is 1 in every channel.
-    let xyz_to_srgb = DMat3::from_cols(
-        tables.xyz_to_rgb(Vec3::X).as_dvec3(),
-        tables.xyz_to_rgb(Vec3::Y).as_dvec3(),
-        tables.xyz_to_rgb(Vec3::Z).as_dvec3(),
-    );
+    let xyz_to_srgb = tables.rgb_to_xyz_f64().inverse();
     let m = xyz_to_srgb * camera_to_xyz;
     // Exact white: any rounding in the tables' white point is taken out.
     let scale = m * DVec3::ONE;

@@ -33,7 +33,7 @@ pub mod raw_file;
 pub mod response;
 mod white_balance;
 
-pub use capture::{capture, RawFrame};
+pub use capture::{capture, capture_through, RawFrame};
 pub use develop::{Demosaic, Development, ToneCurve};
 pub use response::SpectralResponse;
 pub use white_balance::WhiteBalance;
@@ -76,22 +76,12 @@ impl Cfa {
 
     /// The pattern called `name` (case-insensitive).
     pub fn parse(name: &str) -> Result<Cfa> {
-        Cfa::ALL
-            .iter()
-            .find(|(_, n)| n.eq_ignore_ascii_case(name))
-            .map(|(cfa, _)| *cfa)
-            .ok_or_else(|| {
-                let known: Vec<&str> = Cfa::ALL.iter().map(|(_, n)| *n).collect();
-                Error::InvalidArgument(format!(
-                    "unknown colour filter array '{name}' (known: {})",
-                    known.join(", ")
-                ))
-            })
+        by_name(&Cfa::ALL, name, "colour filter array")
     }
 
     /// The pattern's name.
     pub fn name(self) -> &'static str {
-        Cfa::ALL.iter().find(|(cfa, _)| *cfa == self).map_or("", |(_, n)| n)
+        name_in(&Cfa::ALL, self)
     }
 
     /// The channels (0 red, 1 green, 2 blue) of the 2 × 2 block, row by row.
@@ -482,6 +472,23 @@ impl SensorDescription {
         sensor.validate()?;
         Ok(sensor)
     }
+}
+
+/// The choice called `name` (case-insensitive) in `all`, a table of choices
+/// and their names; an error names `what` and lists the names.
+pub(crate) fn by_name<T: Copy>(all: &[(T, &'static str)], name: &str, what: &str) -> Result<T> {
+    all.iter()
+        .find(|(_, n)| n.eq_ignore_ascii_case(name))
+        .map(|(t, _)| *t)
+        .ok_or_else(|| {
+            let known: Vec<&str> = all.iter().map(|(_, n)| *n).collect();
+            Error::InvalidArgument(format!("unknown {what} '{name}' (known: {})", known.join(", ")))
+        })
+}
+
+/// `t`'s name in `all`, a table of choices and their names.
+pub(crate) fn name_in<T: PartialEq>(all: &[(T, &'static str)], t: T) -> &'static str {
+    all.iter().find(|(x, _)| *x == t).map_or("", |(_, n)| n)
 }
 
 /// Why a sensor needs the realistic camera (the ideal ones have no optics

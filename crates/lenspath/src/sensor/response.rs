@@ -194,14 +194,10 @@ impl SpectralResponse {
     /// [`cie::CieTables::spectrum_to_xyz`]): what [`Self::electron_rate`]
     /// estimates.
     pub fn reading(&self, radiance_at: impl Fn(f64) -> f64) -> DVec3 {
-        let last = self.yield_per_nm.len() - 1;
         self.yield_per_nm
             .iter()
             .enumerate()
-            .map(|(i, y)| {
-                let weight = if i == 0 || i == last { 0.5 } else { 1.0 };
-                y.as_dvec3() * (weight * radiance_at(LAMBDA_MIN_NM as f64 + i as f64))
-            })
+            .map(|(i, y)| y.as_dvec3() * (cie::trapezoid_weight(i) * radiance_at(LAMBDA_MIN_NM as f64 + i as f64)))
             .sum()
     }
 
