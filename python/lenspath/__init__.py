@@ -272,6 +272,8 @@ def autofocus(
     seed: int | None = None,
     max_depth: int | None = None,
     threads: int | None = None,
+    sensor: Sensor | None = None,
+    sensor_signal: str | None = None,
 ) -> AutofocusResult:
     """Focuses a realistic camera on ``patch`` (x, y, width, height as fractions of the
     image) by rendering it, as ``lenspath autofocus`` does; returns where and at what cost.
@@ -288,6 +290,12 @@ def autofocus(
     patch renders (``metric`` "tenengrad", ``strategy`` "fast", ``patience`` 12,
     ``spp`` 16, ``max_depth`` 8, ``seed`` 0: ``lenspath.defaults()``), and
     ``resolution`` is the scene file's, else (640, 480).
+
+    With ``sensor`` (a :class:`Sensor`, over the scene file's ``[sensor]``) contrast
+    autofocus scores the sensor's noisy frames, reading ``sensor_signal`` of them
+    ("raw-green", the default, or "luminance"), at an exposure metered from the first
+    frame (with ``auto_exposure``) and held; ``result.exposure_time_s`` and
+    ``result.iso`` say which.
     """
     x, y, width, height = patch
     return _core.autofocus(
@@ -302,4 +310,6 @@ def autofocus(
         seed=seed,
         max_depth=max_depth,
         threads=threads,
+        sensor=sensor,
+        sensor_signal=sensor_signal,
     )

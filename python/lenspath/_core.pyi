@@ -576,6 +576,12 @@ class AutofocusResult:
     @property
     def camera(self) -> Camera:
         """The camera given, with its sensor at ``sensor_depth_mm``."""
+    @property
+    def exposure_time_s(self) -> float | None:
+        """Through a sensor: the exposure time its frames were taken at, s (None without one)."""
+    @property
+    def iso(self) -> float | None:
+        """Through a sensor: the ISO speed its frames were taken at (None without one)."""
 
 def autofocus(
     scene: Scene,
@@ -590,10 +596,15 @@ def autofocus(
     seed: int | None = None,
     max_depth: int | None = None,
     threads: int | None = None,
+    sensor: Sensor | None = None,
+    sensor_signal: str | None = None,
 ) -> AutofocusResult:
     """Focuses a realistic camera on ``patch`` (x, y, width, height in fractions of the image)
-    by rendering it (``strategy``: sweep, early-exit, fast, rangefinder, depth). Raises
-    ValueError for a bad patch, metric, strategy or a camera that is not realistic."""
+    by rendering it (``strategy``: sweep, early-exit, fast, rangefinder, depth). With ``sensor``
+    (over the scene file's ``[sensor]``) contrast autofocus scores the sensor's noisy frames,
+    reading ``sensor_signal`` of them (``raw-green``, the default, or ``luminance``), at an
+    exposure metered from the first frame and held. Raises ValueError for a bad patch, metric,
+    strategy, sensor or a camera that is not realistic."""
 
 def lens_blur(
     image: npt.ArrayLike,

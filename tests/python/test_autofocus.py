@@ -37,6 +37,33 @@ def test_same_settings_give_the_clis_answer(cli, strategy: str) -> None:
     assert ours.depth_of_focus_mm == theirs["depth_of_focus_mm"]
 
 
+@pytest.mark.parametrize("signal", ["raw-green", "luminance"])
+def test_through_a_sensor_the_cli_and_python_focus_on_the_same_frames(cli, signal: str) -> None:
+    # Dim light (2 cd/m² from a white emitter of 1): the frames are metered to the
+    # longest exposure time, and the ISO rises.
+    args = ["--scene", "cornell-spheres", "--patch", "0.52,0.70,0.10,0.12", "--res", "160x120", "--spp", "4"]
+    sensor = ["--sensor-model", "ideal", "--auto-exposure", "--white-luminance", "2", "--af-signal", signal]
+    out = subprocess.run(
+        [str(cli), "autofocus", *args, *sensor, "--strategy", "fast", "--json"],
+        check=True,
+        capture_output=True,
+        text=True,
+    )
+    theirs = json.loads(out.stdout)
+    dim = lenspath.Sensor("ideal", auto_exposure=True, white_luminance_cd_m2=2.0)
+    ours = lenspath.autofocus(
+        "cornell-spheres", NEAR_SPHERE, spp=4, resolution=(160, 120), sensor=dim, sensor_signal=signal
+    )
+    assert ours.sensor_depth_mm == theirs["sensor_position_mm"]
+    assert (ours.exposure_time_s, ours.iso) == (theirs["exposure_time_s"], theirs["iso"])
+    assert ours.exposure_time_s == pytest.approx(1 / 30)
+    assert ours.iso > 55
+    assert np.array_equal(ours.evaluations[:, 1], [p["score"] for p in theirs["points"]])
+    # Without a sensor the same search has no exposure.
+    plain = lenspath.autofocus("cornell-spheres", NEAR_SPHERE, spp=4, resolution=(160, 120))
+    assert (plain.exposure_time_s, plain.iso) == (None, None)
+
+
 def test_the_focused_camera_renders_the_patch_sharper_than_either_side_of_it() -> None:
     # 64 samples: through the dispersive dgauss50 the depth strategy's contrast refinement
     # needed more than the default 16 to stay within a depth of focus of the contrast peak
@@ -76,6 +103,7 @@ def test_the_sweep_visits_every_pixel_pitch_and_keeps_its_best() -> None:
         ({"metric": "sharpness"}, ValueError, "unknown focus measure 'sharpness'"),
         ({"camera": lenspath.Camera.pinhole()}, ValueError, "realistic camera"),
         ({"spp": 0}, ValueError, "at least 1 sample per pixel"),
+        ({"sensor": lenspath.Sensor(), "sensor_signal": "blue"}, ValueError, "unknown autofocus sensor signal 'blue'"),
     ],
 )
 def test_bad_arguments_raise_with_a_clear_message(kwargs, error, message) -> None:

@@ -13,14 +13,19 @@ use std::process::ExitCode;
 
 use clap::Parser;
 use lenspath::accel::BvhSettings;
-use lenspath::autofocus::plot::{focus_curve_svg, Series};
-use lenspath::autofocus::{AutofocusResult, AutofocusSettings, Focuser, GroundTruth, Strategy, STRATEGIES};
+use lenspath::autofocus::plot::{focus_curve_svg, working_range_svg, Series};
+use lenspath::autofocus::{
+    AutofocusResult, AutofocusSettings, FocusSensor, Focuser, GroundTruth, SensorSignal, Strategy, STRATEGIES,
+};
 use lenspath::builtin::builtin_scene;
+use lenspath::camera::CameraPose;
 use lenspath::defaults;
 use lenspath::film::NormalizedRect;
 use lenspath::io::{check_writable, load_scene, write_text};
 use lenspath::lens::LensPrescription;
 use lenspath::options::SceneOptions;
+use lenspath::scene::CompiledScene;
+use lenspath::sensor::SensorDescription;
 use lenspath::setup::{autofocus_setup, realistic_settings, AutofocusOverrides, RealisticDescription};
 use lenspath::{Error, Result};
 use serde_json::json;
@@ -62,6 +67,9 @@ struct Args {
     /// first only.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     seeds: u32,
+    /// Only these strategies (comma-separated; default: every one).
+    #[arg(long, value_name = "NAMES", value_delimiter = ',')]
+    strategies: Vec<String>,
     /// Write every result as JSON here.
     #[arg(long, value_name = "FILE")]
     evaluate_json: Option<PathBuf>,
@@ -71,6 +79,15 @@ struct Args {
     /// Only these patches (comma-separated, such as CBdragon#2,glass-and-gold#3) or scenes (CBbunny).
     #[arg(long, value_name = "IDS", value_delimiter = ',')]
     only: Vec<String>,
+    /// Evaluate through the default sensor at these scene luminances, EV at ISO 100 (comma-separated,
+    /// such as 12,6,0,-3): the patch's mean luminance is set to 2^EV x 12.5/100 cd/m², the sensor
+    /// meters its first frame (auto exposure within its limits) and contrast autofocus scores its
+    /// noisy frames.
+    #[arg(long, value_name = "EVS", value_delimiter = ',')]
+    light_levels: Vec<f64>,
+    /// With --light-levels: what autofocus reads of the frames, raw-green or luminance.
+    #[arg(long, value_name = "SIGNAL", default_value = defaults::AUTOFOCUS_SENSOR_SIGNAL)]
+    af_signal: String,
     /// Reuse the ground truths of an earlier --evaluate-json for the patches
     /// it has with the same place, metric, samples and image size (the truth
     /// is deterministic and costs most of the run); others are computed, as
@@ -110,8 +127,16 @@ fn overrides(args: &Args) -> AutofocusOverrides {
         threads: args.threads,
         metric: Some(args.metric.clone()),
         patience: Some(args.patience),
+        sensor_signal: Some(args.af_signal.clone()),
         ..AutofocusOverrides::default()
     }
+}
+
+/// Luminance of a scene at `ev` (exposure value at ISO 100), cd/m²: the
+/// reflected-light meter equation L = 2^EV · K / S with K = 12.5 cd/m²·s
+/// (ISO 2720's calibration constant) and S = 100.
+fn luminance_at_ev(ev: f64) -> f64 {
+    ev.exp2() * 12.5 / 100.0
 }
 
 /// A scene of the evaluation set: where it comes from and the patches on it.
@@ -238,6 +263,9 @@ fn repo_root() -> PathBuf {
 
 /// Every strategy on every evaluation patch, against ground truth.
 fn evaluate(args: &Args) -> Result<()> {
+    for name in &args.strategies {
+        Strategy::from_name(name, args.patience)?;
+    }
     let (width, height) = args.res.unwrap_or(defaults::IMAGE_SIZE);
     let earlier_truths = args
         .truths
@@ -295,31 +323,35 @@ fn evaluate(args: &Args) -> Result<()> {
                 None => focuser.ground_truth()?,
             };
             let dof = focuser.depth_of_focus_mm(truth.sensor_z_mm);
-            // (seed, result) of every run: all strategies with the first seed, then the cheap ones with the rest.
-            let mut results: Vec<(u32, AutofocusResult)> = Vec::new();
-            for run in 0..args.seeds {
-                let seed = args.seed.wrapping_add(run);
-                if run > 0 {
-                    focuser = Focuser::new(
-                        &compiled,
-                        view.pose,
-                        AutofocusSettings {
-                            seed,
-                            ..settings.clone()
-                        },
-                    )?;
-                }
-                for (_, strategy) in STRATEGIES {
-                    let strategy = match strategy {
-                        Strategy::Sweep | Strategy::EarlyExit { .. } if run > 0 => continue,
-                        Strategy::EarlyExit { .. } => Strategy::EarlyExit {
-                            patience: args.patience,
-                        },
-                        s => s,
+            if !args.light_levels.is_empty() {
+                // The patch's luminance per scene unit of emission, from its sharp image.
+                let relative = focuser.patch_luminance(truth.sensor_z_mm)?;
+                for &ev in &args.light_levels {
+                    let white_luminance_cd_m2 = luminance_at_ev(ev) / relative;
+                    let sensor = SensorDescription {
+                        auto_exposure: Some(true),
+                        white_luminance_cd_m2: Some(white_luminance_cd_m2),
+                        ..SensorDescription::default()
+                    }
+                    .resolve()?;
+                    let through_sensor = AutofocusSettings {
+                        sensor: Some(FocusSensor {
+                            sensor,
+                            signal: SensorSignal::parse(&args.af_signal)?,
+                        }),
+                        ..settings.clone()
                     };
-                    results.push((seed, focuser.run(strategy)?));
+                    let results = run_strategies(&compiled, view.pose, &through_sensor, args)?;
+                    eprintln!("{}", row_text(&format!("{id} at EV {ev}"), &truth, dof, &results));
+                    let mut row = result_row(&id, p, &truth, dof, &results);
+                    row["light_level_ev"] = json!(ev);
+                    row["patch_luminance_cd_m2"] = json!(luminance_at_ev(ev));
+                    rows.push(row);
                 }
+                patches_run += 1;
+                continue;
             }
+            let results = run_strategies(&compiled, view.pose, &settings, args)?;
             eprintln!("{}", row_text(&id, &truth, dof, &results));
             if let Some(dir) = &args.plots_dir {
                 std::fs::create_dir_all(dir).map_err(|e| Error::Io {
@@ -341,27 +373,23 @@ fn evaluate(args: &Args) -> Result<()> {
                 let svg = focus_curve_svg(&title, &series, Some(truth.sensor_z_mm));
                 write_text(&dir.join(format!("{}-{}.svg", scene_spec.name, k + 1)), &svg)?;
             }
-            rows.push(json!({
-                "patch": id,
-                "rect": p,
-                "truth": truth,
-                "depth_of_focus_mm": dof,
-                "results": results.iter().map(|(seed, r)| json!({
-                    "strategy": r.strategy,
-                    "seed": seed,
-                    "sensor_position_mm": r.sensor_z_mm,
-                    "error_dof": (r.sensor_z_mm - truth.sensor_z_mm) / dof,
-                    "evaluations": r.evaluations.len(),
-                    "patch_renders": r.patch_renders(),
-                    "light_fields": r.light_fields,
-                    "camera_rays": r.camera_rays,
-                    "seconds": r.seconds,
-                })).collect::<Vec<_>>(),
-            }));
+            rows.push(result_row(&id, p, &truth, dof, &results));
             patches_run += 1;
         }
     }
-    let summary = summarize(&rows);
+    let summary = if args.light_levels.is_empty() {
+        summarize(&rows)
+    } else {
+        let (table, svg) = working_range(&rows, &args.light_levels, &args.af_signal);
+        if let Some(dir) = &args.plots_dir {
+            std::fs::create_dir_all(dir).map_err(|e| Error::Io {
+                path: dir.clone(),
+                source: e,
+            })?;
+            write_text(&dir.join("working-range.svg"), &svg)?;
+        }
+        table
+    };
     println!("{summary}");
     if let Some(path) = &args.evaluate_json {
         let out = json!({
@@ -378,6 +406,119 @@ fn evaluate(args: &Args) -> Result<()> {
         ));
     }
     Ok(())
+}
+
+/// Every strategy on one patch with `settings`: with the first seed, then
+/// the cheap ones (not the sweep and early-exit) with the rest of `--seeds`.
+fn run_strategies(
+    compiled: &CompiledScene,
+    pose: CameraPose,
+    settings: &AutofocusSettings,
+    args: &Args,
+) -> Result<Vec<(u32, AutofocusResult)>> {
+    let mut results = Vec::new();
+    for run in 0..args.seeds {
+        let seed = args.seed.wrapping_add(run);
+        let mut focuser = Focuser::new(
+            compiled,
+            pose,
+            AutofocusSettings {
+                seed,
+                ..settings.clone()
+            },
+        )?;
+        for (name, strategy) in STRATEGIES {
+            if !args.strategies.is_empty() && !args.strategies.iter().any(|s| s == name) {
+                continue;
+            }
+            let strategy = match strategy {
+                Strategy::Sweep | Strategy::EarlyExit { .. } if run > 0 => continue,
+                Strategy::EarlyExit { .. } => Strategy::EarlyExit {
+                    patience: args.patience,
+                },
+                s => s,
+            };
+            results.push((seed, focuser.run(strategy)?));
+        }
+    }
+    Ok(results)
+}
+
+/// One patch's results as JSON.
+fn result_row(
+    id: &str,
+    rect: &[f64; 4],
+    truth: &GroundTruth,
+    dof: f64,
+    results: &[(u32, AutofocusResult)],
+) -> serde_json::Value {
+    json!({
+        "patch": id,
+        "rect": rect,
+        "truth": truth,
+        "depth_of_focus_mm": dof,
+        "results": results.iter().map(|(seed, r)| json!({
+            "strategy": r.strategy,
+            "seed": seed,
+            "sensor_position_mm": r.sensor_z_mm,
+            "error_dof": (r.sensor_z_mm - truth.sensor_z_mm) / dof,
+            "evaluations": r.evaluations.len(),
+            "patch_renders": r.patch_renders(),
+            "light_fields": r.light_fields,
+            "camera_rays": r.camera_rays,
+            "seconds": r.seconds,
+            "exposure_time_s": r.exposure_time_s,
+            "iso": r.iso,
+        })).collect::<Vec<_>>(),
+    })
+}
+
+/// The working range: per light level, each strategy's runs within 1 DoF
+/// (a Markdown table with the frames' median exposure), and the same as an
+/// SVG plot.
+fn working_range(rows: &[serde_json::Value], levels: &[f64], signal: &str) -> (String, String) {
+    let mut table = String::from("| scene EV (ISO 100) | patch luminance (cd/m²) | frames: median exposure |");
+    let mut rule = String::from("|---|---|---|");
+    for (name, _) in STRATEGIES {
+        table += &format!(" {name} |");
+        rule += "---|";
+    }
+    table += &format!("\n{rule}\n");
+    let mut series: Vec<(&str, Vec<(f64, f64)>)> = STRATEGIES.iter().map(|(name, _)| (*name, Vec::new())).collect();
+    for &ev in levels {
+        let results: Vec<&serde_json::Value> = rows
+            .iter()
+            .filter(|r| r["light_level_ev"].as_f64() == Some(ev))
+            .flat_map(|r| r["results"].as_array().into_iter().flatten())
+            .collect();
+        let median = |key: &str| {
+            let mut v: Vec<f64> = results.iter().filter_map(|r| r[key].as_f64()).collect();
+            v.sort_by(f64::total_cmp);
+            v.get(v.len() / 2).copied()
+        };
+        let exposure = match (median("exposure_time_s"), median("iso")) {
+            (Some(t), Some(iso)) => format!("1/{:.0} s, ISO {iso:.0}", 1.0 / t),
+            _ => "none (no frame)".into(),
+        };
+        table += &format!("| {ev:+} | {:.3} | {exposure} |", luminance_at_ev(ev));
+        for (name, points) in &mut series {
+            let of_strategy: Vec<f64> = results
+                .iter()
+                .filter(|r| r["strategy"] == *name)
+                .map(|r| r["error_dof"].as_f64().unwrap_or(f64::INFINITY).abs())
+                .collect();
+            let within = of_strategy.iter().filter(|&&e| e <= 1.0).count();
+            if of_strategy.is_empty() {
+                table += " |";
+            } else {
+                table += &format!(" {within}/{} |", of_strategy.len());
+                points.push((ev, within as f64 / of_strategy.len() as f64));
+            }
+        }
+        table += "\n";
+    }
+    let svg = working_range_svg(&format!("autofocus working range ({signal} signal)"), &series);
+    (table, svg)
 }
 
 /// One patch's line of the evaluation's progress: its truth and each run's error.

@@ -19,7 +19,7 @@ use lenspath::setup::{resolve_autofocus, AutofocusOverrides};
 use lenspath::{Error, Result};
 use serde_json::json;
 
-use crate::flags::{parse_patch, parse_resolution, LensFlags, Resolution, SceneArgs};
+use crate::flags::{parse_patch, parse_resolution, LensFlags, Resolution, SceneArgs, SensorFlags};
 use crate::Outcome;
 
 /// Options of `lenspath autofocus`.
@@ -30,6 +30,12 @@ pub struct AutofocusArgs {
     scene: SceneArgs,
     #[command(flatten)]
     lens: LensFlags,
+    #[command(flatten)]
+    sensor: SensorFlags,
+    /// Sensor: what contrast autofocus reads of its frames: raw-green (the green pixels, undeveloped)
+    /// or luminance (the developed frame's).
+    #[arg(long, value_name = "SIGNAL", default_value = defaults::AUTOFOCUS_SENSOR_SIGNAL)]
+    af_signal: String,
     /// The patch to focus on, X,Y,W,H in fractions of the image (0 to 1), such as 0.55,0.7,0.1,0.12.
     #[arg(long, value_name = "X,Y,W,H", value_parser = parse_patch)]
     patch: NormalizedRect,
@@ -80,8 +86,12 @@ pub fn summary_line(r: &AutofocusResult, metric: &str, scene_unit_m: f64) -> Str
         ),
         None => "focused beyond infinity".to_string(),
     };
+    let exposure = match (r.exposure_time_s, r.iso) {
+        (Some(t), Some(iso)) => format!(", frames at {t:.4} s and ISO {iso:.0}"),
+        _ => String::new(),
+    };
     format!(
-        "autofocus ({}, {metric}): sensor {:.4} mm behind the stop, {distance}; {} patch renders, {} light fields, {:.2} M camera rays, {:.2} s",
+        "autofocus ({}, {metric}): sensor {:.4} mm behind the stop, {distance}; {} patch renders, {} light fields, {:.2} M camera rays, {:.2} s{exposure}",
         r.strategy,
         r.sensor_z_mm,
         r.patch_renders(),
@@ -123,6 +133,8 @@ pub fn run(args: AutofocusArgs) -> Result<Outcome> {
             "light_fields": result.light_fields,
             "camera_rays": result.camera_rays,
             "seconds": result.seconds,
+            "exposure_time_s": result.exposure_time_s,
+            "iso": result.iso,
             "depth_of_focus_mm": focuser.depth_of_focus_mm(result.sensor_z_mm),
             "points": result.evaluations,
         });
@@ -194,6 +206,8 @@ fn overrides(args: &AutofocusArgs) -> Result<AutofocusOverrides> {
         strategy: Some(args.strategy.clone()),
         patience: Some(args.patience),
         camera: args.lens.description()?,
+        sensor: args.sensor.description()?,
+        sensor_signal: Some(args.af_signal.clone()),
     })
 }
 

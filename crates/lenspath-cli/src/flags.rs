@@ -260,10 +260,6 @@ pub struct SensorFlags {
     /// Sensor: the developed image's tone curve: linear or filmic.
     #[arg(long, value_name = "CURVE")]
     pub tone_curve: Option<String>,
-    /// Sensor: write the raw frame here: .dng (readable by raw developers), or .png / .tif (the
-    /// 16-bit mosaic of digital numbers).
-    #[arg(long, value_name = "FILE")]
-    pub raw: Option<PathBuf>,
 }
 
 impl SensorFlags {
@@ -292,8 +288,7 @@ impl SensorFlags {
             max_exposure_time_s: self.max_exposure_time,
             max_iso: self.max_iso,
         };
-        let asked = described != SensorDescription::default() || self.raw.is_some();
-        Ok(asked.then_some(described))
+        Ok((described != SensorDescription::default()).then_some(described))
     }
 }
 

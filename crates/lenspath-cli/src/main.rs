@@ -31,7 +31,7 @@ enum Command {
     /// Render a scene to an image (PNG or EXR by extension).
     Render(Box<render::RenderArgs>),
     /// Focus the realistic camera on an image patch by contrast or by range.
-    Autofocus(autofocus::AutofocusArgs),
+    Autofocus(Box<autofocus::AutofocusArgs>),
     /// Blur an image with a mask-shaped kernel (bokeh as a post-process).
     Bokeh(bokeh::BokehArgs),
     /// Show what a scene file holds: meshes, triangles, materials, lights, cameras, bounds, warnings.
@@ -147,7 +147,7 @@ fn main() -> ExitCode {
     };
     let outcome = match cli.command {
         Command::Render(args) => render::run(*args),
-        Command::Autofocus(args) => autofocus::run(args),
+        Command::Autofocus(args) => autofocus::run(*args),
         Command::Bokeh(args) => bokeh::run(args),
         Command::Info(args) => info::run(args),
         Command::Lens(args) => lens::run(args),

@@ -18,7 +18,7 @@ use lenspath::sampling::SamplerKind;
 use lenspath::scene::Scene;
 use lenspath::sensor::develop::develop;
 use lenspath::sensor::raw_file::{write_raw, RawFormat};
-use lenspath::sensor::RawFrame;
+use lenspath::sensor::{RawFrame, SensorDescription};
 use lenspath::setup::{
     autofocus_before_render, resolve, CameraDescription, CameraSettings, RealisticDescription, RenderOverrides,
 };
@@ -78,6 +78,10 @@ pub struct RenderArgs {
     aperture: ApertureFlags,
     #[command(flatten)]
     sensor: SensorFlags,
+    /// Sensor: write the raw frame here: .dng (readable by raw developers), or .png / .tif (the
+    /// 16-bit mosaic of digital numbers).
+    #[arg(long, value_name = "FILE")]
+    raw: Option<PathBuf>,
     /// Realistic camera: focus on this patch of the image first, X,Y,W,H in fractions of the
     /// image (0 to 1) such as 0.55,0.7,0.1,0.12, with `lenspath autofocus`'s fast strategy.
     #[arg(long, value_name = "X,Y,W,H", value_parser = parse_patch, conflicts_with_all = ["focus_distance", "sensor_depth"])]
@@ -240,14 +244,18 @@ fn overrides(args: &RenderArgs) -> Result<RenderOverrides> {
         depth: Some(true),
         wavelength_nm: args.wavelength_nm,
         camera,
-        sensor: args.sensor.description()?,
+        // --raw alone asks for the default sensor.
+        sensor: match args.sensor.description()? {
+            None if args.raw.is_some() => Some(SensorDescription::default()),
+            described => described,
+        },
     })
 }
 
 /// Runs `lenspath render`.
 pub fn run(args: RenderArgs) -> Result<Outcome> {
     check_output_path(&args.out)?;
-    if let Some(raw) = &args.sensor.raw {
+    if let Some(raw) = &args.raw {
         RawFormat::of(raw)?;
         lenspath::io::check_writable(raw)?;
     }
@@ -339,7 +347,7 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
     // image written is the raw frame developed.
     match setup.capture(camera.as_ref(), &output.image)? {
         Some((frame, development)) => {
-            if let Some(raw) = &args.sensor.raw {
+            if let Some(raw) = &args.raw {
                 write_raw(raw, &frame)?;
             }
             write_image(&args.out, &develop(&frame, &development), args.exposure)?;

@@ -12,6 +12,7 @@ use pyo3::prelude::*;
 use crate::camera::Camera;
 use crate::error::{deprecated, to_py};
 use crate::scene::Scene;
+use crate::sensor::Sensor;
 
 /// What `autofocus` found and what it cost.
 #[pyclass(module = "lenspath._core", frozen, get_all)]
@@ -39,6 +40,10 @@ pub(crate) struct AutofocusResult {
     pub(crate) depth_of_focus_mm: f64,
     /// The camera given, focused there.
     pub(crate) camera: Camera,
+    /// Through a sensor: the exposure time its frames were taken at, s (None without one).
+    pub(crate) exposure_time_s: Option<f64>,
+    /// Through a sensor: the ISO speed its frames were taken at.
+    pub(crate) iso: Option<f64>,
 }
 
 #[pymethods]
@@ -71,7 +76,8 @@ impl AutofocusResult {
 /// of the image) by rendering it (see the stub).
 #[pyfunction]
 #[pyo3(signature = (scene, patch, camera = None, *, metric = None, strategy = None, patience = None,
-                    spp = None, resolution = None, seed = None, max_depth = None, threads = None))]
+                    spp = None, resolution = None, seed = None, max_depth = None, threads = None,
+                    sensor = None, sensor_signal = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn autofocus(
     py: Python<'_>,
@@ -86,6 +92,8 @@ pub(crate) fn autofocus(
     seed: Option<u32>,
     max_depth: Option<u32>,
     threads: Option<usize>,
+    sensor: Option<&Sensor>,
+    sensor_signal: Option<String>,
 ) -> PyResult<AutofocusResult> {
     let patch = NormalizedRect::new(patch.0, patch.1, patch.2, patch.3).map_err(to_py)?;
     let view = scene.view()?;
@@ -103,6 +111,8 @@ pub(crate) fn autofocus(
         strategy,
         patience,
         camera: description.clone(),
+        sensor: sensor.map(|s| s.description.clone()),
+        sensor_signal,
     };
     let search = resolve_autofocus(&scene.options, &view, patch, &overrides).map_err(to_py)?;
     // The result names the measure as asked; `resolve_autofocus` took the same default.
@@ -142,5 +152,7 @@ pub(crate) fn autofocus(
             focus: Some(LensFocus::SensorPositionMm(result.sensor_z_mm)),
             ..description
         })),
+        exposure_time_s: result.exposure_time_s,
+        iso: result.iso,
     })
 }

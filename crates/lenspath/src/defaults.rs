@@ -58,6 +58,9 @@ pub const AUTOFOCUS_PATIENCE: usize = 12;
 pub const AUTOFOCUS_METRIC: &str = "tenengrad";
 /// The search strategy.
 pub const AUTOFOCUS_STRATEGY: &str = "fast";
+/// What contrast autofocus reads of a sensor's frames: the raw green
+/// pixels, as a camera's AF does before any development.
+pub const AUTOFOCUS_SENSOR_SIGNAL: &str = "raw-green";
 
 // The sensor (`lenspath::sensor`): ISETCam's model of the Sony IMX363
 // (`sensorCreate('IMX363')`, a 1.4 µm-pixel phone sensor; ISETCam, MIT

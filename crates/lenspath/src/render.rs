@@ -15,6 +15,7 @@ pub use crate::film::{NormalizedRect, PixelRect};
 use crate::integrator::Integrator;
 use crate::math::Rgb;
 use crate::parallel::worker_pool;
+use crate::ray::Ray;
 use crate::sampling::{Sampler, SamplerKind, MAX_SAMPLES_PER_PIXEL};
 use crate::scene::CompiledScene;
 use crate::sensor::SpectralResponse;
@@ -76,6 +77,29 @@ pub enum FilmResponse {
     /// unit étendue ([`SpectralResponse::electron_rate`]), for
     /// [`crate::sensor::capture`].
     Sensor(&'static SpectralResponse),
+}
+
+impl FilmResponse {
+    /// What the film records of the light arriving along a camera ray at
+    /// the wavelengths `lambda` ([`Integrator::radiance`]'s arguments).
+    #[inline(always)]
+    pub(crate) fn reading(
+        self,
+        integrator: &Integrator,
+        scene: &CompiledScene,
+        camera_ray: Ray,
+        lambda: SampledWavelengths,
+        sampler: &mut Sampler,
+        rays: &mut u64,
+    ) -> Rgb {
+        match self {
+            FilmResponse::Srgb => integrator.li(scene, camera_ray, lambda, sampler, rays),
+            FilmResponse::Sensor(response) => {
+                let (l, lambda) = integrator.li_spectrum(scene, camera_ray, lambda, sampler, rays);
+                response.electron_rate(&lambda, l)
+            }
+        }
+    }
 }
 
 impl Default for RenderSettings {
@@ -465,17 +489,17 @@ fn render_tile(
                     let l = ray.map_or(Rgb::ZERO, |cr| {
                         let integrator = &settings.integrator;
                         cr.weight
-                            * match (settings.wavelength_nm, settings.film) {
-                                (None, FilmResponse::Srgb) => {
-                                    integrator.li(scene, cr.ray, cr.wavelengths, sampler, &mut tile_rays)
-                                }
-                                (None, FilmResponse::Sensor(response)) => {
-                                    let (l, lambda) =
-                                        integrator.li_spectrum(scene, cr.ray, cr.wavelengths, sampler, &mut tile_rays);
-                                    response.electron_rate(&lambda, l)
-                                }
+                            * match settings.wavelength_nm {
+                                None => settings.film.reading(
+                                    integrator,
+                                    scene,
+                                    cr.ray,
+                                    cr.wavelengths,
+                                    sampler,
+                                    &mut tile_rays,
+                                ),
                                 // One wavelength at density 1: the estimate is the radiance itself.
-                                (Some(_), _) => Rgb::splat(
+                                Some(_) => Rgb::splat(
                                     integrator
                                         .li_spectrum(scene, cr.ray, cr.wavelengths, sampler, &mut tile_rays)
                                         .0

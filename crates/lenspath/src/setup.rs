@@ -13,7 +13,7 @@
 
 use std::sync::Arc;
 
-use crate::autofocus::{AutofocusSettings, FocusMeasure, Strategy};
+use crate::autofocus::{AutofocusSettings, FocusMeasure, FocusSensor, SensorSignal, Strategy};
 use crate::camera::{
     sensor_for_image, Aperture, ApertureShape, Camera, CameraPose, LensFocus, PerspectiveCamera, Radiometry,
     RealisticCamera, RealisticCameraSettings,
@@ -225,12 +225,10 @@ impl RenderSetup {
 pub fn resolve(options: &SceneOptions, view: &SceneView, overrides: &RenderOverrides) -> Result<RenderSetup> {
     let mut settings = resolve_settings(options, overrides)?;
     let camera = resolve_camera(options, view, &overrides.camera, settings.width, settings.height)?;
-    // The caller's sensor settings over the scene file's, field by field.
-    let described = match (&overrides.sensor, &options.sensor) {
-        (Some(asked), Some(file)) => Some(asked.over(file)),
-        (asked, file) => asked.clone().or_else(|| file.clone()),
-    };
-    let sensor = described.as_ref().map(SensorDescription::resolve).transpose()?;
+    let sensor = over_file_sensor(overrides.sensor.as_ref(), options)
+        .as_ref()
+        .map(SensorDescription::resolve)
+        .transpose()?;
     if let Some(sensor) = &sensor {
         if !matches!(camera, CameraSettings::Realistic(_)) {
             return Err(needs_a_lens());
@@ -244,6 +242,14 @@ pub fn resolve(options: &SceneOptions, view: &SceneView, overrides: &RenderOverr
         pose: view.pose,
         sensor,
     })
+}
+
+/// The caller's sensor description over the scene file's, field by field.
+fn over_file_sensor(asked: Option<&SensorDescription>, options: &SceneOptions) -> Option<SensorDescription> {
+    match (asked, &options.sensor) {
+        (Some(asked), Some(file)) => Some(asked.over(file)),
+        (asked, file) => asked.cloned().or_else(|| file.clone()),
+    }
 }
 
 /// The render settings alone (no camera), validated.
@@ -431,6 +437,12 @@ pub struct AutofocusOverrides {
     pub patience: Option<usize>,
     /// The realistic camera; its focus is what the search sets, and is ignored.
     pub camera: RealisticDescription,
+    /// Contrast autofocus through this sensor (over the scene file's
+    /// `[sensor]`, field by field); without either, on the noiseless film.
+    pub sensor: Option<SensorDescription>,
+    /// What the measure reads of the sensor's frames (default
+    /// [`defaults::AUTOFOCUS_SENSOR_SIGNAL`]).
+    pub sensor_signal: Option<String>,
 }
 
 /// An autofocus search, resolved: what to search with and how.
@@ -455,12 +467,16 @@ pub fn resolve_autofocus(
 ) -> Result<AutofocusSetup> {
     let size = image_size(overrides.resolution, options);
     let camera = realistic_settings(options, view, &overrides.camera, size.0, size.1)?;
-    autofocus_setup(camera, size, patch, overrides, view.pose)
+    let overrides = AutofocusOverrides {
+        sensor: over_file_sensor(overrides.sensor.as_ref(), options),
+        ..overrides.clone()
+    };
+    autofocus_setup(camera, size, patch, &overrides, view.pose)
 }
 
 /// The search of `patch` of a `width` × `height` image through `camera` (a
 /// camera already resolved, as the viewer's) at `pose`; `overrides.camera`
-/// and `overrides.resolution` are not read.
+/// and `overrides.resolution` are not read, nor a scene file's sensor.
 pub fn autofocus_setup(
     camera: RealisticCameraSettings,
     (width, height): (u32, u32),
@@ -484,6 +500,21 @@ pub fn autofocus_setup(
         integrator: Integrator::path(overrides.max_depth.unwrap_or(defaults::AUTOFOCUS_PATCH_MAX_DEPTH), 1),
         seed: overrides.seed.unwrap_or(defaults::AUTOFOCUS_SEED),
         threads: overrides.threads,
+        sensor: overrides
+            .sensor
+            .as_ref()
+            .map(|described| -> Result<FocusSensor> {
+                Ok(FocusSensor {
+                    sensor: described.resolve()?,
+                    signal: SensorSignal::parse(
+                        overrides
+                            .sensor_signal
+                            .as_deref()
+                            .unwrap_or(defaults::AUTOFOCUS_SENSOR_SIGNAL),
+                    )?,
+                })
+            })
+            .transpose()?,
     };
     Ok(AutofocusSetup {
         settings,
@@ -495,7 +526,8 @@ pub fn autofocus_setup(
 /// The autofocus of `lenspath render --autofocus`: the default strategy and
 /// measure on `patch` through the render's camera, its patch renders with the
 /// render's seed and threads and its depth capped at
-/// [`defaults::AUTOFOCUS_PATCH_MAX_DEPTH`].
+/// [`defaults::AUTOFOCUS_PATCH_MAX_DEPTH`]; through the render's sensor,
+/// when it has one (the frame a camera focuses on is its sensor's).
 pub fn autofocus_before_render(setup: &RenderSetup, patch: NormalizedRect) -> Result<AutofocusSetup> {
     let CameraSettings::Realistic(camera) = &setup.camera else {
         return Err(Error::InvalidArgument("autofocus needs the realistic camera".into()));
@@ -505,6 +537,7 @@ pub fn autofocus_before_render(setup: &RenderSetup, patch: NormalizedRect) -> Re
         max_depth: Some(s.integrator.max_depth().min(defaults::AUTOFOCUS_PATCH_MAX_DEPTH)),
         seed: Some(s.seed),
         threads: s.threads,
+        sensor: setup.sensor.as_ref().map(SensorSettings::description),
         ..AutofocusOverrides::default()
     };
     autofocus_setup(camera.clone(), (s.width, s.height), patch, &overrides, setup.pose)

@@ -15,6 +15,7 @@ use axum::body::Bytes;
 use lenspath::autofocus::Focuser;
 use lenspath::io::image::encode_jpeg;
 use lenspath::render::{render, render_from, Accumulation, Checkpoints, NormalizedRect};
+use lenspath::sensor::SensorSettings;
 use lenspath::setup::{autofocus_setup, AutofocusOverrides};
 use lenspath::Result;
 use serde_json::json;
@@ -226,6 +227,8 @@ fn autofocus(session: &Session, request: &AutofocusRequest, view: &View) -> Resu
         threads: session.threads(),
         metric: Some(request.metric.clone()),
         strategy: Some(request.strategy.clone()),
+        // Through the view's sensor, when it has one: what its image shows.
+        sensor: view.sensor.as_ref().map(SensorSettings::description),
         ..AutofocusOverrides::default()
     };
     let search = autofocus_setup(

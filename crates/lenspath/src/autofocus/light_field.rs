@@ -28,6 +28,7 @@ use crate::film::Filter;
 use crate::film::PixelRect;
 use crate::integrator::Integrator;
 use crate::parallel::worker_pool;
+use crate::render::FilmResponse;
 use crate::sampling::SamplerKind;
 use crate::scene::CompiledScene;
 
@@ -116,6 +117,8 @@ pub struct Recording {
     pub integrator: Integrator,
     /// Worker threads (`None`: all cores).
     pub threads: Option<usize>,
+    /// What a sample's value is: sRGB radiance or a sensor's electron rates.
+    pub film: FilmResponse,
 }
 
 impl LightField {
@@ -189,6 +192,12 @@ impl LightField {
             records,
             rear_bounds,
         })
+    }
+
+    /// The camera it was recorded through (its film radiometry is the
+    /// refocused images').
+    pub fn camera(&self) -> &RealisticCamera {
+        &self.camera
     }
 
     /// Samples recorded (camera rays).
@@ -286,7 +295,11 @@ fn record_row(
     recording: &Recording,
 ) -> Vec<Record> {
     let Recording {
-        spp, seed, integrator, ..
+        spp,
+        seed,
+        integrator,
+        film: response,
+        ..
     } = *recording;
     let mut row = Vec::with_capacity((region.width * spp) as usize);
     let mut rays = 0u64;
@@ -296,7 +309,7 @@ fn record_row(
             let film = camera_sample.film;
             let sample = camera.generate_lens_sample(camera_sample);
             let l = sample.ray.map_or(Vec3::ZERO, |cr| {
-                cr.weight * integrator.li(scene, cr.ray, cr.wavelengths, &mut sampler, &mut rays)
+                cr.weight * response.reading(&integrator, scene, cr.ray, cr.wavelengths, &mut sampler, &mut rays)
             });
             row.push(Record {
                 film,

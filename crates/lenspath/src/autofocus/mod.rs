@@ -4,6 +4,7 @@
 //! ([`search`]). docs/autofocus.md describes the strategies and how they were
 //! checked against ground truth.
 
+mod frames;
 pub mod light_field;
 pub mod measures;
 pub mod plot;
@@ -12,6 +13,7 @@ pub mod search;
 mod signal;
 mod truth;
 
+pub use frames::{FocusSensor, SensorSignal};
 pub use measures::{FocusMeasure, Patch, FOCUS_MEASURES};
 pub use range::RangeFocus;
 pub use search::{AutofocusResult, AutofocusSettings, Evaluation, Focuser, Strategy, STRATEGIES};

@@ -12,10 +12,12 @@
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
+use super::frames::{frame_key, FocusSensor};
 use super::light_field::{FilmRegion, LightField, Recording, Splat};
 use super::measures::{FocusMeasure, Patch};
 use super::signal::{interior_peak_index, log_parabola_peak, stream_seed, Detail};
-use crate::camera::{ApertureShape, CameraPose, LensFocus, RealisticCamera, RealisticCameraSettings};
+use crate::camera::{ApertureShape, Camera, CameraPose, LensFocus, RealisticCamera, RealisticCameraSettings};
+use crate::color::luminance;
 use crate::error::{Error, Result};
 use crate::film::Filter;
 use crate::film::PixelRect;
@@ -24,6 +26,7 @@ use crate::lens::{AnalysisSettings, LensAnalysis, LensSystem};
 use crate::render::{render, FilmResponse, RenderSettings};
 use crate::sampling::SamplerKind;
 use crate::scene::CompiledScene;
+use crate::sensor::SensorSettings;
 
 /// The spatial frequency, cycles per pixel, at which the lens's best focus is
 /// found for the range finder: where the band-passed Tenengrad responds most
@@ -150,6 +153,10 @@ pub struct AutofocusSettings {
     pub seed: u32,
     /// Worker threads (`None`: all cores).
     pub threads: Option<usize>,
+    /// The sensor the patch images are captured through and what the
+    /// measure reads of them ([`FocusSensor`]); `None`: the film's noiseless
+    /// radiance.
+    pub sensor: Option<FocusSensor>,
 }
 
 /// One scored patch image: a patch render, or the patch refocused from a light field.
@@ -186,6 +193,10 @@ pub struct AutofocusResult {
     pub camera_rays: u64,
     /// Wall time.
     pub seconds: f64,
+    /// The exposure time the search held, s (`None`: no sensor, or no frame taken).
+    pub exposure_time_s: Option<f64>,
+    /// The ISO speed the search held.
+    pub iso: Option<f64>,
 }
 
 impl AutofocusResult {
@@ -213,6 +224,8 @@ pub struct Focuser<'a> {
     pub(super) observer: Option<EvaluationObserver<'a>>,
     pub(super) light_fields: usize,
     pub(super) camera_rays: u64,
+    /// The sensor exposure of the running search, from its first frame ([`Focuser::seen`]).
+    pub(super) held_exposure: Option<SensorSettings>,
 }
 
 impl<'a> Focuser<'a> {
@@ -258,6 +271,7 @@ impl<'a> Focuser<'a> {
             observer: None,
             light_fields: 0,
             camera_rays: 0,
+            held_exposure: None,
         })
     }
 
@@ -272,6 +286,11 @@ impl<'a> Focuser<'a> {
             observer(&evaluation);
         }
         self.evaluations.push(evaluation);
+    }
+
+    /// The search's settings.
+    pub fn settings(&self) -> &AutofocusSettings {
+        &self.settings
     }
 
     /// Infinity-focus and close-focus sensor positions, mm behind the stop.
@@ -319,9 +338,11 @@ impl<'a> Focuser<'a> {
     pub fn measure_at(&mut self, z: f64, spp: u32, seed: u32, detail: Detail) -> Result<f64> {
         let camera = self.patch_camera(z, self.settings.camera.aperture.clone())?;
         let halves = if spp >= 2 { [spp / 2, spp - spp / 2] } else { [spp, 0] };
+        let frames = halves.iter().filter(|&&h| h > 0).count() as u32;
         let mut images = Vec::new();
         for (k, &half) in halves.iter().enumerate().filter(|(_, &h)| h > 0) {
-            images.push(self.render_patch(&camera, half, stream_seed(seed, k), detail)?);
+            let key = frame_key(z, seed, k);
+            images.push(self.render_patch(&camera, half, stream_seed(seed, k), detail, (frames, key))?);
         }
         let score = self.score(&images)?;
         self.record(Evaluation {
@@ -362,6 +383,7 @@ impl<'a> Focuser<'a> {
                     seed: stream_seed(s.seed, k as usize),
                     integrator: s.integrator,
                     threads: s.threads,
+                    film: self.film_response(),
                 };
                 LightField::record(self.scene, camera.clone(), region, &recording)
             })
@@ -380,17 +402,36 @@ impl<'a> Focuser<'a> {
 
     /// The score of the patch refocused from `fields` to `z` (bilinear
     /// splats, so the score is smooth in `z`), at [`Detail::Fine`]; `None`
-    /// out of their reach.
-    pub(super) fn refocused_score(&self, fields: &[LightField], z: f64) -> Result<Option<f64>> {
-        let width = self.settings.patch.width as usize;
+    /// out of their reach. Through a sensor, each field's image is one of
+    /// the frames at `z`.
+    pub(super) fn refocused_score(&mut self, fields: &[LightField], z: f64) -> Result<Option<f64>> {
+        let (width, patch, seed) = (
+            self.settings.patch.width as usize,
+            self.settings.patch,
+            self.settings.seed,
+        );
         let mut images = Vec::new();
-        for field in fields {
-            match field.refocus(z, self.settings.patch, Splat::Bilinear) {
-                Some(rgb) => images.push(Detail::Fine.band_pass(&rgb, width)),
-                None => return Ok(None),
-            }
+        for (k, field) in fields.iter().enumerate() {
+            let Some(rgb) = field.refocus(z, patch, Splat::Bilinear) else {
+                return Ok(None);
+            };
+            let seen = self.seen(
+                rgb,
+                field.camera().film_radiometry(),
+                fields.len() as u32,
+                frame_key(z, seed, k),
+            )?;
+            images.push(Detail::Fine.band_pass(&seen, width));
         }
         self.score(&images).map(Some)
+    }
+
+    /// What the film records: a sensor's channels when the search looks through one.
+    fn film_response(&self) -> FilmResponse {
+        self.settings
+            .sensor
+            .as_ref()
+            .map_or(FilmResponse::Srgb, |s| FilmResponse::Sensor(s.sensor.response))
     }
 
     /// The camera for patch renders with the sensor at `z`, its stop opening shaped as `aperture`.
@@ -403,16 +444,27 @@ impl<'a> Focuser<'a> {
         RealisticCamera::for_region(self.pose, s.width, s.height, &settings, s.patch)
     }
 
-    /// The patch rendered through `camera` at `spp` samples with `seed`,
-    /// band-passed at the scale of `detail`; its samples are counted as
-    /// camera rays of the running strategy.
+    /// The patch rendered through `camera` at `spp` samples with `seed`, as
+    /// the search sees it ([`Focuser::seen`]: through a sensor, one of
+    /// `frames.0` frames at this position, its key `frames.1`), band-passed
+    /// at the scale of `detail`.
     pub(super) fn render_patch(
         &mut self,
         camera: &RealisticCamera,
         spp: u32,
         seed: u32,
         detail: Detail,
+        (frames, key): (u32, u64),
     ) -> Result<Vec<f32>> {
+        let film = self.render_film(camera, spp, seed)?;
+        let seen = self.seen(film, camera.film_radiometry(), frames, key)?;
+        Ok(detail.band_pass(&seen, self.settings.patch.width as usize))
+    }
+
+    /// The patch's film rendered through `camera` at `spp` samples with
+    /// `seed` (a sensor's channels when the search looks through one); its
+    /// samples are counted as camera rays of the running strategy.
+    fn render_film(&mut self, camera: &RealisticCamera, spp: u32, seed: u32) -> Result<Vec<f32>> {
         let s = &self.settings;
         let render_settings = RenderSettings {
             width: s.width,
@@ -427,7 +479,7 @@ impl<'a> Focuser<'a> {
             crop: Some(s.patch),
             depth: false,
             wavelength_nm: None,
-            film: FilmResponse::Srgb,
+            film: self.film_response(),
         };
         let output = render(
             self.scene,
@@ -437,7 +489,26 @@ impl<'a> Focuser<'a> {
             &AtomicBool::new(false),
         )?;
         self.camera_rays += output.stats.samples;
-        Ok(detail.band_pass(&output.image.rgb, output.image.width as usize))
+        Ok(output.image.rgb)
+    }
+
+    /// The patch's mean luminance with the sensor at `z`, relative to a
+    /// white emitter of 1 (linear sRGB, noiseless, at the settings' samples
+    /// and seed): what sets its luminance in cd/m² through a sensor's
+    /// `white_luminance_cd_m2`. Not counted in any strategy's cost.
+    pub fn patch_luminance(&mut self, z: f64) -> Result<f64> {
+        let (sensor, rays) = (self.settings.sensor.take(), self.camera_rays);
+        let film = self
+            .patch_camera(z, self.settings.camera.aperture.clone())
+            .and_then(|camera| self.render_film(&camera, self.settings.spp, self.settings.seed));
+        (self.settings.sensor, self.camera_rays) = (sensor, rays);
+        let film = film?;
+        let pixels = (film.len() / 3).max(1) as f64;
+        Ok(film
+            .chunks_exact(3)
+            .map(|p| f64::from(luminance([p[0], p[1], p[2]])))
+            .sum::<f64>()
+            / pixels)
     }
 
     /// Runs `strategy` and reports what it found and what it cost.
@@ -446,6 +517,7 @@ impl<'a> Focuser<'a> {
         self.evaluations.clear();
         self.light_fields = 0;
         self.camera_rays = 0;
+        self.held_exposure = None;
         let z = match strategy {
             Strategy::Sweep => self.sweep(None)?,
             Strategy::EarlyExit { patience } => self.sweep(Some(patience.max(1)))?,
@@ -461,6 +533,8 @@ impl<'a> Focuser<'a> {
             light_fields: self.light_fields,
             camera_rays: self.camera_rays,
             seconds: started.elapsed().as_secs_f64(),
+            exposure_time_s: self.held_exposure.as_ref().map(|e| e.exposure_time_s),
+            iso: self.held_exposure.as_ref().map(|e| e.iso),
         })
     }
 

@@ -49,8 +49,17 @@ impl Focuser<'_> {
     /// samples are doubled (from 4× the settings', up to
     /// [`TRUTH_MAX_SPP_FACTOR`]×) until the seeds agree within
     /// [`TRUTH_SEED_SPREAD_DOF`].
-    /// Its evaluations are not counted anywhere.
+    /// Its evaluations are not counted anywhere. It is found in the film's
+    /// noiseless radiance, also when the search looks through a sensor.
     pub fn ground_truth(&mut self) -> Result<GroundTruth> {
+        let sensor = self.settings.sensor.take();
+        let truth = self.noiseless_truth();
+        self.settings.sensor = sensor;
+        truth
+    }
+
+    /// [`Focuser::ground_truth`] without a sensor.
+    fn noiseless_truth(&mut self) -> Result<GroundTruth> {
         let saved = (std::mem::take(&mut self.evaluations), self.camera_rays);
         let seed = self.settings.seed;
         let mut spp = 4 * self.settings.spp;

@@ -5,13 +5,14 @@
 
 use glam::Vec3;
 use lenspath::accel::BvhSettings;
-use lenspath::autofocus::{AutofocusSettings, FocusMeasure, Focuser, Strategy};
+use lenspath::autofocus::{AutofocusSettings, FocusMeasure, FocusSensor, Focuser, SensorSignal, Strategy};
 use lenspath::builtin::{add_checkerboard, checker_scene};
 use lenspath::camera::{CameraPose, LensFocus, RealisticCameraSettings};
 use lenspath::integrator::Integrator;
 use lenspath::lens::LensPrescription;
 use lenspath::render::PixelRect;
 use lenspath::scene::CompiledScene;
+use lenspath::sensor::SensorDescription;
 
 /// The centre 24 × 24 pixels of the 320 × 240 image.
 const CENTRE: PixelRect = PixelRect {
@@ -41,7 +42,6 @@ fn focuser_with(
     patch: PixelRect,
     spp: u32,
 ) -> Focuser<'_> {
-    let pose = CameraPose::look_at(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y);
     let (width, height) = (320, 240);
     let mut camera = RealisticCameraSettings::new(lens, (36.0, 27.0), LensFocus::SensorPositionMm(0.0));
     camera.f_number = f_number;
@@ -55,8 +55,14 @@ fn focuser_with(
         integrator: Integrator::path(2, 1),
         seed: 7,
         threads: None,
+        sensor: None,
     };
-    Focuser::new(scene, pose, settings).unwrap()
+    Focuser::new(scene, pose(), settings).unwrap()
+}
+
+/// The camera at the origin looking down −z.
+fn pose() -> CameraPose {
+    CameraPose::look_at(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y)
 }
 
 /// A checkerboard filling the view `distance` metres away, squares of 2 cm
@@ -262,4 +268,82 @@ fn depth_focuses_on_the_edge_the_contrast_comes_from() {
         "depth at {:.4} mm, {error:+.2} DoF from the board's conjugate {near:.4} (the wall's {far:.4})",
         r.sensor_z_mm
     );
+}
+
+/// The board's centre through the default sensor with auto exposure, lit so
+/// the patch's mean luminance is `ev` (EV at ISO 100: 2^EV · 12.5/100
+/// cd/m²), the measure reading `signal`.
+fn through_sensor<'a>(scene: &'a CompiledScene, ev: f64, signal: SensorSignal) -> Focuser<'a> {
+    let mut f = focuser(scene, Some(5.6), CENTRE, 4);
+    let relative = f.patch_luminance(f.sensor_z_for_distance(1.5).unwrap()).unwrap();
+    let sensor = SensorDescription {
+        auto_exposure: Some(true),
+        white_luminance_cd_m2: Some(ev.exp2() * 0.125 / relative),
+        ..SensorDescription::default()
+    }
+    .resolve()
+    .unwrap();
+    let mut settings = f.settings().clone();
+    settings.sensor = Some(FocusSensor { sensor, signal });
+    Focuser::new(scene, pose(), settings).unwrap()
+}
+
+/// Contrast autofocus on the sensor's frames: in good light every contrast
+/// strategy still lands within a DoF of the board's conjugate, on either
+/// signal; the exposure is metered once and held (half the light, twice the
+/// time; past the longest time, the ISO up to its limit); the frames are
+/// deterministic and a new frame seed is new noise.
+#[test]
+fn autofocus_through_a_sensor_focuses_in_good_light_and_holds_a_metered_exposure() {
+    let scene = board_at(1.5);
+    let conjugate = focuser(&scene, Some(5.6), CENTRE, 4)
+        .sensor_z_for_distance(1.5)
+        .unwrap();
+    let defaults = SensorDescription::default().resolve().unwrap();
+    let limits = (
+        lenspath::defaults::SENSOR_MAX_EXPOSURE_TIME_S,
+        lenspath::defaults::SENSOR_MAX_ISO,
+    );
+    for signal in [SensorSignal::RawGreen, SensorSignal::Luminance] {
+        let mut f = through_sensor(&scene, 12.0, signal);
+        let dof = f.depth_of_focus_mm(conjugate);
+        for strategy in [Strategy::Sweep, Strategy::Fast, Strategy::Depth] {
+            let r = f.run(strategy).unwrap();
+            let error = (r.sensor_z_mm - conjugate) / dof;
+            eprintln!(
+                "{signal:?} {strategy:?}: {error:+.2} DoF, {:?} s at ISO {:?}",
+                r.exposure_time_s, r.iso
+            );
+            assert!(
+                error.abs() <= 1.0,
+                "{signal:?} {strategy:?}: {error:+.2} DoF from the conjugate"
+            );
+            // EV 12 at f/5.6 meters under the longest time, at the base ISO.
+            let t = r.exposure_time_s.unwrap();
+            assert!(t < limits.0, "{t} s");
+            assert_eq!(r.iso, Some(defaults.unity_gain_iso));
+        }
+    }
+    // One EV less light: twice the time (the first frame, which meters, is
+    // the same render at half the radiance).
+    let time_at = |ev: f64| {
+        through_sensor(&scene, ev, SensorSignal::RawGreen)
+            .run(Strategy::Fast)
+            .unwrap()
+    };
+    let (bright, dimmer) = (time_at(14.0), time_at(13.0));
+    let ratio = dimmer.exposure_time_s.unwrap() / bright.exposure_time_s.unwrap();
+    assert!((ratio - 2.0).abs() < 1e-9, "one EV less light: exposure time ×{ratio}");
+    // In dim light: the longest time at the highest ISO.
+    let dark = time_at(2.0);
+    assert_eq!((dark.exposure_time_s, dark.iso), (Some(limits.0), Some(limits.1)));
+    // The same frames again; another frame seed, other noise.
+    let again = time_at(2.0);
+    assert_eq!(dark.evaluations, again.evaluations);
+    let mut f = through_sensor(&scene, 2.0, SensorSignal::RawGreen);
+    let mut settings = f.settings().clone();
+    settings.sensor.as_mut().unwrap().sensor.frame_seed = 1;
+    f = Focuser::new(&scene, pose(), settings).unwrap();
+    let other = f.run(Strategy::Fast).unwrap();
+    assert_ne!(dark.evaluations, other.evaluations);
 }

@@ -14,7 +14,7 @@ use lenspath::camera::{CameraPose, LensFocus, RealisticCamera, RealisticCameraSe
 use lenspath::film::Filter;
 use lenspath::integrator::Integrator;
 use lenspath::lens::{LensPrescription, LensSystem};
-use lenspath::render::{render, PixelRect, RenderSettings};
+use lenspath::render::{render, FilmResponse, PixelRect, RenderSettings};
 use lenspath::scene::CompiledScene;
 
 const SIZE: (u32, u32) = (320, 240);
@@ -111,6 +111,7 @@ fn record(
         seed,
         integrator: PATH,
         threads: None,
+        film: FilmResponse::Srgb,
     };
     LightField::record(scene, camera, region, &recording).unwrap()
 }
