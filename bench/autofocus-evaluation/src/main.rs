@@ -16,6 +16,7 @@ use lenspath::accel::BvhSettings;
 use lenspath::autofocus::plot::{focus_curve_svg, working_range_svg, Series};
 use lenspath::autofocus::{
     AutofocusResult, AutofocusSettings, FocusSensor, Focuser, GroundTruth, SensorSignal, Strategy, STRATEGIES,
+    TRUTH_SEED_SPREAD_DOF,
 };
 use lenspath::builtin::builtin_scene;
 use lenspath::camera::CameraPose;
@@ -85,6 +86,9 @@ struct Args {
     /// noisy frames.
     #[arg(long, value_name = "EVS", value_delimiter = ',')]
     light_levels: Vec<f64>,
+    /// With --light-levels: the sensor's highest ISO for auto exposure [default: the sensor's].
+    #[arg(long, value_name = "ISO")]
+    max_iso: Option<f64>,
     /// With --light-levels: what autofocus reads of the frames, raw-green or luminance.
     #[arg(long, value_name = "SIGNAL", default_value = defaults::AUTOFOCUS_SENSOR_SIGNAL)]
     af_signal: String,
@@ -330,6 +334,7 @@ fn evaluate(args: &Args) -> Result<()> {
                     let white_luminance_cd_m2 = luminance_at_ev(ev) / relative;
                     let sensor = SensorDescription {
                         auto_exposure: Some(true),
+                        max_iso: args.max_iso,
                         white_luminance_cd_m2: Some(white_luminance_cd_m2),
                         ..SensorDescription::default()
                     }
@@ -380,7 +385,13 @@ fn evaluate(args: &Args) -> Result<()> {
     let summary = if args.light_levels.is_empty() {
         summarize(&rows)
     } else {
-        let (table, svg) = working_range(&rows, &args.light_levels, &args.af_signal);
+        let label = format!(
+            "{} signal, frames at most 1/{:.0} s and ISO {}",
+            args.af_signal,
+            1.0 / defaults::SENSOR_MAX_EXPOSURE_TIME_S,
+            args.max_iso.unwrap_or(defaults::SENSOR_MAX_ISO)
+        );
+        let (table, svg) = working_range(&rows, &args.light_levels, &label);
         if let Some(dir) = &args.plots_dir {
             std::fs::create_dir_all(dir).map_err(|e| Error::Io {
                 path: dir.clone(),
@@ -475,8 +486,21 @@ fn result_row(
 
 /// The working range: per light level, each strategy's runs within 1 DoF
 /// (a Markdown table with the frames' median exposure), and the same as an
-/// SVG plot.
-fn working_range(rows: &[serde_json::Value], levels: &[f64], signal: &str) -> (String, String) {
+/// SVG plot titled with `label`. A patch whose truth is not settled (its
+/// seeds disagree at the samples' cap) has no reference and is left out.
+fn working_range(rows: &[serde_json::Value], levels: &[f64], label: &str) -> (String, String) {
+    let settled = |r: &&serde_json::Value| {
+        r["truth"]["seed_spread_dof"]
+            .as_f64()
+            .is_some_and(|spread| spread <= TRUTH_SEED_SPREAD_DOF)
+    };
+    let mut left_out: Vec<&str> = rows
+        .iter()
+        .filter(|r| !settled(r))
+        .filter_map(|r| r["patch"].as_str())
+        .collect();
+    left_out.dedup();
+    let rows: Vec<&serde_json::Value> = rows.iter().filter(settled).collect();
     let mut table = String::from("| scene EV (ISO 100) | patch luminance (cd/m²) | frames: median exposure |");
     let mut rule = String::from("|---|---|---|");
     for (name, _) in STRATEGIES {
@@ -517,7 +541,10 @@ fn working_range(rows: &[serde_json::Value], levels: &[f64], signal: &str) -> (S
         }
         table += "\n";
     }
-    let svg = working_range_svg(&format!("autofocus working range ({signal} signal)"), &series);
+    if !left_out.is_empty() {
+        table += &format!("\n(left out, their truths' seeds disagree: {})\n", left_out.join(", "));
+    }
+    let svg = working_range_svg(&format!("autofocus working range ({label})"), &series);
     (table, svg)
 }
 
