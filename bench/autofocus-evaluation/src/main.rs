@@ -16,7 +16,6 @@ use lenspath::accel::BvhSettings;
 use lenspath::autofocus::plot::{focus_curve_svg, working_range_svg, Series};
 use lenspath::autofocus::{
     AutofocusResult, AutofocusSettings, FocusSensor, Focuser, GroundTruth, SensorSignal, Strategy, STRATEGIES,
-    TRUTH_SEED_SPREAD_DOF,
 };
 use lenspath::builtin::builtin_scene;
 use lenspath::camera::CameraPose;
@@ -486,21 +485,19 @@ fn result_row(
 
 /// The working range: per light level, each strategy's runs within 1 DoF
 /// (a Markdown table with the frames' median exposure), and the same as an
-/// SVG plot titled with `label`. A patch whose truth is not settled (its
-/// seeds disagree at the samples' cap) has no reference and is left out.
+/// SVG plot titled with `label`. A patch whose truth's seeds disagree (at
+/// the samples' cap) has no reference and is left out.
 fn working_range(rows: &[serde_json::Value], levels: &[f64], label: &str) -> (String, String) {
-    let settled = |r: &&serde_json::Value| {
-        r["truth"]["seed_spread_dof"]
-            .as_f64()
-            .is_some_and(|spread| spread <= TRUTH_SEED_SPREAD_DOF)
+    let agrees = |r: &&serde_json::Value| {
+        serde_json::from_value::<GroundTruth>(r["truth"].clone()).is_ok_and(|truth| truth.seeds_agree())
     };
     let mut left_out: Vec<&str> = rows
         .iter()
-        .filter(|r| !settled(r))
+        .filter(|r| !agrees(r))
         .filter_map(|r| r["patch"].as_str())
         .collect();
     left_out.dedup();
-    let rows: Vec<&serde_json::Value> = rows.iter().filter(settled).collect();
+    let rows: Vec<&serde_json::Value> = rows.iter().filter(agrees).collect();
     let mut table = String::from("| scene EV (ISO 100) | patch luminance (cd/m²) | frames: median exposure |");
     let mut rule = String::from("|---|---|---|");
     for (name, _) in STRATEGIES {

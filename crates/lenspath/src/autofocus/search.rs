@@ -497,11 +497,12 @@ impl<'a> Focuser<'a> {
     /// and seed): what sets its luminance in cd/m² through a sensor's
     /// `white_luminance_cd_m2`. Not counted in any strategy's cost.
     pub fn patch_luminance(&mut self, z: f64) -> Result<f64> {
-        let (sensor, rays) = (self.settings.sensor.take(), self.camera_rays);
-        let film = self
-            .patch_camera(z, self.settings.camera.aperture.clone())
-            .and_then(|camera| self.render_film(&camera, self.settings.spp, self.settings.seed));
-        (self.settings.sensor, self.camera_rays) = (sensor, rays);
+        let rays = self.camera_rays;
+        let film = self.without_sensor(|f| {
+            let camera = f.patch_camera(z, f.settings.camera.aperture.clone())?;
+            f.render_film(&camera, f.settings.spp, f.settings.seed)
+        });
+        self.camera_rays = rays;
         let film = film?;
         let pixels = (film.len() / 3).max(1) as f64;
         Ok(film
@@ -509,6 +510,15 @@ impl<'a> Focuser<'a> {
             .map(|p| f64::from(luminance([p[0], p[1], p[2]])))
             .sum::<f64>()
             / pixels)
+    }
+
+    /// `work` done on the film's noiseless radiance: with the sensor set
+    /// aside, and put back whatever `work` returns.
+    pub(super) fn without_sensor<T>(&mut self, work: impl FnOnce(&mut Self) -> Result<T>) -> Result<T> {
+        let sensor = self.settings.sensor.take();
+        let done = work(self);
+        self.settings.sensor = sensor;
+        done
     }
 
     /// Runs `strategy` and reports what it found and what it cost.

@@ -36,7 +36,13 @@ impl GroundTruth {
     /// [`TRUTH_SEED_SPREAD_DOF`], or it already took the most samples allowed
     /// for strategies rendering at `strategy_spp`.
     pub fn is_settled(&self, strategy_spp: u32) -> bool {
-        self.seed_spread_dof <= TRUTH_SEED_SPREAD_DOF || self.spp >= TRUTH_MAX_SPP_FACTOR * strategy_spp
+        self.seeds_agree() || self.spp >= TRUTH_MAX_SPP_FACTOR * strategy_spp
+    }
+
+    /// Whether its two seeds' peaks agree within [`TRUTH_SEED_SPREAD_DOF`]
+    /// (when they do not, even at the most samples, it is no reference).
+    pub fn seeds_agree(&self) -> bool {
+        self.seed_spread_dof <= TRUTH_SEED_SPREAD_DOF
     }
 }
 
@@ -52,10 +58,7 @@ impl Focuser<'_> {
     /// Its evaluations are not counted anywhere. It is found in the film's
     /// noiseless radiance, also when the search looks through a sensor.
     pub fn ground_truth(&mut self) -> Result<GroundTruth> {
-        let sensor = self.settings.sensor.take();
-        let truth = self.noiseless_truth();
-        self.settings.sensor = sensor;
-        truth
+        self.without_sensor(Self::noiseless_truth)
     }
 
     /// [`Focuser::ground_truth`] without a sensor.
