@@ -123,6 +123,7 @@ def render(
     progress: bool | Callable[[int, int], Any] = False,
     sampler: Literal["sobol", "independent"] | None = None,
     wavelength_nm: float | None = None,
+    integrator: Literal["path", "guided"] | None = None,
     sensor: None = None,
 ) -> npt.NDArray[np.float32]: ...
 @overload
@@ -141,6 +142,7 @@ def render(
     progress: bool | Callable[[int, int], Any] = False,
     sampler: Literal["sobol", "independent"] | None = None,
     wavelength_nm: float | None = None,
+    integrator: Literal["path", "guided"] | None = None,
     sensor: Sensor,
 ) -> RawFrame: ...
 @overload
@@ -159,6 +161,7 @@ def render(
     progress: bool | Callable[[int, int], Any] = False,
     sampler: Literal["sobol", "independent"] | None = None,
     wavelength_nm: float | None = None,
+    integrator: Literal["path", "guided"] | None = None,
     sensor: None = None,
 ) -> dict[str, npt.NDArray[np.float32]]: ...
 def render(
@@ -176,6 +179,7 @@ def render(
     progress: bool | Callable[[int, int], Any] = False,
     sampler: Literal["sobol", "independent"] | None = None,
     wavelength_nm: float | None = None,
+    integrator: Literal["path", "guided"] | None = None,
     sensor: Sensor | None = None,
 ) -> npt.NDArray[np.float32] | dict[str, npt.NDArray[np.float32]] | RawFrame:
     """Renders ``scene`` and returns linear RGB, float32, shape (height, width, 3).
@@ -196,7 +200,11 @@ def render(
     (uniform random numbers, as Mitsuba's and pbrt's ``independent``),
     default the scene file's. ``wavelength_nm`` renders at that one
     wavelength (360-830 nm): every channel is the spectral radiance there, a
-    monochromatic image (default: colour across the visible). ``progress``:
+    monochromatic image (default: colour across the visible). ``integrator``:
+    ``"path"`` (the path tracer, the default) or ``"guided"`` (path guiding:
+    a guide of where light comes from is trained first, then steers the
+    paths; for caustics and light through glass or off metal; docs/guiding.md),
+    default the scene file's. ``progress``:
     True for a tqdm bar, or a callable ``(samples_done, samples_total)``. The
     GIL is released while rendering; Ctrl-C stops the render and raises
     KeyboardInterrupt.
@@ -225,6 +233,7 @@ def render(
             progress=callback,
             sampler=sampler,
             wavelength_nm=wavelength_nm,
+            integrator=integrator,
             sensor=sensor,
         )
     if aovs is None:
@@ -241,6 +250,7 @@ def render(
             progress=callback,
             sampler=sampler,
             wavelength_nm=wavelength_nm,
+            integrator=integrator,
         )
     return _core.render(
         _as_scene(scene),
@@ -256,6 +266,7 @@ def render(
         progress=callback,
         sampler=sampler,
         wavelength_nm=wavelength_nm,
+        integrator=integrator,
     )
 
 

@@ -379,6 +379,7 @@ def render(
     progress: Callable[[int, int], Any] | None = None,
     sampler: Literal["sobol", "independent"] | None = None,
     wavelength_nm: float | None = None,
+    integrator: Literal["path", "guided"] | None = None,
     sensor: None = None,
 ) -> npt.NDArray[np.float32]: ...
 @overload
@@ -397,6 +398,7 @@ def render(
     progress: Callable[[int, int], Any] | None = None,
     sampler: Literal["sobol", "independent"] | None = None,
     wavelength_nm: float | None = None,
+    integrator: Literal["path", "guided"] | None = None,
     sensor: Sensor,
 ) -> RawFrame: ...
 @overload
@@ -415,6 +417,7 @@ def render(
     progress: Callable[[int, int], Any] | None = None,
     sampler: Literal["sobol", "independent"] | None = None,
     wavelength_nm: float | None = None,
+    integrator: Literal["path", "guided"] | None = None,
     sensor: None = None,
 ) -> dict[str, npt.NDArray[np.float32]]: ...
 
@@ -508,7 +511,8 @@ class RawFrame:
 def defaults() -> dict[str, Any]:
     """The library's defaults: what a setting left out of ``render`` or ``autofocus`` becomes
     when the scene file does not give it (resolution, spp, max_depth, light_samples, seed,
-    sampler, scene_unit_m, lens, sensor_width_mm, thin_lens_aperture_radius, autofocus_*)."""
+    sampler, integrator, guide_training_spp, scene_unit_m, lens, sensor_width_mm,
+    thin_lens_aperture_radius, autofocus_*)."""
 
 def read(path: str | PathLike[str]) -> npt.NDArray[np.float32]:
     """Reads a PNG, JPEG (decoded from sRGB) or EXR image as linear RGB (H, W, 3)."""

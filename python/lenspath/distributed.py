@@ -41,7 +41,9 @@ __all__ = ["map_renders", "render"]
 Image = npt.NDArray[np.float32] | dict[str, npt.NDArray[np.float32]]
 
 # Keyword arguments of a job, as lenspath.render takes them.
-_RENDER_OPTIONS = frozenset({"spp", "resolution", "seed", "max_depth", "light_samples", "threads", "aovs", "sampler"})
+_RENDER_OPTIONS = frozenset(
+    {"spp", "resolution", "seed", "max_depth", "light_samples", "threads", "aovs", "sampler", "integrator"}
+)
 # Scenes a worker keeps: enough for a batch alternating between a few scenes.
 _CACHED_SCENES = 4
 
@@ -220,8 +222,9 @@ def map_renders(
     built-in name, a scene file path or a ``Scene`` loaded from one),
     ``camera`` and any of ``spp``, ``resolution``, ``seed``, ``max_depth``,
     ``light_samples``, ``threads`` (per tile; default the worker's cores over
-    its Dask threads), ``aovs`` and ``sampler``. Each image is that of
-    ``lenspath.render(**job)``, bit for bit. ``tile_size``: cut each image
+    its Dask threads), ``aovs``, ``sampler`` and ``integrator``. Each image is that of
+    ``lenspath.render(**job)``, bit for bit (a guided render's tiles each
+    train the whole image's guide first, so they cost that training each). ``tile_size``: cut each image
     into squares of that many pixels (None: one task per image). ``progress``:
     True for a tqdm bar over tiles, or a callable ``(tiles_done, tiles_total)``.
     """
@@ -297,6 +300,7 @@ def render(
     threads: int | None = None,
     aovs: Sequence[str] | None = None,
     sampler: Literal["sobol", "independent"] | None = None,
+    integrator: Literal["path", "guided"] | None = None,
     tile_size: int = 64,
     progress: bool | Callable[[int, int], Any] = True,
 ) -> Image:
@@ -319,6 +323,7 @@ def render(
         "light_samples": light_samples,
         "threads": threads,
         "sampler": sampler,
+        "integrator": integrator,
     }
     if aovs is not None:
         job["aovs"] = aovs

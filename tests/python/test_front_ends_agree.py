@@ -46,14 +46,21 @@ def needs_shared(scene: str) -> bool:
 #: scene file's, else the defaults), and every render setting and the f-stop.
 OVERRIDES: dict[str, dict[str, Any]] = {
     "file-settings": {},
-    "overridden": {"max_depth": 3, "light_samples": 2, "seed": 7, "sampler": "independent", "f_number": 4.0},
+    "overridden": {
+        "max_depth": 3,
+        "light_samples": 2,
+        "seed": 7,
+        "sampler": "independent",
+        "integrator": "guided",
+        "f_number": 4.0,
+    },
 }
 
 
 def cli_flags(o: dict[str, Any]) -> list[str]:
     flags = ["--res", f"{RESOLUTION[0]}x{RESOLUTION[1]}", "--spp", str(SPP)]
     names = {"max_depth": "--max-depth", "light_samples": "--light-samples", "seed": "--seed"}
-    names |= {"sampler": "--sampler", "f_number": "--fstop"}
+    names |= {"sampler": "--sampler", "integrator": "--integrator", "f_number": "--fstop"}
     for key, flag in names.items():
         if key in o:
             flags += [flag, str(o[key])]
@@ -164,6 +171,7 @@ def test_the_defaults_are_the_librarys() -> None:
     d = lenspath.defaults()
     assert (d["spp"], d["max_depth"], d["light_samples"], d["seed"]) == (64, 16, 1, 0)
     assert d["resolution"] == (640, 480) and d["sampler"] == "sobol" and d["lens"] == "dgauss50"
+    assert (d["integrator"], d["guide_training_spp"]) == ("path", 15)
     assert (d["autofocus_spp"], d["autofocus_max_depth"], d["autofocus_patience"]) == (16, 8, 12)
 
 

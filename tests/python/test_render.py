@@ -123,6 +123,11 @@ def test_a_diffuse_sphere_under_a_uniform_sky_has_its_albedo(sampler: str) -> No
             ValueError,
             "unknown sampler 'halton'; expected one of: sobol, independent",
         ),
+        (
+            lambda: lenspath.render("cornell-spheres", integrator="bdpt"),  # type: ignore[call-overload]
+            ValueError,
+            "unknown integrator 'bdpt'; expected one of: path, guided",
+        ),
         (lambda: lenspath.render("no-such-scene.obj"), OSError, "no-such-scene.obj"),
         (lambda: lenspath.render(42), TypeError, "scene must be"),
         (lambda: lenspath.Camera.realistic("nikkor"), ValueError, "unknown built-in lens 'nikkor'"),

@@ -78,6 +78,7 @@ fn command() -> clap::Command {
         ("res", scene_file_else(format!("{w}x{h}"))),
         ("seed", scene_file_else(d::SEED.to_string())),
         ("sampler", scene_file_else(d::SAMPLER.name().to_string())),
+        ("integrator", scene_file_else(d::INTEGRATOR.name().to_string())),
         ("lens", scene_file_else(d::LENS.to_string())),
         ("sensor", scene_file_else(format!("{} mm wide", d::SENSOR_WIDTH_MM))),
         ("scene_unit", scene_file_else(d::SCENE_UNIT_M.to_string())),

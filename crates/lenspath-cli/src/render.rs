@@ -11,6 +11,7 @@ use lenspath::autofocus::Focuser;
 use lenspath::camera::{ApertureShape, LensFocus};
 use lenspath::defaults;
 use lenspath::film::{Filter, NormalizedRect, PixelRect};
+use lenspath::integrator::IntegratorKind;
 use lenspath::io::checkpoint::{read_checkpoint, write_checkpoint};
 use lenspath::io::image::{check_output_path, write_image};
 use lenspath::render::{render_from, Accumulation, Checkpoints, RenderSettings};
@@ -32,6 +33,15 @@ use crate::flags::{
 };
 use crate::progress::Progress;
 use crate::Outcome;
+
+/// `--integrator`'s values ([`IntegratorKind`]'s names).
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum IntegratorArg {
+    /// The path tracer: next-event estimation, MIS, Russian roulette.
+    Path,
+    /// The path tracer guided by a learned distribution of incident light (path guiding).
+    Guided,
+}
 
 /// Options of `lenspath render`.
 #[derive(Args, Debug)]
@@ -60,6 +70,10 @@ pub struct RenderArgs {
     /// Sample sequence.
     #[arg(long, value_enum)]
     sampler: Option<SamplerArg>,
+    /// Integrator: the path tracer, or the path tracer guided by a guide of where light comes from,
+    /// trained first (for caustics and light through glass or off metal; docs/guiding.md).
+    #[arg(long, value_enum)]
+    integrator: Option<IntegratorArg>,
     /// Render at this one wavelength (360-830 nm): a grey image of the spectral radiance there (default: colour).
     #[arg(long, value_name = "NM")]
     wavelength_nm: Option<f32>,
@@ -235,6 +249,10 @@ fn overrides(args: &RenderArgs) -> Result<RenderOverrides> {
         light_samples: args.light_samples,
         seed: args.seed,
         sampler: args.sampler.map(SamplerKind::from),
+        integrator: args.integrator.map(|i| match i {
+            IntegratorArg::Path => IntegratorKind::Path,
+            IntegratorArg::Guided => IntegratorKind::Guided,
+        }),
         filter: Some(match args.filter {
             FilterKind::Box => Filter::Box,
             FilterKind::Gaussian => Filter::GAUSSIAN,

@@ -5,6 +5,7 @@ use std::time::Duration;
 
 use lenspath::film::Image;
 use lenspath::film::PixelRect;
+use lenspath::integrator::IntegratorKind;
 use lenspath::render::render as render_scene;
 use lenspath::sampling::SamplerKind;
 use lenspath::sensor::develop::develop;
@@ -31,7 +32,7 @@ pub(crate) fn rgb_array<'py>(py: Python<'py>, image: &Image) -> Bound<'py, PyArr
 #[pyfunction]
 #[pyo3(signature = (scene, camera = None, *, spp = None, resolution = None, seed = None, max_depth = None,
                     light_samples = None, threads = None, aovs = None, crop = None, progress = None,
-                    sampler = None, wavelength_nm = None, sensor = None))]
+                    sampler = None, wavelength_nm = None, sensor = None, integrator = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn render<'py>(
     py: Python<'py>,
@@ -49,7 +50,18 @@ pub(crate) fn render<'py>(
     sampler: Option<&str>,
     wavelength_nm: Option<f32>,
     sensor: Option<&Sensor>,
+    integrator: Option<&str>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    let integrator = integrator
+        .map(|name| {
+            IntegratorKind::from_name(name).ok_or_else(|| {
+                value_error(format!(
+                    "unknown integrator '{name}'; expected one of: {}",
+                    IntegratorKind::NAMES.join(", ")
+                ))
+            })
+        })
+        .transpose()?;
     let sampler = sampler
         .map(|name| {
             SamplerKind::from_name(name).ok_or_else(|| {
@@ -72,6 +84,7 @@ pub(crate) fn render<'py>(
     let overrides = RenderOverrides {
         resolution,
         spp,
+        integrator,
         max_depth,
         light_samples,
         seed,

@@ -437,6 +437,8 @@ pub(crate) fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     out.set_item("light_samples", d::LIGHT_SAMPLES)?;
     out.set_item("seed", d::SEED)?;
     out.set_item("sampler", d::SAMPLER.name())?;
+    out.set_item("integrator", d::INTEGRATOR.name())?;
+    out.set_item("guide_training_spp", d::GUIDE_TRAINING_SPP)?;
     out.set_item("scene_unit_m", d::SCENE_UNIT_M)?;
     out.set_item("lens", d::LENS)?;
     out.set_item("sensor_width_mm", d::SENSOR_WIDTH_MM)?;

@@ -3,6 +3,7 @@
 //! applies the precedence caller > scene file > default); the CLI's help,
 //! the Python signatures and the viewer show these, never their own copies.
 
+use crate::integrator::IntegratorKind;
 use crate::sampling::SamplerKind;
 
 // Rendering.
@@ -11,6 +12,11 @@ use crate::sampling::SamplerKind;
 pub const IMAGE_SIZE: (u32, u32) = (640, 480);
 /// Samples per pixel.
 pub const SPP: u32 = 64;
+/// The integrator: the path tracer, unguided.
+pub const INTEGRATOR: IntegratorKind = IntegratorKind::Path;
+/// The guided integrator's training: samples per pixel of the whole image
+/// spent on iterations of 1, 2, 4 and 8 before the render.
+pub const GUIDE_TRAINING_SPP: u32 = 15;
 /// Maximum path depth (scattering events; 1 is direct lighting only).
 pub const MAX_DEPTH: u32 = 16;
 /// Shadow rays per light at each non-specular hit.

@@ -5,9 +5,16 @@
 //! Transport is spectral: a path carries the four wavelengths its camera
 //! sample drew ([`SampledWavelengths`]) and its throughput at each; the
 //! estimate becomes linear sRGB at the end ([`SampledWavelengths::to_rgb`]).
+//!
+//! The guided path tracer is the same loop with a trained [`Guide`]: at a
+//! diffuse or rough vertex it samples the guide or the BSDF (one-sample MIS,
+//! [`crate::guiding::BSDF_SAMPLING_FRACTION`]) and weighs light samples
+//! against that mixture's density.
 
 use glam::{Vec2, Vec3};
 
+use crate::guiding::directional::{to_square, DirectionalTree};
+use crate::guiding::{Guide, PathRecorder, BSDF_SAMPLING_FRACTION};
 use crate::lights::LightSample;
 use crate::materials::Bsdf;
 use crate::math::{Frame, Rgb};
@@ -36,6 +43,91 @@ pub struct PathSettings {
 pub enum Integrator {
     /// The unidirectional path tracer with next-event estimation and MIS.
     Path(PathSettings),
+    /// The path tracer guided by a [`Guide`] trained on the scene first
+    /// (`crate::render` trains it): for caustics and light that arrives
+    /// through glass or off metal, which light sampling cannot find.
+    Guided(GuidedSettings),
+}
+
+/// The guided path tracer's settings.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GuidedSettings {
+    /// Its paths' depth and light samples.
+    pub path: PathSettings,
+    /// Samples per pixel spent training the guide before the render, in
+    /// iterations of 1, 2, 4, ... (as many as fit); they train the guide and
+    /// are not part of the image.
+    pub training_spp: u32,
+}
+
+/// Which integrator, without its settings: what callers and scene files
+/// choose by name.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum IntegratorKind {
+    /// [`Integrator::Path`].
+    #[default]
+    Path,
+    /// [`Integrator::Guided`].
+    Guided,
+}
+
+impl IntegratorKind {
+    /// Every kind's name, as every front end spells it.
+    pub const NAMES: [&'static str; 2] = ["path", "guided"];
+
+    /// The kind called `name` ([`IntegratorKind::NAMES`]).
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "path" => Some(IntegratorKind::Path),
+            "guided" => Some(IntegratorKind::Guided),
+            _ => None,
+        }
+    }
+
+    /// Its name in [`IntegratorKind::NAMES`].
+    pub fn name(self) -> &'static str {
+        match self {
+            IntegratorKind::Path => "path",
+            IntegratorKind::Guided => "guided",
+        }
+    }
+}
+
+impl Integrator {
+    /// The integrator of kind `kind` with `settings`; a guided one trains
+    /// its guide with `training_spp` samples per pixel.
+    pub fn new(kind: IntegratorKind, settings: PathSettings, training_spp: u32) -> Self {
+        match kind {
+            IntegratorKind::Path => Integrator::Path(settings),
+            IntegratorKind::Guided => Integrator::Guided(GuidedSettings {
+                path: settings,
+                training_spp,
+            }),
+        }
+    }
+
+    /// Which integrator it is.
+    pub fn kind(&self) -> IntegratorKind {
+        match self {
+            Integrator::Path(_) => IntegratorKind::Path,
+            Integrator::Guided(_) => IntegratorKind::Guided,
+        }
+    }
+
+    /// Its path settings (depth, light samples).
+    pub fn path_settings(&self) -> PathSettings {
+        match *self {
+            Integrator::Path(s) | Integrator::Guided(GuidedSettings { path: s, .. }) => s,
+        }
+    }
+
+    /// The guide's training samples per pixel, for a guided integrator.
+    pub fn guide_training_spp(&self) -> Option<u32> {
+        match self {
+            Integrator::Path(_) => None,
+            Integrator::Guided(g) => Some(g.training_spp),
+        }
+    }
 }
 
 impl Integrator {
@@ -49,29 +141,27 @@ impl Integrator {
 
     /// Maximum number of scattering events.
     pub fn max_depth(&self) -> u32 {
-        match self {
-            Integrator::Path(s) => s.max_depth,
-        }
+        self.path_settings().max_depth
     }
 
     /// Shadow rays per light at each non-specular hit.
     pub fn light_samples(&self) -> u32 {
-        match self {
-            Integrator::Path(s) => s.light_samples,
-        }
+        self.path_settings().light_samples
     }
 
     /// Radiance arriving along a camera ray at the wavelengths `lambda`, as
-    /// linear sRGB. `rays` counts traced rays.
+    /// linear sRGB, guided by `guide` if the integrator is guided and one is
+    /// given. `rays` counts traced rays.
     pub fn radiance(
         &self,
         scene: &CompiledScene,
+        guide: Option<&Guide>,
         camera_ray: Ray,
         lambda: SampledWavelengths,
         sampler: &mut Sampler,
         rays: &mut u64,
     ) -> Rgb {
-        self.li(scene, camera_ray, lambda, sampler, rays)
+        self.li(scene, guide, camera_ray, lambda, sampler, rays)
     }
 
     /// [`Integrator::radiance`], inlined into its caller: the loops over a
@@ -81,12 +171,13 @@ impl Integrator {
     pub(crate) fn li(
         &self,
         scene: &CompiledScene,
+        guide: Option<&Guide>,
         camera_ray: Ray,
         lambda: SampledWavelengths,
         sampler: &mut Sampler,
         rays: &mut u64,
     ) -> Rgb {
-        let (l, lambda) = self.li_spectrum(scene, camera_ray, lambda, sampler, rays);
+        let (l, lambda) = self.li_spectrum(scene, guide, camera_ray, lambda, sampler, rays);
         lambda.to_rgb(l)
     }
 
@@ -97,29 +188,109 @@ impl Integrator {
     pub(crate) fn li_spectrum(
         &self,
         scene: &CompiledScene,
+        guide: Option<&Guide>,
         camera_ray: Ray,
         mut lambda: SampledWavelengths,
         sampler: &mut Sampler,
         rays: &mut u64,
     ) -> (SampledSpectrum, SampledWavelengths) {
         let l = match self {
-            Integrator::Path(settings) => trace_path(scene, camera_ray, &mut lambda, sampler, settings, rays),
+            Integrator::Path(settings) => {
+                trace_path(scene, camera_ray, &mut lambda, sampler, settings, None, None, rays)
+            }
+            Integrator::Guided(settings) => trace_path(
+                scene,
+                camera_ray,
+                &mut lambda,
+                sampler,
+                &settings.path,
+                guide,
+                None,
+                rays,
+            ),
         };
         (l, lambda)
     }
+
+    /// A training path of the guided integrator: traced like a render's,
+    /// guided by `guide` as trained so far, recording the light it finds
+    /// into `recorder`. Returns the rays traced.
+    pub(crate) fn train(
+        &self,
+        scene: &CompiledScene,
+        guide: &Guide,
+        camera_ray: Ray,
+        mut lambda: SampledWavelengths,
+        sampler: &mut Sampler,
+        mut recorder: PathRecorder<'_>,
+    ) -> u64 {
+        let mut rays = 0;
+        let settings = self.path_settings();
+        trace_path(
+            scene,
+            camera_ray,
+            &mut lambda,
+            sampler,
+            &settings,
+            Some(guide),
+            Some(&mut recorder),
+            &mut rays,
+        );
+        recorder.finish();
+        rays
+    }
 }
+
+/// What the guide offers at one guided vertex: once the vertex's region
+/// has learned light, its distribution.
+#[derive(Clone, Copy)]
+struct GuideAt<'g> {
+    distribution: Option<&'g DirectionalTree>,
+}
+
+impl GuideAt<'_> {
+    /// The density of the guided mixture for world direction `wi`, given
+    /// the BSDF's density `bsdf_pdf` for it.
+    #[inline(always)]
+    fn mixture_pdf(&self, bsdf_pdf: f32, wi: Vec3) -> f32 {
+        match self.distribution {
+            Some(d) => BSDF_SAMPLING_FRACTION * bsdf_pdf + (1.0 - BSDF_SAMPLING_FRACTION) * d.pdf(to_square(wi)),
+            None => bsdf_pdf,
+        }
+    }
+}
+
+/// True for BSDFs the guide steers: diffuse and rough ones, where the
+/// light a path finds depends on where it comes from (not for delta lobes
+/// or nearly smooth metal, whose own sampling is better than any guide).
+#[inline(always)]
+fn is_guidable(bsdf: &Bsdf) -> bool {
+    match bsdf {
+        Bsdf::Diffuse { .. } => true,
+        Bsdf::Conductor { alpha, .. } => *alpha >= GUIDED_MIN_ALPHA,
+        Bsdf::Mirror { .. } | Bsdf::Dielectric { .. } => false,
+    }
+}
+
+/// Conductors at least this rough are guided.
+const GUIDED_MIN_ALPHA: f32 = 0.3;
 
 /// Shadow rays stop this fraction short of a sampled light point.
 const SHADOW_EPSILON: f32 = 1e-4;
 
 /// The path tracer's loop, inlined into [`Integrator::li`].
+/// With `guide`, it is the guided path tracer; with `recorder` too, a
+/// training path.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn trace_path(
     scene: &CompiledScene,
     camera_ray: Ray,
     lambda: &mut SampledWavelengths,
     sampler: &mut Sampler,
     settings: &PathSettings,
+    guide: Option<&Guide>,
+    mut recorder: Option<&mut PathRecorder<'_>>,
     rays: &mut u64,
 ) -> SampledSpectrum {
     let n_light = settings.light_samples as f32;
@@ -128,7 +299,8 @@ fn trace_path(
     let mut eta_scale = 1.0f32;
     // The camera ray and specular bounces see emitters directly, without MIS.
     let mut specular_bounce = true;
-    let mut bsdf_pdf = 0.0f32;
+    // The density the last direction was sampled with (BSDF or guided mixture).
+    let mut scatter_pdf = 0.0f32;
     let mut ray = camera_ray;
     let mut depth = 0;
     let mut emitted = EmissionCache::new(scene);
@@ -141,9 +313,13 @@ fn trace_path(
                     let w = if specular_bounce {
                         1.0
                     } else {
-                        power_heuristic(1.0, bsdf_pdf, n_light, light_pdf)
+                        power_heuristic(1.0, scatter_pdf, n_light, light_pdf)
                     };
-                    l += beta * emitted.get(LightRef::Other(i), emission, lambda) * w;
+                    let c = beta * emitted.get(LightRef::Other(i), emission, lambda) * w;
+                    l += c;
+                    if let Some(r) = recorder.as_deref_mut() {
+                        r.contribution(c);
+                    }
                 }
             }
             break;
@@ -157,9 +333,13 @@ fn trace_path(
                 let w = if specular_bounce {
                     1.0
                 } else {
-                    power_heuristic(1.0, bsdf_pdf, n_light, light.pdf(hit.t, cos_light))
+                    power_heuristic(1.0, scatter_pdf, n_light, light.pdf(hit.t, cos_light))
                 };
-                l += beta * emitted.get(LightRef::Area(index as usize), &light.emission, lambda) * w;
+                let c = beta * emitted.get(LightRef::Area(index as usize), &light.emission, lambda) * w;
+                l += c;
+                if let Some(r) = recorder.as_deref_mut() {
+                    r.contribution(c);
+                }
             }
         }
         if depth == settings.max_depth {
@@ -170,36 +350,65 @@ fn trace_path(
         let bsdf = bsdfs.get(scene, hit.material, lambda);
         let frame = Frame::from_normal(hit.shading_normal);
         let wo = frame.to_local(-ray.direction);
+        // The side of the surface the path is on: what the guide tells apart.
+        let facing = if wo.z < 0.0 {
+            -hit.shading_normal
+        } else {
+            hit.shading_normal
+        };
+        let guide_at = guide.filter(|_| is_guidable(&bsdf)).map(|g| GuideAt {
+            distribution: g.distribution(hit.p, facing),
+        });
         if !bsdf.is_specular() && settings.light_samples > 0 {
-            l += beta
-                * direct_lighting(
-                    scene,
-                    &hit,
-                    &bsdf,
-                    &frame,
-                    wo,
-                    lambda,
-                    &mut emitted,
-                    sampler,
-                    settings,
-                    rays,
-                );
+            let direct = direct_lighting(
+                scene,
+                &hit,
+                &bsdf,
+                &frame,
+                wo,
+                lambda,
+                &mut emitted,
+                sampler,
+                settings,
+                guide_at,
+                rays,
+            );
+            let c = beta * direct;
+            l += c;
+            if let Some(r) = recorder.as_deref_mut() {
+                r.contribution(c);
+            }
         }
 
-        // Continue the path by sampling the BSDF.
-        let uc = sampler.get_1d();
-        let u = sampler.get_2d();
-        let Some(bs) = bsdf.sample(wo, uc, u) else {
-            break;
+        // Continue the path by sampling the BSDF, or the guide beside it.
+        let (wi, pdf) = match guide_at {
+            Some(at) => {
+                let Some((wi, f, pdf)) = sample_guided(&bsdf, &frame, wo, at, sampler) else {
+                    break;
+                };
+                beta *= f * (frame.to_local(wi).z.abs() / pdf);
+                specular_bounce = false;
+                (wi, pdf)
+            }
+            None => {
+                let uc = sampler.get_1d();
+                let u = sampler.get_2d();
+                let Some(bs) = bsdf.sample(wo, uc, u) else {
+                    break;
+                };
+                beta *= bs.f * (bs.wi.z.abs() / bs.pdf);
+                specular_bounce = bs.specular;
+                eta_scale *= bs.eta * bs.eta;
+                (frame.from_local(bs.wi), bs.pdf)
+            }
         };
-        beta *= bs.f * (bs.wi.z.abs() / bs.pdf);
         if beta == SampledSpectrum::ZERO || !beta.is_finite() {
             break;
         }
-        specular_bounce = bs.specular;
-        bsdf_pdf = bs.pdf;
-        eta_scale *= bs.eta * bs.eta;
-        let wi = frame.from_local(bs.wi);
+        scatter_pdf = pdf;
+        if let (Some(r), Some(_)) = (recorder.as_deref_mut(), guide_at) {
+            r.scattered(hit.p, facing, wi, pdf, beta);
+        }
         ray = Ray::new(offset_origin(hit.p, hit.geometric_normal, wi), wi);
 
         // Russian roulette on the throughput without the radiance scaling of refraction.
@@ -215,9 +424,34 @@ fn trace_path(
     l
 }
 
+/// A continuation at a guided vertex: from the guide's distribution with
+/// probability 1 − [`BSDF_SAMPLING_FRACTION`], else from the BSDF; returns
+/// the world direction, the BSDF's value for it and the mixture's density.
+#[inline(always)]
+fn sample_guided(
+    bsdf: &Bsdf,
+    frame: &Frame,
+    wo: Vec3,
+    at: GuideAt<'_>,
+    sampler: &mut Sampler,
+) -> Option<(Vec3, SampledSpectrum, f32)> {
+    let choose = sampler.get_1d();
+    let uc = sampler.get_1d();
+    let u = sampler.get_2d();
+    let wi_local = match at.distribution {
+        Some(d) if choose >= BSDF_SAMPLING_FRACTION => frame.to_local(d.sample(u)?.0),
+        _ => bsdf.sample(wo, uc, u)?.wi,
+    };
+    let wi = frame.from_local(wi_local);
+    let pdf = at.mixture_pdf(bsdf.pdf(wo, wi_local), wi);
+    let f = bsdf.eval(wo, wi_local);
+    (pdf > 0.0 && f != SampledSpectrum::ZERO).then_some((wi, f, pdf))
+}
+
 /// Light arriving directly from every light, `light_samples` shadow rays
-/// each, weighted against BSDF sampling with the power heuristic
-/// (Veach's multi-sample model: n_light light samples, one BSDF sample).
+/// each, weighted against BSDF sampling (or the guided mixture's) with the
+/// power heuristic (Veach's multi-sample model: n_light light samples, one
+/// BSDF sample).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn direct_lighting(
@@ -230,6 +464,7 @@ fn direct_lighting(
     emitted: &mut EmissionCache,
     sampler: &mut Sampler,
     settings: &PathSettings,
+    guide_at: Option<GuideAt<'_>>,
     rays: &mut u64,
 ) -> SampledSpectrum {
     let mut shading = Shading {
@@ -242,6 +477,7 @@ fn direct_lighting(
         emitted,
         sampler,
         settings,
+        guide_at,
         rays,
     };
     // Two loops, not one over `dyn` lights: each light's sampling inlines.
@@ -349,6 +585,7 @@ struct Shading<'a> {
     emitted: &'a mut EmissionCache,
     sampler: &'a mut Sampler,
     settings: &'a PathSettings,
+    guide_at: Option<GuideAt<'a>>,
     rays: &'a mut u64,
 }
 
@@ -393,7 +630,9 @@ impl Shading<'_> {
             let w = if ls.delta {
                 1.0
             } else {
-                power_heuristic(n_light, ls.pdf, 1.0, bsdf.pdf(wo, wi))
+                let bsdf_pdf = bsdf.pdf(wo, wi);
+                let scatter_pdf = self.guide_at.map_or(bsdf_pdf, |at| at.mixture_pdf(bsdf_pdf, ls.wi));
+                power_heuristic(n_light, ls.pdf, 1.0, scatter_pdf)
             };
             let emitted = self.emitted.get(light, emission, self.lambda);
             sum += f * emitted * (ls.scale * w / (ls.pdf * n_light));
@@ -406,6 +645,7 @@ impl Shading<'_> {
 mod tests {
     use super::*;
     use crate::accel::BvhSettings;
+    use crate::guiding::Guide;
     use crate::io::load_scene;
     use crate::sampling::{uniform_sphere, SamplerKind};
 
@@ -435,7 +675,7 @@ mod tests {
             integrator: &Integrator,
             rays: &mut u64,
         ) -> Rgb {
-            integrator.li(scene, ray, lambda, sampler, rays)
+            integrator.li(scene, None, ray, lambda, sampler, rays)
         }
         let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/glass-and-gold.toml");
         let scene = load_scene(path.as_ref())
@@ -454,7 +694,7 @@ mod tests {
             let lambda = SampledWavelengths::sample_visible(setup.get_1d());
             let mut sampler_a = Sampler::new(SamplerKind::Sobol, i, 1, 0, 3);
             let mut sampler_b = Sampler::new(SamplerKind::Sobol, i, 1, 0, 3);
-            let a = integrator.radiance(&scene, ray, lambda, &mut sampler_a, &mut rays_a);
+            let a = integrator.radiance(&scene, None, ray, lambda, &mut sampler_a, &mut rays_a);
             // SAFETY: the CPU has every feature `trace_path_v3` is compiled for (checked above).
             let b = unsafe { trace_path_v3(&scene, ray, lambda, &mut sampler_b, &integrator, &mut rays_b) };
             assert_eq!(
@@ -466,5 +706,70 @@ mod tests {
         }
         assert_eq!(rays_a, rays_b);
         assert!(lit > 10_000, "only {lit} paths carried light");
+    }
+
+    /// Paths recorded through the guided loop teach the guide where light
+    /// comes from: paths that start at a point on the Cornell box's floor,
+    /// without light sampling (so only their directions find the lamp),
+    /// leave a guide whose density toward the lamp is many times the
+    /// cosine's that BSDF sampling has, and whose samples hit the lamp
+    /// several times as often.
+    #[test]
+    fn recorded_paths_teach_the_guide_where_the_lamp_is() {
+        let scene = crate::builtin::builtin_scene("cornell-spheres", 0)
+            .unwrap()
+            .compile(&BvhSettings::default())
+            .unwrap();
+        let blind = Integrator::new(
+            IntegratorKind::Guided,
+            PathSettings {
+                max_depth: 16,
+                light_samples: 0,
+            },
+            15,
+        );
+        let mut guide = Guide::new(scene.bounds());
+        let p = Vec3::new(0.0, 0.0, 0.9);
+        for iteration in 0..4u32 {
+            let mut records = Vec::new();
+            for i in 0..20_000u32 {
+                let mut sampler = Sampler::new(SamplerKind::Independent, i, iteration, 0, 3);
+                let ray = Ray::new(p + Vec3::Y, -Vec3::Y);
+                let lambda = SampledWavelengths::sample_visible(sampler.get_1d());
+                let recorder = PathRecorder::new(&mut records, &guide, u64::from(i));
+                blind.train(&scene, &guide, ray, lambda, &mut sampler, recorder);
+            }
+            guide.learn(&records);
+            guide.end_iteration(1 << iteration);
+        }
+        let learned = guide.distribution(p, Vec3::Y).expect("the guide learned light at p");
+        let to_lamp = (Vec3::new(0.0, 1.98, 0.0) - p).normalize();
+        let cosine_pdf = to_lamp.y * std::f32::consts::FRAC_1_PI;
+        let pdf = learned.pdf(to_square(to_lamp));
+        assert!(
+            pdf > 10.0 * cosine_pdf,
+            "density toward the lamp {pdf}, cosine {cosine_pdf}"
+        );
+        let mut rng = crate::sampling::Rng::new(1);
+        let hits = |sample: &mut dyn FnMut() -> Vec3| {
+            (0..10_000)
+                .filter(|_| {
+                    let w = sample();
+                    scene
+                        .intersect(&Ray::new(p + Vec3::Y * 1e-3, w))
+                        .is_some_and(|h| h.area_light.is_some())
+                })
+                .count()
+        };
+        let guided = hits(&mut || learned.sample(Vec2::new(rng.uniform(), rng.uniform())).unwrap().0);
+        let mut rng = crate::sampling::Rng::new(2);
+        let cosine = hits(&mut || {
+            let l = crate::sampling::cosine_hemisphere(Vec2::new(rng.uniform(), rng.uniform()));
+            Vec3::new(l.x, l.z, l.y)
+        });
+        assert!(
+            guided > 4 * cosine,
+            "lamp hits of 10 000: guided {guided}, cosine {cosine}"
+        );
     }
 }

@@ -39,6 +39,7 @@ pub mod defaults;
 pub mod error;
 pub mod film;
 pub mod glass;
+pub mod guiding;
 pub mod integrator;
 pub mod io;
 pub mod lens;

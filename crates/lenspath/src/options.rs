@@ -4,6 +4,7 @@
 //! library's defaults.
 
 use crate::camera::ApertureShape;
+use crate::integrator::IntegratorKind;
 use crate::sampling::SamplerKind;
 use crate::sensor::SensorDescription;
 
@@ -14,6 +15,8 @@ pub struct SceneOptions {
     pub resolution: Option<(u32, u32)>,
     /// Samples per pixel.
     pub spp: Option<u32>,
+    /// The integrator (`[integrator] type`).
+    pub integrator: Option<IntegratorKind>,
     /// Maximum path depth.
     pub max_depth: Option<u32>,
     /// Shadow rays per light per hit.

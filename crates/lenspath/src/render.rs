@@ -12,11 +12,12 @@ use crate::defaults;
 use crate::error::{Error, Result};
 use crate::film::{Filter, Image};
 pub use crate::film::{NormalizedRect, PixelRect};
+use crate::guiding::{Guide, GuideRecord, PathRecorder};
 use crate::integrator::Integrator;
 use crate::math::Rgb;
 use crate::parallel::worker_pool;
 use crate::ray::Ray;
-use crate::sampling::{Sampler, SamplerKind, MAX_SAMPLES_PER_PIXEL};
+use crate::sampling::{hash_u32, Sampler, SamplerKind, MAX_SAMPLES_PER_PIXEL};
 use crate::scene::CompiledScene;
 use crate::sensor::SpectralResponse;
 use crate::spectrum::{SampledWavelengths, LAMBDA_MAX_NM, LAMBDA_MIN_NM};
@@ -83,19 +84,21 @@ impl FilmResponse {
     /// What the film records of the light arriving along a camera ray at
     /// the wavelengths `lambda` ([`Integrator::radiance`]'s arguments).
     #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn reading(
         self,
         integrator: &Integrator,
         scene: &CompiledScene,
+        guide: Option<&Guide>,
         camera_ray: Ray,
         lambda: SampledWavelengths,
         sampler: &mut Sampler,
         rays: &mut u64,
     ) -> Rgb {
         match self {
-            FilmResponse::Srgb => integrator.li(scene, camera_ray, lambda, sampler, rays),
+            FilmResponse::Srgb => integrator.li(scene, guide, camera_ray, lambda, sampler, rays),
             FilmResponse::Sensor(response) => {
-                let (l, lambda) = integrator.li_spectrum(scene, camera_ray, lambda, sampler, rays);
+                let (l, lambda) = integrator.li_spectrum(scene, guide, camera_ray, lambda, sampler, rays);
                 response.electron_rate(&lambda, l)
             }
         }
@@ -288,7 +291,8 @@ pub fn render(
 /// [`render`], continuing from `start` (a saved [`Accumulation`] of the same
 /// scene, camera and settings, with at most `settings.spp` samples) and
 /// saving its state through `checkpoints`. The image is bit-identical to an
-/// uninterrupted render's.
+/// uninterrupted render's: a guided render trains its guide again
+/// ([`train_guide`] is deterministic), which a checkpoint does not hold.
 pub fn render_from(
     scene: &CompiledScene,
     camera: &dyn Camera,
@@ -300,8 +304,157 @@ pub fn render_from(
 ) -> Result<RenderOutput> {
     settings.validate()?;
     let tiles = tiles(settings, start)?;
-    worker_pool(settings.threads)?
-        .install(|| render_in_pool(scene, camera, settings, tiles, checkpoints, progress, cancel))
+    worker_pool(settings.threads)?.install(|| {
+        let started = Instant::now();
+        let trained = settings
+            .integrator
+            .guide_training_spp()
+            .map(|spp| train_in_pool(scene, camera, settings, spp, cancel));
+        let guide = trained.as_ref().map(|(guide, _)| guide);
+        let mut output = render_in_pool(scene, camera, settings, guide, tiles, checkpoints, progress, cancel)?;
+        output.stats.rays += trained.as_ref().map_or(0, |(_, rays)| *rays);
+        output.stats.seconds = started.elapsed().as_secs_f64();
+        Ok(output)
+    })
+}
+
+/// [`render_from`] with a guide trained beforehand by [`train_guide`] for
+/// the same scene, camera and settings (the viewer trains one for all its
+/// steps); the image is [`render_from`]'s, bit for bit.
+#[allow(clippy::too_many_arguments)]
+pub fn render_guided_from(
+    scene: &CompiledScene,
+    camera: &dyn Camera,
+    settings: &RenderSettings,
+    guide: &Guide,
+    start: Option<Accumulation>,
+    checkpoints: Option<Checkpoints<'_>>,
+    progress: &(dyn Fn(u64, u64) + Sync),
+    cancel: &AtomicBool,
+) -> Result<RenderOutput> {
+    settings.validate()?;
+    let tiles = tiles(settings, start)?;
+    worker_pool(settings.threads)?.install(|| {
+        render_in_pool(
+            scene,
+            camera,
+            settings,
+            Some(guide),
+            tiles,
+            checkpoints,
+            progress,
+            cancel,
+        )
+    })
+}
+
+/// Trains the guide of a guided render of `scene` through `camera` with
+/// `settings` (`None` when its integrator is not guided, or when `cancel`
+/// stopped the training): iterations of 1, 2, 4, ... samples per pixel over
+/// the whole image (whatever its crop, so a crop's pixels are the full
+/// render's), as many as fit in the integrator's training samples, each with
+/// its own sample sequence and guided by what the ones before it learned.
+/// Those samples train the guide only; the image is rendered after, with
+/// the guide fixed. Deterministic: the same guide for any thread count.
+pub fn train_guide(
+    scene: &CompiledScene,
+    camera: &dyn Camera,
+    settings: &RenderSettings,
+    cancel: &AtomicBool,
+) -> Result<Option<Guide>> {
+    settings.validate()?;
+    let Some(spp) = settings.integrator.guide_training_spp() else {
+        return Ok(None);
+    };
+    let (guide, _) = worker_pool(settings.threads)?.install(|| train_in_pool(scene, camera, settings, spp, cancel));
+    Ok((!cancel.load(Ordering::Relaxed)).then_some(guide))
+}
+
+/// The samples per pixel of each training iteration within `training_spp`:
+/// 1, 2, 4, ... while their sum fits (one iteration at least).
+pub fn guide_training_iterations(training_spp: u32) -> Vec<u32> {
+    let mut iterations = vec![1u32];
+    let mut used = 1u32;
+    loop {
+        let next = 2 * iterations[iterations.len() - 1];
+        if used + next > training_spp {
+            return iterations;
+        }
+        iterations.push(next);
+        used += next;
+    }
+}
+
+/// Paths a training batch traces before its records are learned: bounds
+/// the records held at once.
+const TRAINING_BATCH_PATHS: u32 = 1 << 19;
+
+/// [`train_guide`] inside the worker pool; also returns the rays traced.
+/// Stops early (with what it learned) when `cancel` is set.
+fn train_in_pool(
+    scene: &CompiledScene,
+    camera: &dyn Camera,
+    settings: &RenderSettings,
+    training_spp: u32,
+    cancel: &AtomicBool,
+) -> (Guide, u64) {
+    let mut guide = Guide::new(scene.bounds());
+    let mut rays = 0u64;
+    for (iteration, spp) in guide_training_iterations(training_spp).into_iter().enumerate() {
+        // A sequence of its own: the render's samples stay independent of the guide's.
+        let seed = hash_u32(settings.seed ^ hash_u32(0x6775_6964 + iteration as u32));
+        let rows_per_batch = (TRAINING_BATCH_PATHS / (settings.width * spp)).max(1);
+        for y0 in (0..settings.height).step_by(rows_per_batch as usize) {
+            if cancel.load(Ordering::Relaxed) {
+                return (guide, rays);
+            }
+            let rows: Vec<(Vec<GuideRecord>, u64)> = (y0..(y0 + rows_per_batch).min(settings.height))
+                .into_par_iter()
+                .map(|py| train_row(scene, camera, settings, &guide, py, spp, seed))
+                .collect();
+            let records: Vec<GuideRecord> = rows.iter().flat_map(|(r, _)| r.iter().copied()).collect();
+            rays += rows.iter().map(|(_, n)| n).sum::<u64>();
+            guide.learn(&records);
+        }
+        guide.end_iteration(spp);
+    }
+    (guide, rays)
+}
+
+/// Training paths of row `py` of the image, `spp` per pixel with sample
+/// sequence `seed`: their records in pixel then sample order, and the rays
+/// they traced.
+#[multiversion::multiversion(targets("x86_64+avx+avx2+fma+bmi1+bmi2+lzcnt+movbe+f16c"))]
+fn train_row(
+    scene: &CompiledScene,
+    camera: &dyn Camera,
+    settings: &RenderSettings,
+    guide: &Guide,
+    py: u32,
+    spp: u32,
+    seed: u32,
+) -> (Vec<GuideRecord>, u64) {
+    let mut records = Vec::new();
+    let mut rays = 0u64;
+    for px in 0..settings.width {
+        for index in 0..spp {
+            let (mut sampler, mut sample) =
+                pixel_sample(settings.sampler, px as i32, py as i32, index, seed, settings.filter);
+            if let Some(nm) = settings.wavelength_nm {
+                sample.wavelengths = SampledWavelengths::single(nm);
+            }
+            rays += 1;
+            if let Some(cr) = camera.generate_ray(sample) {
+                let pixel = u64::from(py * settings.width + px);
+                let path_seed = (u64::from(seed) << 32 ^ pixel).wrapping_mul(0x9e37_79b9) + u64::from(index);
+                let recorder = PathRecorder::new(&mut records, guide, path_seed);
+                rays += settings
+                    .integrator
+                    .train(scene, guide, cr.ray, cr.wavelengths, &mut sampler, recorder);
+            }
+        }
+    }
+    (records, rays)
 }
 
 /// The region a render covers: its crop, else the whole image.
@@ -447,6 +600,7 @@ fn render_tile(
     scene: &CompiledScene,
     camera: &dyn Camera,
     settings: &RenderSettings,
+    guide: Option<&Guide>,
     tile: &mut Tile,
     pass_end: u32,
 ) -> (u64, u64) {
@@ -493,6 +647,7 @@ fn render_tile(
                                 None => settings.film.reading(
                                     integrator,
                                     scene,
+                                    guide,
                                     cr.ray,
                                     cr.wavelengths,
                                     sampler,
@@ -501,7 +656,7 @@ fn render_tile(
                                 // One wavelength at density 1: the estimate is the radiance itself.
                                 Some(_) => Rgb::splat(
                                     integrator
-                                        .li_spectrum(scene, cr.ray, cr.wavelengths, sampler, &mut tile_rays)
+                                        .li_spectrum(scene, guide, cr.ray, cr.wavelengths, sampler, &mut tile_rays)
                                         .0
                                         .x,
                                 ),
@@ -543,10 +698,12 @@ fn next_pass_size(last: u32, checkpoints: Option<&Checkpoints<'_>>, seconds_per_
     }
 }
 
+#[allow(clippy::too_many_arguments)]
 fn render_in_pool(
     scene: &CompiledScene,
     camera: &dyn Camera,
     settings: &RenderSettings,
+    guide: Option<&Guide>,
     mut tiles: Vec<Tile>,
     mut checkpoints: Option<Checkpoints<'_>>,
     progress: &(dyn Fn(u64, u64) + Sync),
@@ -573,7 +730,7 @@ fn render_in_pool(
                 return;
             }
             let before = tile_samples(tile);
-            let (tile_rays, tile_invalid) = render_tile(scene, camera, settings, tile, pass_end);
+            let (tile_rays, tile_invalid) = render_tile(scene, camera, settings, guide, tile, pass_end);
             rays.fetch_add(tile_rays, Ordering::Relaxed);
             invalid.fetch_add(tile_invalid, Ordering::Relaxed);
             let n = tile_samples(tile) - before;

@@ -21,7 +21,7 @@ use crate::camera::{
 use crate::defaults;
 use crate::error::{Error, Result};
 use crate::film::{Filter, Image, NormalizedRect, PixelRect};
-use crate::integrator::Integrator;
+use crate::integrator::{Integrator, IntegratorKind, PathSettings};
 use crate::lens::{LensPrescription, LensSystem};
 use crate::options::SceneOptions;
 use crate::render::{FilmResponse, RenderSettings};
@@ -40,6 +40,8 @@ pub struct RenderOverrides {
     pub resolution: Option<(u32, u32)>,
     /// Samples per pixel.
     pub spp: Option<u32>,
+    /// The integrator (path or guided).
+    pub integrator: Option<IntegratorKind>,
     /// Maximum path depth.
     pub max_depth: Option<u32>,
     /// Shadow rays per light at each non-specular hit.
@@ -261,12 +263,19 @@ pub fn resolve_settings(options: &SceneOptions, overrides: &RenderOverrides) -> 
         width,
         height,
         spp: overrides.spp.or(options.spp).unwrap_or(defaults::SPP),
-        integrator: Integrator::path(
-            overrides.max_depth.or(options.max_depth).unwrap_or(defaults::MAX_DEPTH),
+        integrator: Integrator::new(
             overrides
-                .light_samples
-                .or(options.light_samples)
-                .unwrap_or(defaults::LIGHT_SAMPLES),
+                .integrator
+                .or(options.integrator)
+                .unwrap_or(defaults::INTEGRATOR),
+            PathSettings {
+                max_depth: overrides.max_depth.or(options.max_depth).unwrap_or(defaults::MAX_DEPTH),
+                light_samples: overrides
+                    .light_samples
+                    .or(options.light_samples)
+                    .unwrap_or(defaults::LIGHT_SAMPLES),
+            },
+            defaults::GUIDE_TRAINING_SPP,
         ),
         seed: overrides.seed.or(options.seed).unwrap_or(defaults::SEED),
         sampler: overrides.sampler.or(options.sampler).unwrap_or(defaults::SAMPLER),

@@ -12,6 +12,7 @@ use axum::body::Bytes;
 use glam::Vec3;
 use lenspath::camera::{ApertureShape, CameraPose, LensFocus, RealisticCamera, RealisticCameraSettings};
 use lenspath::film::Image;
+use lenspath::integrator::IntegratorKind;
 use lenspath::io::scene_file::{SceneBase, SceneSettingsFile, SensorTable};
 use lenspath::lens::{AnalysisSettings, LensAnalysis, LensPrescription, TableConvention};
 use lenspath::options::SceneOptions;
@@ -74,10 +75,18 @@ pub struct ViewSettings {
     pub seed: u32,
     /// `sobol` or `independent`.
     pub sampler: String,
+    /// `path` or `guided` (the integrator).
+    #[serde(default = "default_integrator")]
+    pub integrator: String,
     /// Record through an image sensor (`None`: linear radiance): a scene
     /// file's `[sensor]` table, the same names and spellings.
     #[serde(default)]
     pub sensor: Option<SensorTable>,
+}
+
+/// The integrator of settings that do not name one: the library's default.
+fn default_integrator() -> String {
+    lenspath::defaults::INTEGRATOR.name().into()
 }
 
 /// The autofocus request of a click or a dragged rectangle.
@@ -408,6 +417,7 @@ impl Session {
             light_samples: s.light_samples,
             seed: s.seed,
             sampler: view.render.sampler,
+            integrator: view.render.integrator.kind(),
             sensor: s.sensor.as_ref().map(SensorTable::description).transpose()?,
         }
         .to_toml()?;
@@ -434,6 +444,7 @@ impl Session {
             "lenses": self.config.lens_names(),
             "metrics": lenspath::autofocus::FOCUS_MEASURES.iter().map(|(n, _)| *n).collect::<Vec<_>>(),
             "strategies": lenspath::autofocus::STRATEGIES.iter().map(|(n, _)| *n).collect::<Vec<_>>(),
+            "integrators": IntegratorKind::NAMES,
             "sensor_depth_mm": v.sensor_depth_mm,
             "focus_distance_m": v.focus_distance_m,
             "focus_range_mm": [v.focus_range_mm.0, v.focus_range_mm.1],
@@ -560,6 +571,13 @@ impl Config {
                 settings.sampler
             ))
         })?;
+        let integrator = IntegratorKind::from_name(&settings.integrator).ok_or_else(|| {
+            Error::InvalidArgument(format!(
+                "integrator must be one of {}, got '{}'",
+                IntegratorKind::NAMES.join(", "),
+                settings.integrator
+            ))
+        })?;
         let aperture = ApertureShape::parse(&settings.aperture)?;
         if let Some(n) = settings.f_number {
             if !(n > 0.0 && n.is_finite()) {
@@ -600,6 +618,7 @@ impl Config {
                 light_samples: Some(settings.light_samples),
                 seed: Some(settings.seed),
                 sampler: Some(sampler),
+                integrator: Some(integrator),
                 threads: self.threads,
                 // Left to the EXR download (`render::render_depth`): the first preview comes sooner.
                 depth: Some(false),
@@ -719,6 +738,7 @@ fn initial_settings(options: &SceneOptions, view: &SceneView, resolution: (u32, 
         light_samples: s.integrator.light_samples(),
         seed: s.seed,
         sampler: s.sampler.name().into(),
+        integrator: s.integrator.kind().name().into(),
         sensor: options.sensor.as_ref().map(SensorTable::of),
     })
 }

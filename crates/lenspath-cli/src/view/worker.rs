@@ -13,8 +13,12 @@ use std::time::{Duration, Instant};
 
 use axum::body::Bytes;
 use lenspath::autofocus::Focuser;
+use lenspath::guiding::Guide;
+use lenspath::integrator::Integrator;
 use lenspath::io::image::encode_jpeg;
-use lenspath::render::{render, render_from, Accumulation, Checkpoints, NormalizedRect};
+use lenspath::render::{
+    render, render_from, render_guided_from, train_guide, Accumulation, Checkpoints, NormalizedRect,
+};
 use lenspath::sensor::SensorSettings;
 use lenspath::setup::{autofocus_setup, AutofocusOverrides};
 use lenspath::Result;
@@ -52,6 +56,8 @@ struct Progress {
     generation: u64,
     /// The sums so far (`None`: nothing rendered yet).
     state: Option<Accumulation>,
+    /// The guided integrator's guide, trained before the first step.
+    guide: Option<Guide>,
     /// Whether the generation's half-size preview was sent.
     previewed: bool,
     /// Whether its first full-size frame was sent.
@@ -64,6 +70,7 @@ impl Progress {
         Progress {
             generation,
             state: None,
+            guide: None,
             previewed: false,
             shown: false,
         }
@@ -136,19 +143,39 @@ fn step(session: &Session, progress: &mut Progress, view: &Arc<View>, changed_at
         reached = Some(state.clone());
         Ok(())
     };
-    let output = render_from(
-        &session.scene,
-        &view.camera,
-        &settings,
-        progress.state.take(),
-        Some(Checkpoints {
-            // Only the final save, when the step ends or is stopped: the sums to go on from.
-            every: Duration::from_secs(86_400),
-            save: &mut keep,
-        }),
-        &|_, _| {},
-        &session.cancel,
-    )?;
+    // A guided render's guide is trained once, for every step of this view.
+    if progress.guide.is_none() && settings.integrator.guide_training_spp().is_some() {
+        progress.guide = train_guide(&session.scene, &view.camera, &settings, &session.cancel)?;
+        if progress.guide.is_none() {
+            return Ok(());
+        }
+    }
+    let checkpoints = Some(Checkpoints {
+        // Only the final save, when the step ends or is stopped: the sums to go on from.
+        every: Duration::from_secs(86_400),
+        save: &mut keep,
+    });
+    let output = match &progress.guide {
+        Some(guide) => render_guided_from(
+            &session.scene,
+            &view.camera,
+            &settings,
+            guide,
+            progress.state.take(),
+            checkpoints,
+            &|_, _| {},
+            &session.cancel,
+        )?,
+        None => render_from(
+            &session.scene,
+            &view.camera,
+            &settings,
+            progress.state.take(),
+            checkpoints,
+            &|_, _| {},
+            &session.cancel,
+        )?,
+    };
     progress.state = reached;
     if output.stats.cancelled {
         return Ok(());
@@ -196,6 +223,8 @@ fn preview(session: &Session, generation: u64, view: &View, changed_at: Instant)
         width,
         height,
         spp: 1,
+        // Unguided: a guide would take longer to train than the preview to render.
+        integrator: Integrator::Path(view.render.integrator.path_settings()),
         ..view.render
     };
     let output = render(&session.scene, &camera, &settings, &|_, _| {}, &session.cancel)?;

@@ -309,7 +309,16 @@ fn record_row(
             let film = camera_sample.film;
             let sample = camera.generate_lens_sample(camera_sample);
             let l = sample.ray.map_or(Vec3::ZERO, |cr| {
-                cr.weight * response.reading(&integrator, scene, cr.ray, cr.wavelengths, &mut sampler, &mut rays)
+                cr.weight
+                    * response.reading(
+                        &integrator,
+                        scene,
+                        None,
+                        cr.ray,
+                        cr.wavelengths,
+                        &mut sampler,
+                        &mut rays,
+                    )
             });
             row.push(Record {
                 film,

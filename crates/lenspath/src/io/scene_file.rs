@@ -22,6 +22,7 @@ use crate::builtin::{builtin_scene, DEFAULT_MESH_TRIANGLES};
 use crate::camera::{ApertureShape, CameraPose};
 use crate::error::{Error, Result};
 use crate::glass::Dispersion;
+use crate::integrator::IntegratorKind;
 use crate::lights::Light;
 use crate::materials::Material;
 use crate::math::Rgb;
@@ -251,6 +252,9 @@ impl SensorTable {
 #[derive(Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 struct IntegratorSpec {
+    /// `path` or `guided` ([`IntegratorKind::NAMES`]).
+    #[serde(rename = "type", skip_serializing_if = "Option::is_none")]
+    kind: Option<String>,
     spp: Option<u32>,
     max_depth: Option<u32>,
     light_samples: Option<u32>,
@@ -450,6 +454,15 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
         options.max_depth = i.max_depth.or(options.max_depth);
         options.light_samples = i.light_samples.or(options.light_samples);
         options.seed = i.seed.or(options.seed);
+        if let Some(name) = &i.kind {
+            let kind = IntegratorKind::from_name(name).ok_or_else(|| {
+                fail(format!(
+                    "[integrator] type must be one of {}, got '{name}'",
+                    IntegratorKind::NAMES.join(", ")
+                ))
+            })?;
+            options.integrator = Some(kind);
+        }
         if let Some(name) = &i.sampler {
             let kind = SamplerKind::from_name(name).ok_or_else(|| {
                 fail(format!(
@@ -709,6 +722,8 @@ pub struct SceneSettingsFile {
     pub dispersion: bool,
     /// Image width and height in pixels.
     pub resolution: (u32, u32),
+    /// The integrator.
+    pub integrator: IntegratorKind,
     /// Samples per pixel.
     pub spp: u32,
     /// Maximum path depth.
@@ -765,6 +780,7 @@ impl SceneSettingsFile {
                 height: self.resolution.1,
             }),
             integrator: Some(IntegratorSpec {
+                kind: Some(self.integrator.name().into()),
                 spp: Some(self.spp),
                 max_depth: Some(self.max_depth),
                 light_samples: Some(self.light_samples),

@@ -45,7 +45,7 @@ fn render_scene(scene: Scene, camera: &PerspectiveCamera, s: &RenderSettings) ->
 }
 
 /// Mean and standard error of the mean of one channel over the pixels.
-fn mean_and_error(values: &[f32]) -> (f64, f64) {
+pub(crate) fn mean_and_error(values: &[f32]) -> (f64, f64) {
     let n = values.len() as f64;
     let mean = values.iter().map(|&v| f64::from(v)).sum::<f64>() / n;
     let var = values.iter().map(|&v| (f64::from(v) - mean).powi(2)).sum::<f64>() / (n - 1.0);

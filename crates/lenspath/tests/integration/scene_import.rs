@@ -403,6 +403,7 @@ fn settings_file_reads_back_exactly() {
         light_samples: 3,
         seed: 4_000_000_000,
         sampler: SamplerKind::Independent,
+        integrator: lenspath::integrator::IntegratorKind::Guided,
         sensor: Some(SensorDescription {
             model: Some("nikon_d850".into()),
             cfa: Some(Cfa::Gbrg),
@@ -438,8 +439,12 @@ fn settings_file_reads_back_exactly() {
         assert_eq!(o.resolution, Some(written.resolution));
         assert_eq!((o.spp, o.max_depth, o.light_samples), (Some(37), Some(9), Some(3)));
         assert_eq!(
-            (o.seed, o.sampler),
-            (Some(4_000_000_000), Some(SamplerKind::Independent))
+            (o.seed, o.sampler, o.integrator),
+            (
+                Some(4_000_000_000),
+                Some(SamplerKind::Independent),
+                Some(lenspath::integrator::IntegratorKind::Guided)
+            )
         );
         assert_eq!(o.scene_unit_m, Some(written.scene_unit_m));
         let camera = realistic_settings(o, &view, &RealisticDescription::default(), 123, 45).unwrap();

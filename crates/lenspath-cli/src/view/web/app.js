@@ -146,6 +146,7 @@ function showState(s) {
   $("sensor-depth-value").textContent = `${s.sensor_depth_mm.toFixed(3)} mm`;
   setValue($("focus-distance"), s.focus_distance_m == null ? "" : s.focus_distance_m.toFixed(3));
   setValue($("max-spp"), settings.max_spp);
+  fillSelect($("integrator"), s.integrators, settings.integrator);
   showSensor(s);
   $("layout").src = `/api/layout.svg?generation=${s.generation}`;
   $("layout-caption").textContent = `sensor ${s.sensor_depth_mm.toFixed(3)} mm behind the stop`;
@@ -473,6 +474,7 @@ $("focus-distance").addEventListener("change", (e) => {
   change({ focus: { by: "distance", distance_m: Number(e.target.value) } });
 });
 $("max-spp").addEventListener("change", (e) => change({ max_spp: Number(e.target.value) }));
+$("integrator").addEventListener("change", (e) => change({ integrator: e.target.value }));
 for (const id of ["sensor-on", ...SENSOR_CONTROLS]) $(id).addEventListener("change", sendSensor);
 
 let initial = null;
