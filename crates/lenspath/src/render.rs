@@ -423,8 +423,9 @@ fn train_in_pool(
 
 /// Training paths of row `py` of the image, `spp` per pixel with sample
 /// sequence `seed`: their records in pixel then sample order, and the rays
-/// they traced.
-#[multiversion::multiversion(targets("x86_64+avx+avx2+fma+bmi1+bmi2+lzcnt+movbe+f16c"))]
+/// they traced. Compiled for the baseline CPU only (unlike the tiles): the
+/// training is a small part of a guided render, and each copy of the
+/// inlined path loop costs the build time.
 fn train_row(
     scene: &CompiledScene,
     camera: &dyn Camera,
