@@ -316,10 +316,7 @@ fn trace_path(
                         power_heuristic(1.0, scatter_pdf, n_light, light_pdf)
                     };
                     let c = beta * emitted.get(LightRef::Other(i), emission, lambda) * w;
-                    l += c;
-                    if let Some(r) = recorder.as_deref_mut() {
-                        r.contribution(c);
-                    }
+                    add_light(&mut l, &mut recorder, c);
                 }
             }
             break;
@@ -336,10 +333,7 @@ fn trace_path(
                     power_heuristic(1.0, scatter_pdf, n_light, light.pdf(hit.t, cos_light))
                 };
                 let c = beta * emitted.get(LightRef::Area(index as usize), &light.emission, lambda) * w;
-                l += c;
-                if let Some(r) = recorder.as_deref_mut() {
-                    r.contribution(c);
-                }
+                add_light(&mut l, &mut recorder, c);
             }
         }
         if depth == settings.max_depth {
@@ -373,11 +367,7 @@ fn trace_path(
                 guide_at,
                 rays,
             );
-            let c = beta * direct;
-            l += c;
-            if let Some(r) = recorder.as_deref_mut() {
-                r.contribution(c);
-            }
+            add_light(&mut l, &mut recorder, beta * direct);
         }
 
         // Continue the path by sampling the BSDF, or the guide beside it.
@@ -422,6 +412,16 @@ fn trace_path(
         }
     }
     l
+}
+
+/// Adds `c` to the path's estimate `l`, and, on a training path, to the
+/// light its recorded vertices received.
+#[inline(always)]
+fn add_light(l: &mut SampledSpectrum, recorder: &mut Option<&mut PathRecorder<'_>>, c: SampledSpectrum) {
+    *l += c;
+    if let Some(r) = recorder.as_deref_mut() {
+        r.contribution(c);
+    }
 }
 
 /// A continuation at a guided vertex: from the guide's distribution with
