@@ -1,8 +1,7 @@
 """Path guiding against the plain path tracer (issue 33): error against a
 converged reference as a function of wall time, on the same machine in one run.
 
-    target/python-venv/bin/python bench/guiding.py SCENE REFERENCE.exr [--spp 16 32 64 128]
-                                                   [--training 15] [--seed 1]
+    target/python-venv/bin/python bench/guiding.py SCENE REFERENCE.exr [--spp 16 32 64 128] [--seed 1]
 
 SCENE is a scene file (scenes/glass-and-gold.toml, scenes/caustics.toml) or a
 built-in scene name; REFERENCE an EXR of it rendered long with the path tracer
@@ -11,7 +10,7 @@ at the size to compare at, for example
     lenspath render scenes/glass-and-gold.toml --res 320x240 --spp 2048 --seed 7 --out ref.exr
 
 Both integrators render the scene at each --spp (the guided one trains its
-guide first, --training samples per pixel, counted in its time) through the
+guide first, `defaults()["guide_training_spp"]` samples per pixel, counted in its time) through the
 scene's own camera. For each render: the wall time, the mean squared error
 against the reference (all pixels; and the top third of the image, the back
 wall in both scenes), the fireflies there (pixels over three times the median
@@ -58,7 +57,6 @@ def main() -> None:
     parser.add_argument("scene")
     parser.add_argument("reference")
     parser.add_argument("--spp", type=int, nargs="+", default=[16, 32, 64, 128])
-    parser.add_argument("--training", type=int, default=lenspath.defaults()["guide_training_spp"])
     parser.add_argument("--seed", type=int, default=1)
     args = parser.parse_args()
 

@@ -128,6 +128,11 @@ def test_a_diffuse_sphere_under_a_uniform_sky_has_its_albedo(sampler: str) -> No
             ValueError,
             "unknown integrator 'bdpt'; expected one of: path, guided",
         ),
+        (
+            lambda: lenspath.render("cornell-spheres", threads=100_000),
+            ValueError,
+            "100000 threads asked for; at most 1024",
+        ),
         (lambda: lenspath.render("no-such-scene.obj"), OSError, "no-such-scene.obj"),
         (lambda: lenspath.render(42), TypeError, "scene must be"),
         (lambda: lenspath.Camera.realistic("nikkor"), ValueError, "unknown built-in lens 'nikkor'"),

@@ -291,6 +291,18 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
             "--checkpoint-every needs --checkpoint FILE (or --resume FILE)".into(),
         ));
     }
+    if let Some(every) = args.checkpoint_every {
+        lenspath::render::check_checkpoint_interval(every)
+            .map_err(|e| Error::InvalidArgument(format!("--checkpoint-every: {e}")))?;
+    }
+    if let Some(path) = &checkpoint_path {
+        if same_file(path, &args.out) {
+            return Err(Error::InvalidArgument(format!(
+                "{} is both the checkpoint and the output image; give them different names",
+                path.display()
+            )));
+        }
+    }
     if let Some(path) = &args.checkpoint {
         lenspath::io::check_writable(path)?;
     }
@@ -446,4 +458,10 @@ fn exposure_line(frame: &RawFrame) -> String {
         100.0 * clipped as f64 / frame.dn.len() as f64,
         frame.electrons_per_dn
     )
+}
+
+/// True when `a` and `b` name the same file (existing or not).
+fn same_file(a: &Path, b: &Path) -> bool {
+    let resolved = |p: &Path| p.canonicalize().or_else(|_| std::path::absolute(p));
+    matches!((resolved(a), resolved(b)), (Ok(a), Ok(b)) if a == b)
 }

@@ -154,9 +154,7 @@ impl RenderSettings {
                 self.integrator.light_samples()
             ));
         }
-        if self.threads == Some(0) {
-            return fail("threads must be at least 1".into());
-        }
+        crate::parallel::check_threads(self.threads)?;
         if self.tile_size == 0 {
             return fail("tile size must be positive".into());
         }
@@ -239,11 +237,18 @@ impl Accumulation {
     }
 }
 
+/// Least time between two checkpoint saves a front end accepts
+/// ([`check_checkpoint_interval`]): a save writes the whole image's sums,
+/// so saving after every pass spends the render writing them. (The library
+/// itself saves as often as [`Checkpoints::every`] says: 0 is after every
+/// pass, which its tests use.)
+pub const MIN_CHECKPOINT_INTERVAL: Duration = Duration::from_millis(100);
+
 /// Periodic saving of a render's [`Accumulation`], so a stopped or killed
 /// render can continue ([`render_from`]).
 pub struct Checkpoints<'a> {
-    /// Least time between two saves. Passes are kept short enough (about half
-    /// of it) that a save is seldom late.
+    /// Least time between two saves. Passes are kept short enough (about
+    /// half of it) that a save is seldom late.
     pub every: Duration,
     /// Saves the state; called at most every `every`, and once more when the
     /// render finishes or is stopped. An error stops the render.
@@ -346,6 +351,18 @@ pub fn render_guided_from(
             cancel,
         )
     })
+}
+
+/// Fails for a checkpoint interval under [`MIN_CHECKPOINT_INTERVAL`].
+pub fn check_checkpoint_interval(every: Duration) -> Result<()> {
+    if every < MIN_CHECKPOINT_INTERVAL {
+        return Err(Error::InvalidArgument(format!(
+            "checkpoints at most every {} s, asked for every {} s",
+            MIN_CHECKPOINT_INTERVAL.as_secs_f64(),
+            every.as_secs_f64()
+        )));
+    }
+    Ok(())
 }
 
 /// Trains the guide of a guided render of `scene` through `camera` with

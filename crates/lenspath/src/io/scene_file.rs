@@ -374,8 +374,16 @@ pub fn load_scene_file(path: &Path) -> Result<LoadedScene> {
     load_included(path, &[])
 }
 
+/// Most scene files deep a chain of `base` and mesh files may go: far more
+/// than any scene needs, and well within the stack of any thread that
+/// loads a scene (a chain of 1 700 overflowed the CLI's).
+pub const MAX_INCLUDE_DEPTH: usize = 64;
+
 /// Loads `path`, which `including` (outermost first) reached through `base` or mesh files.
 fn load_included(path: &Path, including: &[PathBuf]) -> Result<LoadedScene> {
+    if including.len() >= MAX_INCLUDE_DEPTH {
+        return Err(Error::InvalidScene(too_deep(&including[0], path)));
+    }
     let text = super::read_text(path, crate::FileKind::Scene)?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let canonical = path.canonicalize().map_err(|e| super::io_error(path, e))?;
@@ -406,6 +414,26 @@ fn load_included(path: &Path, including: &[PathBuf]) -> Result<LoadedScene> {
     })
 }
 
+/// The message of a chain of included files from `outermost` that reached
+/// `path` past [`MAX_INCLUDE_DEPTH`].
+fn too_deep(outermost: &Path, path: &Path) -> String {
+    format!(
+        "{}: more than {MAX_INCLUDE_DEPTH} scene files deep (a chain of base or mesh files reaching {})",
+        outermost.display(),
+        path.display()
+    )
+}
+
+/// `e`, an error loading a file this scene file includes, said as `fail`
+/// says it after `what` ("base", "shape 3"); a chain too deep is passed on
+/// as it is, or its message would name every file of the chain.
+fn included_error(e: Error, what: &str, fail: impl Fn(String) -> Error) -> Error {
+    match e {
+        Error::InvalidScene(m) if m.contains("scene files deep") => Error::InvalidScene(m),
+        e => fail(format!("{what}: {e}")),
+    }
+}
+
 /// Parses scene-file text; `load` reads the `base` and mesh files it names.
 pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<LoadedScene>) -> Result<LoadedScene> {
     let fail = |m: String| Error::Parse {
@@ -423,7 +451,7 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
             (scene, SceneOptions::default(), Warnings::default(), 1)
         }
         (Some(base), None) => {
-            let b = load(base).map_err(|e| fail(format!("base: {e}")))?;
+            let b = load(base).map_err(|e| included_error(e, "base", fail))?;
             let mut warnings = Warnings::default();
             for (w, n) in b.warnings.iter() {
                 warnings.add_n(format!("{}: {w}", base.display()), n);
@@ -547,7 +575,7 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
                 ..
             } => {
                 let m = matrix(transform).map_err(|e| fail(format!("{what}: {e}")))?;
-                let sub = load(mesh_file).map_err(|e| fail(format!("{what}: {e}")))?;
+                let sub = load(mesh_file).map_err(|e| included_error(e, &what, fail))?;
                 for (w, n) in sub.warnings.iter() {
                     // The sub-file's own default camera and light are not wanted here.
                     if !w.starts_with("no camera") && !w.starts_with("no lights") {

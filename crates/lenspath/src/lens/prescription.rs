@@ -49,6 +49,10 @@ pub(crate) struct TableRow {
     pub shape: SurfaceShape,
 }
 
+/// Radii at least this large (mm) are flats: over a 100 mm aperture such a
+/// sphere departs from its tangent plane by less than a nanometre.
+pub const FLAT_RADIUS_MM: f64 = 1e10;
+
 impl TableRow {
     /// A row with these columns, read at `location`.
     pub(crate) fn new(
@@ -200,6 +204,8 @@ impl LensPrescription {
 
     /// Parses a table; `source` names it in errors.
     pub fn parse(text: &str, source: &str, convention: TableConvention) -> Result<LensPrescription> {
+        // A byte-order mark (some Windows editors write one) is not part of line 1.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         let fail = |line: usize, message: String| Error::Parse {
             kind: crate::FileKind::Lens,
             path: source.into(),
@@ -320,6 +326,13 @@ impl LensPrescription {
             if radius_mm.is_nan() {
                 return Err(fail(line, "radius is not a number".into()));
             }
+            // Tables write a flat as a huge radius too (1e20, 1e18): its
+            // sphere's centre is beyond what f64 can intersect with.
+            let radius_mm = if radius_mm.abs() >= FLAT_RADIUS_MM {
+                f64::INFINITY.copysign(radius_mm)
+            } else {
+                radius_mm
+            };
             if glass_column.is_some() && ior <= 1.0 {
                 return Err(fail(
                     line,
@@ -605,6 +618,27 @@ mod tests {
         let lens = LensPrescription::parse(table, "t", TableConvention::Auto).unwrap();
         let thicknesses: Vec<f64> = lens.surfaces.iter().map(|s| s.thickness_mm).collect();
         assert_eq!(thicknesses, [0.0, 6.0, 2.5, 95.95]);
+    }
+
+    /// A byte-order mark before line 1 is ignored, and a flat written as a
+    /// huge radius (1e20, as some tables do) is the same lens as `inf`.
+    #[test]
+    fn a_byte_order_mark_and_huge_radii_read_as_intended() {
+        let flat = "50 5 1.5 20\n0 5 0 18\ninf 40 1 20\n";
+        let reference = LensPrescription::parse(flat, "a", TableConvention::Auto).unwrap();
+        for table in [
+            format!("\u{feff}# made on Windows\n{flat}"),
+            flat.replace("inf", "1e20"),
+            flat.replace("inf", "-1e18"),
+        ] {
+            let lens = LensPrescription::parse(&table, "b", TableConvention::Auto).unwrap_or_else(|e| panic!("{e}"));
+            assert_eq!(lens.surfaces.len(), 3);
+            assert_eq!(lens.surfaces[2].curvature(), 0.0, "{table}");
+            assert_eq!(
+                lens.surfaces.iter().map(|s| s.thickness_mm).collect::<Vec<_>>(),
+                reference.surfaces.iter().map(|s| s.thickness_mm).collect::<Vec<_>>()
+            );
+        }
     }
 
     #[test]

@@ -564,3 +564,24 @@ fn unknown_extension_is_a_clear_error() {
     let err = load_scene(Path::new("scene.blend")).unwrap_err().to_string();
     assert!(err.contains("scene.blend: unknown scene format"), "{err}");
 }
+
+/// A chain of scene files each naming the next as its base (2 000 of them,
+/// which overflowed the stack) is refused at the library's depth limit,
+/// with one readable message naming where the chain starts.
+#[test]
+fn a_deep_chain_of_base_files_is_refused_not_a_stack_overflow() {
+    let dir = tempfile::tempdir().unwrap();
+    let name = |i: usize| format!("chain{i:04}.toml");
+    for i in 0..2000 {
+        std::fs::write(dir.path().join(name(i)), format!("base = \"{}\"\n", name(i + 1))).unwrap();
+    }
+    std::fs::write(dir.path().join(name(2000)), "builtin = \"cornell-spheres\"\n").unwrap();
+    let err = load_scene(&dir.path().join(name(0))).unwrap_err().to_string();
+    let limit = lenspath::io::scene_file::MAX_INCLUDE_DEPTH;
+    assert!(err.contains(&format!("more than {limit} scene files deep")), "{err}");
+    assert!(err.contains(&name(0)) && err.lines().count() == 1, "{err}");
+    // Just within the limit loads.
+    let err_at = |start: usize| load_scene(&dir.path().join(name(start))).map(|_| ());
+    assert!(err_at(2000 - limit + 1).is_ok());
+    assert!(err_at(2000 - limit).is_err());
+}
