@@ -22,7 +22,7 @@ for round in 1 2 3 4 5; do
         [ "$tag" = new ] && bin=$new
         render=$(seconds "$bin" render --threads 1 --spp 16 --out "$out/$tag.png")
         focus=$(seconds "$bin" autofocus --patch 0.52,0.70,0.10,0.12 --strategy fast --threads 1)
-        dragon=$(seconds "$bin" render scenes/cbdragon.toml --threads 1 --spp 8 --out "$out/$tag-dragon.png")
+        dragon=$(seconds "$bin" render scenes/cbdragon.toml --allow-read ../shared --threads 1 --spp 8 --out "$out/$tag-dragon.png")
         echo "round $round $tag: render $render autofocus $focus dragon $dragon"
     done
 done

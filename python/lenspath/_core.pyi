@@ -168,9 +168,12 @@ class Scene:
         view ``fov_deg`` (pinhole and thin lens), subject at ``focus_distance`` (default:
         the target's distance), which the lens cameras focus on unless told otherwise."""
 
-def load(path: str | PathLike[str]) -> Scene:
+def load(path: str | PathLike[str], allow_read: Sequence[str | PathLike[str]] | None = None) -> Scene:
     """Loads a scene file (COLLADA .dae, OBJ, PLY, glTF .gltf/.glb, lenspath .toml) by extension.
-    Raises SceneError for a broken file, OSError when it cannot be read."""
+    The files it names (buffers, material libraries, base scenes, meshes, lens tables) are read
+    only from its own folder and the ``allow_read`` folders (a scene from elsewhere cannot read
+    your other files). Raises SceneError for a broken file or a file named outside those folders,
+    OSError when it cannot be read."""
 
 def builtin_scenes() -> list[str]:
     """The built-in scenes' names."""

@@ -56,6 +56,7 @@ class _SceneRef:
     builtin: str | None = None
     mesh_triangles: int | None = None  # None: Scene.builtin's default
     path: str | None = None
+    allow_read: tuple[str, ...] = ()  # folders the scene file may read besides its own
 
 
 def _file_sha256(path: str) -> str:
@@ -68,11 +69,13 @@ def _file_sha256(path: str) -> str:
 
 def _scene_ref(scene: Scene | str | os.PathLike[str]) -> _SceneRef:
     """The reference workers make ``scene`` from: a built-in name or a file with its hash."""
+    allow_read: tuple[str, ...] = ()
     if isinstance(scene, Scene):
         # Pickling gives the recipe, and refuses scenes built in Python.
         make, args = scene.__reduce__()
         if make is _core.load:
-            scene = args[0]
+            scene, allowed = args
+            allow_read = tuple(os.path.abspath(os.fspath(a)) for a in allowed)
         else:
             name, triangles = args
             return _SceneRef(key=f"builtin:{name}:{triangles}", builtin=name, mesh_triangles=triangles)
@@ -83,7 +86,8 @@ def _scene_ref(scene: Scene | str | os.PathLike[str]) -> _SceneRef:
         path = os.path.abspath(os.fspath(scene))
         if not os.path.isfile(path):
             raise FileNotFoundError(f"{path}: no such scene file")
-        return _SceneRef(key=f"sha256:{_file_sha256(path)}", path=path)
+        key = f"sha256:{_file_sha256(path)}" + "".join(f":{a}" for a in allow_read)
+        return _SceneRef(key=key, path=path, allow_read=allow_read)
     raise TypeError(f"scene must be a lenspath.Scene, a built-in scene name or a path, not {type(scene).__name__}")
 
 
@@ -110,13 +114,13 @@ def _worker_scene(ref: _SceneRef) -> Scene:
             )
         else:
             assert ref.path is not None
-            here = f"sha256:{_file_sha256(ref.path)}"
+            here = f"sha256:{_file_sha256(ref.path)}" + "".join(f":{a}" for a in ref.allow_read)
             if here != ref.key:
                 raise RuntimeError(
                     f"{ref.path} differs on this worker from the client's copy "
                     f"({here[:15]}... here, {ref.key[:15]}... there); every worker needs the same file"
                 )
-            scene = _core.load(ref.path)
+            scene = _core.load(ref.path, allow_read=list(ref.allow_read))
         scene.compile()
         _scenes[ref.key] = scene
         while len(_scenes) > _CACHED_SCENES:

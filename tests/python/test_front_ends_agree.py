@@ -74,13 +74,17 @@ def python_args(o: dict[str, Any]) -> tuple[Camera | None, dict[str, Any]]:
 
 
 def where(scene: str) -> list[str]:
-    """The CLI's arguments naming `scene`."""
+    """The CLI's arguments naming `scene` (those reading ../shared allowed to)."""
+    if needs_shared(scene):
+        return [scene, "--allow-read", str(SHARED)]
     if scene.endswith(".toml"):
         return [scene]
     return ["--scene", scene, "--mesh-triangles", str(MESH_TRIANGLES)]
 
 
 def python_scene(scene: str) -> lenspath.Scene | str:
+    if needs_shared(scene):
+        return lenspath.load(scene, allow_read=[SHARED])
     return scene if scene.endswith(".toml") else lenspath.Scene.builtin(scene, MESH_TRIANGLES)
 
 
@@ -148,7 +152,10 @@ def test_every_front_end_gives_the_same_image(
     assert np.array_equal(tiled, reference), "lenspath.distributed.render differs from lenspath render"
 
     saved, shown = viewer_saved_file(cli, chromium, scene, overrides, tmp_path)
-    again = cli_render(cli, str(saved), [], tmp_path / "saved.exr")
+    # The saved file names the scene file as its base, in another folder: allowed explicitly.
+    allow = ["--allow-read", str(Path(scene).parent)] if scene.endswith(".toml") else []
+    allow += ["--allow-read", str(SHARED)] if needs_shared(scene) else []
+    again = cli_render(cli, str(saved), allow, tmp_path / "saved.exr")
     assert scene.endswith(".toml") or f"builtin = {scene!r}".replace("'", '"') in saved.read_text()
     assert np.array_equal(shown, reference), "the viewer shows another image than lenspath render"
     assert np.array_equal(again, reference), "the viewer's saved scene renders another image"
@@ -216,6 +223,6 @@ def test_every_front_end_gives_the_same_sensor_frame(cli: Path, chromium: Any, t
     # The viewer: the page's sensor settings show the developed frame, and the saved file has them.
     saved, shown = viewer_saved_file(cli, chromium, str(scene_file), {}, tmp_path)
     assert "[sensor]" in saved.read_text() and 'white_balance = "3200K"' in saved.read_text()
-    again = cli_render(cli, str(saved), [], tmp_path / "saved.exr")
+    again = cli_render(cli, str(saved), ["--allow-read", str(scene_file.parent)], tmp_path / "saved.exr")
     assert np.array_equal(shown, from_file), "the viewer shows another developed frame than lenspath render"
     assert np.array_equal(again, from_file), "the viewer's saved scene develops another frame"

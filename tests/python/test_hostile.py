@@ -3,6 +3,8 @@ error line it must give (exit code 2, never a panic), or `ok:` and what it must 
 
 from __future__ import annotations
 
+import itertools
+import os
 import shlex
 import subprocess
 from pathlib import Path
@@ -42,8 +44,12 @@ def made(cli: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 @pytest.mark.parametrize(("args", "expected"), cases(), ids=[a for a, _ in cases()])
 def test_hostile_input_gets_one_clear_answer(cli: Path, made: Path, args: str, expected: str) -> None:
-    command = [cli, *shlex.split(args.format(here=HOSTILE, made=made))]
-    run = subprocess.run(command, capture_output=True, text=True, timeout=120)
+    words = shlex.split(args.format(here=HOSTILE, made=made))
+    # Leading NAME=VALUE words set the environment, as in a shell.
+    settings = [w for w in itertools.takewhile(lambda w: "=" in w and not w.startswith("-"), words)]
+    env = {**os.environ, **dict(s.split("=", 1) for s in settings)}
+    command = [cli, *words[len(settings) :]]
+    run = subprocess.run(command, capture_output=True, text=True, timeout=120, env=env)
     assert "panicked" not in run.stderr, run.stderr
     if expected.startswith("ok:"):
         assert run.returncode == 0, run.stderr

@@ -374,7 +374,9 @@ def test_a_dropped_lens_table_is_offered_drawn_and_saved(chromium, viewer: Viewe
         ("api/settings", {"max_spp": "many"}, "bad setting"),
         ("api/settings", {"focus": {"by": "distance", "distance_m": 0}}, "focus must be a positive"),
         ("api/settings", {"lens": "/etc/passwd"}, "outside the scene's folder"),
-        ("api/settings", {"eye": [0, 1, 0], "target": [0, 1, 0]}, "eye away from the target"),
+        ("api/settings", {"eye": [0, 1, 0], "target": [0, 1, 0]}, "must differ"),
+        ("api/settings", {"eye": [1e38, 1, 0]}, "within ±1e18 scene units"),
+        ("api/settings", {"max_depth": 5000}, "max depth must be at most 1024, got 5000"),
         ("api/settings", {"sensor": {"iso": -5}}, "sensor: the sensor's ISO must be positive"),
         ("api/settings", {"sensor": {"cfa": "rgbw"}}, "sensor: unknown colour filter array 'rgbw'"),
         ("api/settings", {"sensor": {"gain": 2}}, "bad setting"),
@@ -383,6 +385,9 @@ def test_a_dropped_lens_table_is_offered_drawn_and_saved(chromium, viewer: Viewe
         ("api/autofocus", {"patch": [0.4, 0.4, 0.1, 0.1], "metric": "sharpness"}, "unknown focus measure"),
         ("api/lens?name=bad.dat", b"# radius thickness ior aperture\n1 2 3\n", "bad.dat"),
         ("api/lens?name=../x.dat", b"", "plain file name"),
+        ("api/lens?name=a%0Ab.dat", b"", "plain file name"),
+        ("api/lens?name=x%22.dat", b"", "plain file name"),
+        ("api/lens?name=dgauss50", b"", "named like the built-in lens 'dgauss50'"),
     ],
 )
 def test_bad_input_is_refused_with_its_reason(viewer: Viewer, path: str, body, match: str) -> None:

@@ -21,7 +21,7 @@ use lenspath::builtin::builtin_scene;
 use lenspath::camera::CameraPose;
 use lenspath::defaults;
 use lenspath::film::NormalizedRect;
-use lenspath::io::{check_writable, load_scene, write_text};
+use lenspath::io::{check_writable, load_scene_in, write_text, ReadScope};
 use lenspath::lens::LensPrescription;
 use lenspath::options::SceneOptions;
 use lenspath::scene::CompiledScene;
@@ -294,7 +294,13 @@ fn evaluate(args: &Args) -> Result<()> {
                     );
                     continue;
                 }
-                let loaded = load_scene(&path)?;
+                // The cb* scenes name meshes in ../shared.
+                let shared: Vec<_> = Some(repo_root().join("../shared"))
+                    .filter(|s| s.exists())
+                    .into_iter()
+                    .collect();
+                let scope = ReadScope::of_scene(&path, &shared)?;
+                let loaded = load_scene_in(&path, &scope)?;
                 (loaded.scene, loaded.options)
             }
         };

@@ -5,8 +5,8 @@ use std::time::Instant;
 
 use clap::{Args, ValueEnum};
 use lenspath::bokeh::{
-    choose_method, convolve_planes, depth_blur, interleave_planes, lift_highlights, rgb_planes, CircleOfConfusion,
-    Edges, Kernel, KernelSize, Method,
+    check_blur_memory, check_kernel_diameter, choose_method, convolve_planes, depth_blur, interleave_planes,
+    lift_highlights, rgb_planes, CircleOfConfusion, Edges, Kernel, KernelSize, Method, MAX_KERNEL_SIDE_PX,
 };
 use lenspath::camera::{Aperture, ApertureShape};
 use lenspath::io::image::{check_output_path, read_exr, read_gray, read_image, write_image};
@@ -47,8 +47,10 @@ fn parse_size(s: &str) -> std::result::Result<SizeArg, String> {
         return Ok(SizeArg::Full);
     }
     match s.parse::<u32>() {
-        Ok(n) if (1..=16384).contains(&n) => Ok(SizeArg::Pixels(n)),
-        _ => Err(format!("expected a size in pixels (1 to 16384) or 'full', got '{s}'")),
+        Ok(n) if (1..=MAX_KERNEL_SIDE_PX).contains(&n) => Ok(SizeArg::Pixels(n)),
+        _ => Err(format!(
+            "expected a size in pixels (1 to {MAX_KERNEL_SIDE_PX}) or 'full', got '{s}'"
+        )),
     }
 }
 
@@ -208,6 +210,7 @@ pub fn run(args: BokehArgs) -> Result<Outcome> {
         MethodKind::Fft => Method::Fft,
         MethodKind::Auto => choose_method(width, height, &kernel),
     };
+    check_blur_memory(width, height, &kernel, method)?;
     let edges = match args.edges {
         EdgesKind::Renormalize => Edges::Renormalize,
         EdgesKind::Black => Edges::Black,
@@ -314,6 +317,7 @@ fn load_kernel(mask: &str, size: KernelSize) -> Result<Kernel> {
         KernelSize::Exactly(w, h) => w.max(h) as usize,
         KernelSize::Native => 64,
     };
+    check_kernel_diameter(side as f64)?;
     let raster = Aperture::new(&shape)?.rasterize(side, side, 1.0);
     Kernel::from_mask(side, side, &raster, size)
 }

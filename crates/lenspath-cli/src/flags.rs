@@ -2,14 +2,14 @@
 //! and the parsers of their values. They only spell options: what a flag left
 //! out means is decided by the library ([`lenspath::setup`]).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use clap::{Args, ValueEnum};
 use lenspath::builtin::{builtin_scene, DEFAULT_MESH_TRIANGLES};
 use lenspath::camera::{Aperture, ApertureShape, Radiometry};
 use lenspath::film::{NormalizedRect, PixelRect};
-use lenspath::io::load_scene;
+use lenspath::io::{load_scene_in, LoadedScene, ReadScope};
 use lenspath::lens::LensPrescription;
 use lenspath::options::SceneOptions;
 use lenspath::sampling::SamplerKind;
@@ -161,6 +161,24 @@ pub struct SceneArgs {
     /// Triangles of the procedural mesh in cornell-mesh.
     #[arg(long, default_value_t = DEFAULT_MESH_TRIANGLES)]
     pub mesh_triangles: usize,
+    #[command(flatten)]
+    pub allow_read: AllowRead,
+}
+
+/// Which folders a scene file may read the files it names from.
+#[derive(Args, Debug)]
+pub struct AllowRead {
+    /// Let the scene file read the files it names (base scenes, meshes, buffers, material
+    /// libraries, lens tables) from DIR too; by default only from its own folder (repeatable).
+    #[arg(long = "allow-read", value_name = "DIR")]
+    pub dirs: Vec<PathBuf>,
+}
+
+impl AllowRead {
+    /// Loads the scene file `path` within its folder and these.
+    pub fn load_scene(&self, path: &Path) -> Result<LoadedScene> {
+        load_scene_in(path, &ReadScope::of_scene(path, &self.dirs)?)
+    }
 }
 
 impl SceneArgs {
@@ -168,7 +186,7 @@ impl SceneArgs {
     pub fn load(&self) -> Result<(String, Scene, SceneOptions)> {
         match &self.file {
             Some(path) => {
-                let loaded = load_scene(path)?;
+                let loaded = self.allow_read.load_scene(path)?;
                 for (what, n) in loaded.warnings.iter() {
                     eprintln!(
                         "warning: {what}{}",

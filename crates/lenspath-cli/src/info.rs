@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 use lenspath::io::import::scene_bounds;
-use lenspath::io::{load_scene, LoadedScene};
+use lenspath::io::LoadedScene;
 use lenspath::lights::Light;
 use lenspath::materials::Material;
 use lenspath::Result;
@@ -20,11 +20,13 @@ pub struct InfoArgs {
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
+    #[command(flatten)]
+    allow_read: crate::flags::AllowRead,
 }
 
 /// Runs `lenspath info`.
 pub fn run(args: InfoArgs) -> Result<Outcome> {
-    let loaded = load_scene(&args.file)?;
+    let loaded = args.allow_read.load_scene(&args.file)?;
     let summary = summarize(&loaded);
     if args.json {
         println!(

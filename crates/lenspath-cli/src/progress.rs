@@ -53,6 +53,14 @@ impl Progress {
         }
     }
 
+    /// Prints `message` to stderr on a line of its own (above the bar).
+    pub fn warn(&self, message: &str) {
+        match self {
+            Progress::Bar(bar) => bar.suspend(|| eprintln!("{message}")),
+            Progress::Plain { .. } => eprintln!("{message}"),
+        }
+    }
+
     /// Removes the bar.
     pub fn finish(&self) {
         if let Progress::Bar(bar) = self {

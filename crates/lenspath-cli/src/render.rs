@@ -355,7 +355,15 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
     let mut save;
     let checkpoints = match &checkpointing {
         Some((path, fingerprint)) => {
-            save = |state: &Accumulation| write_checkpoint(path, fingerprint, state);
+            lenspath::io::remove_stale_temporaries(path);
+            // A failed save (a full disk, a folder gone) costs the checkpoint,
+            // not the render: it goes on and writes its image.
+            save = |state: &Accumulation| {
+                if let Err(e) = write_checkpoint(path, fingerprint, state) {
+                    progress.warn(&format!("warning: checkpoint not saved ({e}); the render goes on"));
+                }
+                Ok(())
+            };
             Some(Checkpoints {
                 every: args.checkpoint_every.unwrap_or(Duration::from_secs(60)),
                 save: &mut save,

@@ -296,6 +296,54 @@ fn a_killed_render_resumes_to_the_uninterrupted_image() {
     }
 }
 
+/// A checkpoint that cannot be saved (its folder is removed mid-render, as
+/// a full disk would refuse it) costs the checkpoint, not the render: it
+/// warns, goes on and writes its image. Temporary files that killed writers
+/// left beside the checkpoint are removed when a render starts.
+#[test]
+fn a_failed_checkpoint_save_warns_and_the_render_still_writes_its_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let saves = dir.path().join("saves");
+    std::fs::create_dir(&saves).unwrap();
+    let ckpt = saves.join("render.ckpt");
+    let dead_pid = {
+        let mut child = Command::new("true").spawn().unwrap();
+        child.wait().unwrap();
+        child.id()
+    };
+    let stale = saves.join(format!(".render.ckpt.{dead_pid}.tmp"));
+    std::fs::write(&stale, b"left by a killed render").unwrap();
+    let out = dir.path().join("image.png");
+    let child = Command::new(env!("CARGO_BIN_EXE_lenspath"))
+        .args([
+            "render",
+            "--res",
+            "64x48",
+            "--spp",
+            "1500",
+            "--checkpoint-every",
+            "0.1s",
+        ])
+        .arg("--checkpoint")
+        .arg(&ckpt)
+        .arg("--out")
+        .arg(&out)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let started = Instant::now();
+    while !ckpt.exists() {
+        assert!(started.elapsed() < Duration::from_secs(60), "no checkpoint was written");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    assert!(!stale.exists(), "the stale temporary file is still there");
+    std::fs::remove_dir_all(&saves).unwrap();
+    let o = child.wait_with_output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("warning: checkpoint not saved"), "{}", stderr(&o));
+    assert!(out.exists(), "no image was written");
+}
+
 #[test]
 fn ctrl_c_stops_within_a_second_and_saves_the_partial_image() {
     let dir = tempfile::tempdir().unwrap();

@@ -10,7 +10,7 @@ use numpy::{IntoPyArray, PyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
 use crate::camera::Camera;
-use crate::error::{deprecated, to_py};
+use crate::error::{deprecated, guarded, to_py};
 use crate::scene::Scene;
 use crate::sensor::Sensor;
 
@@ -122,11 +122,13 @@ pub(crate) fn autofocus(
     let compiled = scene.compiled(py)?;
     let (result, depth_of_focus_mm) = py
         .detach(|| {
-            let mut focuser = Focuser::new(&compiled, search.pose, search.settings)?;
-            let result = focuser.run(search.strategy)?;
-            let dof = focuser.depth_of_focus_mm(result.sensor_z_mm);
-            Ok::<_, Error>((result, dof))
-        })
+            guarded(|| {
+                let mut focuser = Focuser::new(&compiled, search.pose, search.settings)?;
+                let result = focuser.run(search.strategy)?;
+                let dof = focuser.depth_of_focus_mm(result.sensor_z_mm);
+                Ok::<_, Error>((result, dof))
+            })
+        })?
         .map_err(to_py)?;
     let rows: Vec<f64> = result
         .evaluations

@@ -77,3 +77,21 @@ pub(crate) fn renamed<T>(
         (new, None) => Ok(new),
     }
 }
+
+/// Runs library code `f`, turning a panic (a bug in lenspath) into
+/// `lenspath.LenspathError` saying so: left alone, pyo3 raises
+/// `PanicException`, a `BaseException` that `except Exception` misses, and
+/// a panic on a worker thread would never reach Python at all. The error
+/// is made lazily, so `f` may run without the GIL.
+pub(crate) fn guarded<T>(f: impl FnOnce() -> T) -> PyResult<T> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(f)).map_err(|payload| {
+        let what = payload
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| payload.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "a panic without a message".into());
+        LenspathError::new_err(format!(
+            "internal error, a bug in lenspath (please report it with the call that raised it): {what}"
+        ))
+    })
+}

@@ -1,6 +1,6 @@
 //! Optical glass: a catalogue glass's index against wavelength.
 
-use lenspath::glass::{self, Dispersion};
+use lenspath::glass::{self, check_wavelength_nm, Dispersion};
 use numpy::{IntoPyArray, PyArray1};
 use pyo3::prelude::*;
 
@@ -42,9 +42,13 @@ impl Glass {
     /// The index of refraction at `wavelength_nm` (a number, or an array of them).
     fn index<'py>(&self, py: Python<'py>, wavelength_nm: &Bound<'py, PyAny>) -> PyResult<Py<PyAny>> {
         if let Ok(nm) = wavelength_nm.extract::<f64>() {
+            check_wavelength_nm(nm).map_err(to_py)?;
             return Ok(self.dispersion.index(nm).into_pyobject(py)?.into_any().unbind());
         }
         let nms: Vec<f64> = wavelength_nm.extract()?;
+        for &nm in &nms {
+            check_wavelength_nm(nm).map_err(to_py)?;
+        }
         let indices: Vec<f64> = nms.iter().map(|&nm| self.dispersion.index(nm)).collect();
         let array: Bound<'py, PyArray1<f64>> = indices.into_pyarray(py);
         Ok(array.into_any().unbind())

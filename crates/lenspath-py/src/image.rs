@@ -3,7 +3,10 @@
 use std::path::PathBuf;
 
 use lenspath::autofocus::{FocusMeasure, Patch};
-use lenspath::bokeh::{convolve_rgb, depth_blur, CircleOfConfusion, Edges, Kernel, KernelSize, Method};
+use lenspath::bokeh::{
+    check_blur_memory, check_kernel_diameter, convolve_rgb, depth_blur, CircleOfConfusion, Edges, Kernel, KernelSize,
+    Method,
+};
 use lenspath::camera::{Aperture, ApertureShape};
 use lenspath::film::Image;
 use lenspath::io::image::{read_image, write_image};
@@ -11,7 +14,7 @@ use numpy::{AllowTypeChange, PyArray3, PyArrayLike2, PyArrayLike3, PyUntypedArra
 use pyo3::prelude::*;
 
 use crate::camera::{lens_from_py, parse_aperture};
-use crate::error::{to_py, value_error};
+use crate::error::{guarded, to_py, value_error};
 use crate::render::rgb_array;
 
 /// An (H, W, 3) float32 array as a core image.
@@ -79,9 +82,7 @@ pub(crate) fn bokeh<'py>(
         (None, None) => return Err(value_error("give aperture (such as 'blades:6') or mask (a 2-D array)")),
         (Some(shape), None) => {
             let diameter = diameter_px.ok_or_else(|| value_error("an aperture kernel needs diameter_px"))?;
-            if !(diameter >= 1.0 && diameter.is_finite()) {
-                return Err(value_error(format!("diameter_px must be at least 1, got {diameter}")));
-            }
+            check_kernel_diameter(diameter).map_err(to_py)?;
             let shape = ApertureShape::parse(shape).map_err(to_py)?;
             Kernel::from_aperture(&Aperture::new(&shape).map_err(to_py)?, diameter)
         }
@@ -89,8 +90,10 @@ pub(crate) fn bokeh<'py>(
             let (h, w) = (m.shape()[0], m.shape()[1]);
             let size = match diameter_px {
                 None => KernelSize::Native,
-                Some(d) if d >= 1.0 && d.is_finite() => KernelSize::LongerSide(d.round() as u32),
-                Some(d) => return Err(value_error(format!("diameter_px must be at least 1, got {d}"))),
+                Some(d) => {
+                    check_kernel_diameter(d).map_err(to_py)?;
+                    KernelSize::LongerSide(d.round() as u32)
+                }
             };
             let values: Vec<f32> = m.as_array().iter().copied().collect();
             Kernel::from_mask(w, h, &values, size).map_err(to_py)?
@@ -117,7 +120,8 @@ pub(crate) fn bokeh<'py>(
     };
     let mut image = image_from_array(&image)?;
     let (w, h) = (image.width as usize, image.height as usize);
-    py.detach(|| convolve_rgb(&mut image.rgb, w, h, &kernel, method, edges));
+    check_blur_memory(w, h, &kernel, method).map_err(to_py)?;
+    py.detach(|| guarded(|| convolve_rgb(&mut image.rgb, w, h, &kernel, method, edges)))?;
     Ok(rgb_array(py, &image))
 }
 
@@ -178,7 +182,7 @@ pub(crate) fn lens_blur<'py>(
     let aperture = Aperture::new(&shape).map_err(to_py)?;
     let depth: Vec<f32> = depth.as_array().iter().copied().collect();
     let blurred = py
-        .detach(|| depth_blur(&image.rgb, &depth, width as usize, height as usize, &coc, &aperture))
+        .detach(|| guarded(|| depth_blur(&image.rgb, &depth, width as usize, height as usize, &coc, &aperture)))?
         .map_err(to_py)?;
     Ok(rgb_array(py, &Image { rgb: blurred, ..image }))
 }

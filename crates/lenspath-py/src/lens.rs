@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use glam::DVec3;
+use lenspath::glass::check_wavelength_nm;
 use lenspath::lens::{
     chromatic::{focal_shift, ChromaticAnalysis},
     library,
@@ -15,7 +16,7 @@ use numpy::{AllowTypeChange, IntoPyArray, PyArray1, PyArray2, PyArrayLike1, PyAr
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use crate::error::{deprecated, to_py, value_error};
+use crate::error::{deprecated, guarded, to_py, value_error};
 
 /// The default sensor of the lens drawings, as `lenspath lens` draws them: 36 × 24 mm.
 pub(crate) const FULL_FRAME_MM: (f64, f64) = (36.0, 24.0);
@@ -36,19 +37,21 @@ impl Lens {
     fn at_wavelength(&self, wavelength_nm: Option<f64>) -> PyResult<LensSystem> {
         match wavelength_nm {
             None => Ok(self.system.clone()),
-            Some(nm) if nm > 0.0 && nm.is_finite() => Ok(self.system.at_wavelength(nm)),
-            Some(nm) => Err(value_error(format!("wavelength_nm must be positive, got {nm}"))),
+            Some(nm) => {
+                check_wavelength_nm(nm).map_err(to_py)?;
+                Ok(self.system.at_wavelength(nm))
+            }
         }
     }
 
     pub(crate) fn from_prescription(prescription: LensPrescription) -> PyResult<Lens> {
-        let system = LensSystem::new(&prescription);
+        let system = guarded(|| LensSystem::new(&prescription))?;
         Lens::placed(prescription, system)
     }
 
     /// `prescription` placed as `system` (wide open or stopped down), analysed.
     pub(crate) fn placed(prescription: LensPrescription, system: LensSystem) -> PyResult<Lens> {
-        let analysis = LensAnalysis::new(&system, &AnalysisSettings::default()).map_err(to_py)?;
+        let analysis = guarded(|| LensAnalysis::new(&system, &AnalysisSettings::default()))?.map_err(to_py)?;
         Ok(Lens {
             prescription,
             system,
@@ -344,8 +347,8 @@ impl Lens {
         wavelengths_nm: PyArrayLike1<'_, f64, AllowTypeChange>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let wavelengths = wavelengths_nm.as_array().to_vec();
-        if let Some(bad) = wavelengths.iter().find(|nm| !(**nm > 0.0 && nm.is_finite())) {
-            return Err(value_error(format!("wavelengths must be positive nm, got {bad}")));
+        for &nm in &wavelengths {
+            check_wavelength_nm(nm).map_err(to_py)?;
         }
         let shift = focal_shift(&self.system, &wavelengths).map_err(to_py)?;
         Ok(shift.into_iter().map(|(_, mm)| mm).collect::<Vec<_>>().into_pyarray(py))

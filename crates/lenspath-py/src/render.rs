@@ -16,7 +16,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::camera::Camera;
-use crate::error::{to_py, value_error};
+use crate::error::{guarded, to_py, value_error};
 use crate::scene::Scene;
 use crate::sensor::{RawFrame, Sensor};
 
@@ -38,12 +38,12 @@ pub(crate) fn render<'py>(
     py: Python<'py>,
     scene: &Scene,
     camera: Option<&Camera>,
-    spp: Option<u32>,
+    spp: Option<i64>,
     resolution: Option<(u32, u32)>,
-    seed: Option<u32>,
-    max_depth: Option<u32>,
-    light_samples: Option<u32>,
-    threads: Option<usize>,
+    seed: Option<i64>,
+    max_depth: Option<i64>,
+    light_samples: Option<i64>,
+    threads: Option<i64>,
     aovs: Option<Vec<String>>,
     crop: Option<(u32, u32, u32, u32)>,
     progress: Option<Bound<'py, PyAny>>,
@@ -83,14 +83,14 @@ pub(crate) fn render<'py>(
     };
     let overrides = RenderOverrides {
         resolution,
-        spp,
+        spp: whole("spp", spp)?,
         integrator,
-        max_depth,
-        light_samples,
-        seed,
+        max_depth: whole("max_depth", max_depth)?,
+        light_samples: whole("light_samples", light_samples)?,
+        seed: whole("seed", seed)?,
         sampler,
         filter: None,
-        threads,
+        threads: whole("threads", threads)?,
         crop: crop.map(|(x0, y0, width, height)| PixelRect { x0, y0, width, height }),
         depth: Some(want_depth),
         wavelength_nm,
@@ -121,16 +121,19 @@ pub(crate) fn render<'py>(
     let waiting = std::thread::current();
     let output = std::thread::scope(|s| {
         let worker = s.spawn(|| {
-            let out = render_scene(
-                compiled.as_ref(),
-                camera.as_ref(),
-                &settings,
-                &|d, t| {
-                    done.store(d, Ordering::Relaxed);
-                    total.store(t, Ordering::Relaxed);
-                },
-                &cancel,
-            );
+            // Guarded: a panic must still end the wait below.
+            let out = guarded(|| {
+                render_scene(
+                    compiled.as_ref(),
+                    camera.as_ref(),
+                    &settings,
+                    &|d, t| {
+                        done.store(d, Ordering::Relaxed);
+                        total.store(t, Ordering::Relaxed);
+                    },
+                    &cancel,
+                )
+            });
             finished.store(true, Ordering::Release);
             waiting.unpark();
             out
@@ -151,12 +154,12 @@ pub(crate) fn render<'py>(
                 }
             }
         }
-        worker.join().expect("the render thread does not panic")
+        worker.join().expect("the render thread's panics are caught")
     });
     if let Some(e) = interrupt {
         return Err(e);
     }
-    let output = output.map_err(to_py)?;
+    let output = output?.map_err(to_py)?;
     if let Some(callback) = &progress {
         callback.call1((output.stats.samples, output.stats.samples))?;
     }
@@ -180,4 +183,12 @@ pub(crate) fn render<'py>(
     d.set_item("rgb", rgb)?;
     d.set_item("depth", depth)?;
     Ok(d.into_any())
+}
+
+/// An integer argument as the type the library takes, or a `ValueError`
+/// naming it (pyo3's own `OverflowError` for -1 names no argument).
+fn whole<T: TryFrom<i64>>(name: &str, value: Option<i64>) -> PyResult<Option<T>> {
+    value
+        .map(|v| T::try_from(v).map_err(|_| value_error(format!("{name} must be a whole number from 0, got {v}"))))
+        .transpose()
 }

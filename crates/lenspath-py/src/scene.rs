@@ -9,7 +9,7 @@ use lenspath::accel::BvhSettings;
 use lenspath::builtin::{builtin_scene, BUILTIN_SCENES, DEFAULT_MESH_TRIANGLES};
 use lenspath::camera::CameraPose;
 use lenspath::glass::Dispersion;
-use lenspath::io::load_scene;
+use lenspath::io::{load_scene_in, ReadScope};
 use lenspath::lights::Light;
 use lenspath::materials::Material;
 use lenspath::options::SceneOptions;
@@ -22,7 +22,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
 use crate::emission::Emission;
-use crate::error::{deprecated, renamed, to_py, value_error};
+use crate::error::{deprecated, guarded, renamed, to_py, value_error};
 
 /// Where a [`Scene`] came from: how to make it again (pickling it, and
 /// `lenspath.distributed`'s workers, need that).
@@ -30,8 +30,8 @@ use crate::error::{deprecated, renamed, to_py, value_error};
 pub(crate) enum SceneOrigin {
     /// `Scene.builtin(name, mesh_triangles)`.
     Builtin(String, usize),
-    /// `load(path)`.
-    File(PathBuf),
+    /// `load(path, allow_read)`.
+    File(PathBuf, Vec<PathBuf>),
     /// Built or changed in Python.
     Python,
 }
@@ -81,7 +81,7 @@ impl Scene {
     pub(crate) fn source(&self) -> Option<String> {
         match &self.origin {
             SceneOrigin::Builtin(name, _) => Some(name.clone()),
-            SceneOrigin::File(path) => Some(path.display().to_string()),
+            SceneOrigin::File(path, _) => Some(path.display().to_string()),
             SceneOrigin::Python => None,
         }
     }
@@ -99,7 +99,10 @@ impl Scene {
                 module.getattr("Scene")?.getattr("builtin")?,
                 (name.clone(), *triangles).into_pyobject(py)?,
             )),
-            SceneOrigin::File(path) => Ok((module.getattr("load")?, (path.clone(),).into_pyobject(py)?)),
+            SceneOrigin::File(path, allowed) => Ok((
+                module.getattr("load")?,
+                (path.clone(), allowed.clone()).into_pyobject(py)?,
+            )),
             SceneOrigin::Python => Err(PyTypeError::new_err(format!(
                 "scene '{}' was built or changed in Python and cannot be pickled; save it as a scene file \
                  and load that (lenspath.load) to send it to other processes",
@@ -213,7 +216,8 @@ impl Scene {
     pub(crate) fn add_mesh(
         &mut self,
         vertices: PyArrayLike2<'_, f32, AllowTypeChange>,
-        indices: PyArrayLike2<'_, u32, AllowTypeChange>,
+        // As floats, so 1.7 or -1 is refused rather than cast to 1 or 4294967295.
+        indices: PyArrayLike2<'_, f64, AllowTypeChange>,
         material: u32,
         emission: Option<LightAmount>,
     ) -> PyResult<()> {
@@ -231,12 +235,22 @@ impl Scene {
             .into_iter()
             .map(|r| Vec3::new(r[0], r[1], r[2]))
             .collect();
+        let whole = |t: usize, v: f64| {
+            if v.fract() == 0.0 && (0.0..=f64::from(u32::MAX)).contains(&v) {
+                Ok(v as u32)
+            } else {
+                Err(value_error(format!(
+                    "indices must be whole numbers from 0; triangle {t} has {v}"
+                )))
+            }
+        };
         let triangles: Vec<[u32; 3]> = indices
             .as_array()
             .rows()
             .into_iter()
-            .map(|r| [r[0], r[1], r[2]])
-            .collect();
+            .enumerate()
+            .map(|(t, r)| Ok([whole(t, r[0])?, whole(t, r[1])?, whole(t, r[2])?]))
+            .collect::<PyResult<_>>()?;
         let mut scene = self.scene.clone();
         scene.meshes.push(TriangleMesh {
             positions,
@@ -358,16 +372,10 @@ impl Scene {
     ) -> PyResult<()> {
         self.changed();
         let (eye, target, up) = (Vec3::from(eye), Vec3::from(target), Vec3::from(up));
-        if (target - eye).length() <= 0.0 || (target - eye).cross(up).length() <= 1e-6 {
-            return Err(value_error(
-                "look_at: eye and target must differ, and up must not be along the view",
-            ));
-        }
-        if !(fov_deg > 0.0 && fov_deg < 180.0) {
-            return Err(value_error(format!("fov_deg must be between 0 and 180, got {fov_deg}")));
-        }
+        let pose = CameraPose::try_look_at(eye, target, up).map_err(|m| value_error(format!("look_at: {m}")))?;
+        lenspath::camera::check_fov_deg(fov_deg).map_err(|m| value_error(format!("fov_deg: {m}")))?;
         self.scene.view = Some(SceneView {
-            pose: CameraPose::look_at(eye, target, up),
+            pose,
             fov_y_deg: fov_deg,
             focus_distance: focus_distance.unwrap_or((target - eye).length()),
         });
@@ -400,7 +408,10 @@ impl Scene {
             return Ok(c.clone());
         }
         let scene = self.scene.clone();
-        let compiled = Arc::new(py.detach(|| scene.compile(&BvhSettings::default())).map_err(to_py)?);
+        let compiled = Arc::new(
+            py.detach(|| guarded(|| scene.compile(&BvhSettings::default())))?
+                .map_err(to_py)?,
+        );
         Ok(self.compiled.get_or_init(|| compiled).clone())
     }
 
@@ -414,13 +425,16 @@ impl Scene {
 
 /// Loads a scene file (COLLADA, OBJ, PLY, glTF or lenspath TOML) by extension.
 #[pyfunction]
-pub(crate) fn load(py: Python<'_>, path: PathBuf) -> PyResult<Scene> {
-    let loaded = py.detach(|| load_scene(&path)).map_err(to_py)?;
+#[pyo3(signature = (path, allow_read = None))]
+pub(crate) fn load(py: Python<'_>, path: PathBuf, allow_read: Option<Vec<PathBuf>>) -> PyResult<Scene> {
+    let allowed = allow_read.unwrap_or_default();
+    let scope = ReadScope::of_scene(&path, &allowed).map_err(to_py)?;
+    let loaded = py.detach(|| guarded(|| load_scene_in(&path, &scope)))?.map_err(to_py)?;
     Ok(Scene {
         name: path.display().to_string(),
         scene: loaded.scene,
         options: loaded.options,
-        origin: SceneOrigin::File(path),
+        origin: SceneOrigin::File(path, allowed),
         compiled: OnceLock::new(),
     })
 }

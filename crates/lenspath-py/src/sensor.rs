@@ -13,7 +13,7 @@ use numpy::{IntoPyArray, PyArray2, PyArray3};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::error::to_py;
+use crate::error::{guarded, to_py};
 
 /// An image sensor for `render(..., sensor=...)`; every argument left out is
 /// the scene file's `[sensor]`, else the library's default.
@@ -255,7 +255,7 @@ impl RawFrame {
                 .map_err(to_py)?
                 .unwrap_or(self.development.tone_curve),
         };
-        let image = py.detach(|| develop(&self.frame, &how));
+        let image = py.detach(|| guarded(|| develop(&self.frame, &how)))?;
         Ok(
             Array3::from_shape_vec((image.height as usize, image.width as usize, 3), image.rgb)
                 .expect("three channels per pixel")

@@ -171,6 +171,18 @@ pub struct Glass {
 
 const CATALOGUE_TSV: &str = include_str!("../data/glass/catalogue.tsv");
 
+/// Fails unless `wavelength_nm` is a wavelength an index can be asked at: a
+/// positive, finite number of nanometres (a dispersion formula gives
+/// numbers for 0 or NaN too, which mean nothing).
+pub fn check_wavelength_nm(wavelength_nm: f64) -> Result<()> {
+    if !(wavelength_nm > 0.0 && wavelength_nm.is_finite()) {
+        return Err(Error::InvalidArgument(format!(
+            "a wavelength must be a positive number of nm, got {wavelength_nm}"
+        )));
+    }
+    Ok(())
+}
+
 /// Every catalogue glass, in [`MAKERS`] order.
 pub fn catalogue() -> &'static [Glass] {
     static GLASSES: OnceLock<Vec<Glass>> = OnceLock::new();

@@ -46,6 +46,7 @@ pub mod lens;
 pub mod lights;
 pub mod materials;
 pub mod math;
+pub mod memory;
 pub mod options;
 pub mod parallel;
 pub mod ray;

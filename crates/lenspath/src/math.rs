@@ -2,6 +2,17 @@
 
 use glam::{Vec3, Vec3A};
 
+/// The largest scene coordinate lenspath accepts, in scene units: it
+/// computes in 32-bit floats, whose squares overflow past about 1.8e19, so
+/// beyond this the distance between two points is no longer a number.
+pub const MAX_SCENE_COORDINATE: f32 = 1e18;
+
+/// True when every coordinate of `p` is finite and within
+/// ±[`MAX_SCENE_COORDINATE`].
+pub fn within_scene_range(p: Vec3) -> bool {
+    p.is_finite() && p.abs().max_element() <= MAX_SCENE_COORDINATE
+}
+
 /// A linear RGB radiometric quantity (radiance, reflectance, power...).
 pub type Rgb = Vec3;
 

@@ -148,6 +148,7 @@ impl RenderSettings {
                 self.spp
             ));
         }
+        check_max_depth(self.integrator.max_depth())?;
         if self.integrator.light_samples() > 1024 {
             return fail(format!(
                 "light samples must be at most 1024, got {}",
@@ -155,6 +156,11 @@ impl RenderSettings {
             ));
         }
         crate::parallel::check_threads(self.threads)?;
+        let (width, height) = self.crop.map_or((self.width, self.height), |c| (c.width, c.height));
+        crate::memory::check_fits(
+            &|| format!("a {width}x{height} render"),
+            u64::from(width) * u64::from(height) * crate::memory::RENDER_BYTES_PER_PIXEL,
+        )?;
         if self.tile_size == 0 {
             return fail("tile size must be positive".into());
         }
@@ -351,6 +357,21 @@ pub fn render_guided_from(
             cancel,
         )
     })
+}
+
+/// The deepest path a render may ask for (scattering events): deeper paths
+/// carry nothing Russian roulette would not have ended long before.
+pub const MAX_PATH_DEPTH: u32 = 1024;
+
+/// Fails for a maximum path depth over [`MAX_PATH_DEPTH`] (0, emitters
+/// only, is a depth).
+pub fn check_max_depth(max_depth: u32) -> Result<()> {
+    if max_depth > MAX_PATH_DEPTH {
+        return Err(Error::InvalidArgument(format!(
+            "max depth must be at most {MAX_PATH_DEPTH}, got {max_depth}"
+        )));
+    }
+    Ok(())
 }
 
 /// Fails for a checkpoint interval under [`MIN_CHECKPOINT_INTERVAL`].

@@ -9,7 +9,7 @@ use crate::camera::CameraPose;
 use crate::error::{Error, Result};
 use crate::lights::{AreaLight, Light};
 use crate::materials::{Material, SpectralMaterial};
-use crate::math::{Bounds3, Rgb};
+use crate::math::{within_scene_range, Bounds3, Rgb, MAX_SCENE_COORDINATE};
 use crate::ray::Ray;
 use crate::shapes::{MaterialId, Sphere, TriangleMesh};
 use crate::spectrum::{Emission, Spectrum};
@@ -133,8 +133,11 @@ impl Scene {
         };
         for (i, m) in self.meshes.iter().enumerate() {
             check_material(format!("mesh {i}"), m.material)?;
-            if let Some(p) = m.positions.iter().position(|p| !p.is_finite()) {
-                return Err(Error::InvalidScene(format!("mesh {i}: vertex {p} is not finite")));
+            if let Some(p) = m.positions.iter().position(|&p| !within_scene_range(p)) {
+                return Err(Error::InvalidScene(format!(
+                    "mesh {i}: vertex {p} {} is not finite or beyond ±{MAX_SCENE_COORDINATE:e} scene units",
+                    m.positions[p]
+                )));
             }
             let n = m.positions.len() as u32;
             if let Some(t) = m.indices.iter().position(|tri| tri.iter().any(|&v| v >= n)) {
@@ -158,9 +161,9 @@ impl Scene {
         }
         for (i, s) in self.spheres.iter().enumerate() {
             check_material(format!("sphere {i}"), s.material)?;
-            if !(s.center.is_finite() && s.radius > 0.0 && s.radius.is_finite()) {
+            if !(within_scene_range(s.center) && s.radius > 0.0 && s.radius <= MAX_SCENE_COORDINATE) {
                 return Err(Error::InvalidScene(format!(
-                    "sphere {i}: centre must be finite and radius positive, got {} and {}",
+                    "sphere {i}: centre must be finite and radius positive, both within {MAX_SCENE_COORDINATE:e} scene units, got {} and {}",
                     s.center, s.radius
                 )));
             }

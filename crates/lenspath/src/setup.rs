@@ -306,13 +306,8 @@ pub fn resolve_camera(
 ) -> Result<CameraSettings> {
     let fov = |asked: Option<f32>| {
         let fov = asked.unwrap_or(view.fov_y_deg);
-        if fov > 0.0 && fov < 180.0 {
-            Ok(fov)
-        } else {
-            Err(Error::InvalidArgument(format!(
-                "the field of view must be between 0 and 180 degrees, got {fov}"
-            )))
-        }
+        crate::camera::check_fov_deg(fov).map_err(Error::InvalidArgument)?;
+        Ok(fov)
     };
     Ok(match description {
         CameraDescription::Pinhole { fov_y_deg } => CameraSettings::Pinhole {

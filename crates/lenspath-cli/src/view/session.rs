@@ -16,7 +16,7 @@ use lenspath::integrator::IntegratorKind;
 use lenspath::io::scene_file::{SceneBase, SceneSettingsFile, SensorTable};
 use lenspath::lens::{AnalysisSettings, LensAnalysis, LensPrescription, TableConvention};
 use lenspath::options::SceneOptions;
-use lenspath::render::{FilmResponse, NormalizedRect, RenderSettings};
+use lenspath::render::{check_max_depth, FilmResponse, NormalizedRect, RenderSettings};
 use lenspath::sampling::SamplerKind;
 use lenspath::scene::{CompiledScene, SceneView};
 use lenspath::sensor::{capture_through, develop::develop, SensorSettings};
@@ -421,6 +421,16 @@ impl Session {
             sensor: s.sensor.as_ref().map(SensorTable::description).transpose()?,
         }
         .to_toml()?;
+        // A scene reads only from its own folder unless allowed (io::ReadScope).
+        let file = match &self.config.base {
+            SceneBase::File(base) => format!(
+                "# Saved from lenspath view. Unless this file is saved in the folder of {}, render it with\n\
+                 #   lenspath render THIS.toml --allow-read {}\n{file}",
+                base.display(),
+                base.parent().map_or(String::from("."), |p| p.display().to_string())
+            ),
+            SceneBase::Builtin { .. } => file,
+        };
         Ok(if view.lens_dropped {
             format!(
                 "# The lens table '{}' was dropped on lenspath view's page: save it beside this file.\n{file}",
@@ -464,9 +474,17 @@ impl Session {
 
 impl Config {
     fn add_dropped_lens(&self, name: &str, text: &str) -> Result<()> {
-        if name.is_empty() || name.len() > 128 || name.contains(['/', '\\']) {
+        // It is written into saved scene files (`lens = "NAME"`) and saved beside them.
+        let plain = |c: char| c.is_alphanumeric() || " ._-+()".contains(c);
+        if name.is_empty() || name.len() > 128 || name.starts_with('.') || !name.chars().all(plain) {
             return Err(Error::InvalidArgument(format!(
-                "a dropped lens needs a plain file name of at most 128 characters, got '{name}'"
+                "a dropped lens needs a plain file name of at most 128 characters (letters, digits, \
+                 spaces and . _ - + ( ), not starting with a dot), got {name:?}"
+            )));
+        }
+        if lenspath::lens::library::is_shipped(name) || name.starts_with(lenspath::lens::lentil::PREFIX) {
+            return Err(Error::InvalidArgument(format!(
+                "a dropped lens may not be named like the built-in lens '{name}'; rename the file"
             )));
         }
         if text.len() > MAX_LENS_TABLE_BYTES {
@@ -545,19 +563,11 @@ impl Config {
             Vec3::from_array(settings.target),
             Vec3::from_array(settings.up),
         );
-        if !(eye.is_finite() && target.is_finite() && up.is_finite())
-            || (target - eye).cross(up).length_squared() <= 0.0
-        {
-            return bad(
-                "eye, target and up must be finite, the eye away from the target, up not along the view".into(),
-            );
-        }
+        let moved_pose = CameraPose::try_look_at(eye, target, up).map_err(Error::InvalidArgument)?;
         if !(1..=1 << 16).contains(&settings.max_spp) {
             return bad(format!("max_spp must be from 1 to 65536, got {}", settings.max_spp));
         }
-        if !(1..=1024).contains(&settings.max_depth) {
-            return bad(format!("max_depth must be from 1 to 1024, got {}", settings.max_depth));
-        }
+        check_max_depth(settings.max_depth)?;
         if !(1..=64).contains(&settings.light_samples) {
             return bad(format!(
                 "light_samples must be from 1 to 64, got {}",
@@ -601,7 +611,7 @@ impl Config {
         let pose = if [settings.eye, settings.target, settings.up] == self.initial_look {
             self.view.pose
         } else {
-            CameraPose::look_at(eye, target, up)
+            moved_pose
         };
         let sensor = settings
             .sensor

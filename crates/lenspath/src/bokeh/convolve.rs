@@ -77,6 +77,32 @@ pub fn convolve_rgb(rgb: &mut [f32], width: usize, height: usize, kernel: &Kerne
     interleave_planes(&blurred, rgb);
 }
 
+/// Fails when blurring a `width`×`height` image with `kernel` by `method`
+/// would need more memory than [`crate::memory::budget_bytes`] allows.
+pub fn check_blur_memory(width: usize, height: usize, kernel: &Kernel, method: Method) -> crate::error::Result<()> {
+    let method = match method {
+        Method::Auto => choose_method(width, height, kernel),
+        m => m,
+    };
+    let bytes = match method {
+        // Three planes in, three out.
+        Method::Direct => (width * height) as u64 * 24,
+        _ => {
+            let (w, h) = padded_size(width, height, kernel);
+            (w * h) as u64 * crate::memory::FFT_BYTES_PER_PADDED_PIXEL
+        }
+    };
+    crate::memory::check_fits(
+        &|| {
+            format!(
+                "blurring a {width}x{height} image with a {}x{} kernel",
+                kernel.width, kernel.height
+            )
+        },
+        bytes,
+    )
+}
+
 /// Convolves `channels` planes (each `width`×`height`, row-major) with `kernel`.
 pub fn convolve_planes(
     planes: &[Vec<f32>],
@@ -86,6 +112,10 @@ pub fn convolve_planes(
     method: Method,
     edges: Edges,
 ) -> Vec<Vec<f32>> {
+    // An empty image blurs to itself (and its rows cannot be cut into chunks).
+    if width == 0 || height == 0 {
+        return planes.to_vec();
+    }
     let method = match method {
         Method::Auto => choose_method(width, height, kernel),
         m => m,

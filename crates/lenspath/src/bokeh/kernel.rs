@@ -4,6 +4,23 @@
 use crate::camera::Aperture;
 use crate::error::{Error, Result};
 
+/// The largest kernel side, pixels: a bokeh wider than a 16k image is no
+/// longer a blur, and its FFT would need tens of gigabytes.
+pub const MAX_KERNEL_SIDE_PX: u32 = 16384;
+
+/// Fails unless `diameter_px` is a kernel diameter: finite, at least 1 and
+/// at most [`MAX_KERNEL_SIDE_PX`], and its square kernel (weights and the
+/// raster they are made from) fits the memory budget.
+pub fn check_kernel_diameter(diameter_px: f64) -> Result<()> {
+    if !(1.0..=f64::from(MAX_KERNEL_SIDE_PX)).contains(&diameter_px) {
+        return Err(Error::InvalidArgument(format!(
+            "a bokeh kernel's diameter must be 1 to {MAX_KERNEL_SIDE_PX} pixels, got {diameter_px}"
+        )));
+    }
+    let side = diameter_px.ceil() as u64 + 2;
+    crate::memory::check_fits(&|| format!("a bokeh kernel {side} pixels across"), side * side * 8)
+}
+
 /// How large the mask becomes as a kernel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum KernelSize {
@@ -44,6 +61,11 @@ impl Kernel {
             return Err(Error::InvalidArgument(
                 "mask values must be finite and not negative".into(),
             ));
+        }
+        match size {
+            KernelSize::Native => {}
+            KernelSize::LongerSide(n) => check_kernel_diameter(f64::from(n))?,
+            KernelSize::Exactly(w, h) => check_kernel_diameter(f64::from(w.max(h)))?,
         }
         let (new_width, new_height) = match size {
             KernelSize::Native => (width, height),

@@ -9,10 +9,11 @@ mod depth;
 mod kernel;
 
 pub use convolve::{
-    choose_method, convolve_planes, convolve_rgb, direct, interleave_planes, rgb_planes, Edges, Method,
+    check_blur_memory, choose_method, convolve_planes, convolve_rgb, direct, interleave_planes, rgb_planes, Edges,
+    Method,
 };
 pub use depth::{depth_blur, CircleOfConfusion};
-pub use kernel::{Kernel, KernelSize};
+pub use kernel::{check_kernel_diameter, Kernel, KernelSize, MAX_KERNEL_SIDE_PX};
 
 use crate::color::linear_to_srgb;
 

@@ -138,10 +138,46 @@ impl CameraPose {
         }
     }
 
+    /// [`CameraPose::look_at`], or why the three give no camera: a point not
+    /// finite or beyond ±[`crate::math::MAX_SCENE_COORDINATE`], `eye` on
+    /// `target`, or `up` along the view. Every front end and loader asks
+    /// this, so a camera is refused for the same reasons everywhere.
+    pub fn try_look_at(eye: Vec3, target: Vec3, up: Vec3) -> std::result::Result<Self, String> {
+        use crate::math::{within_scene_range, MAX_SCENE_COORDINATE};
+        if !(within_scene_range(eye) && within_scene_range(target) && up.is_finite()) {
+            return Err(format!(
+                "eye {eye} and target {target} must be finite and within ±{MAX_SCENE_COORDINATE:e} scene units, up {up} finite"
+            ));
+        }
+        let pose = Self::look_at(eye, target, up);
+        let frame = pose.render_from_camera.matrix3;
+        let orthonormal = [frame.x_axis, frame.y_axis, frame.z_axis]
+            .iter()
+            .all(|a| a.is_finite() && (a.length() - 1.0).abs() < 1e-3);
+        if !orthonormal {
+            return Err(format!(
+                "eye {eye} and target {target} must differ, and up {up} must not lie along the view"
+            ));
+        }
+        Ok(pose)
+    }
+
     /// The eye, target and up [`CameraPose::look_at`] made it from.
     pub fn look_at_arguments(&self) -> (Vec3, Vec3, Vec3) {
         let [eye, target, up] = self.look_at;
         (eye, target, up)
+    }
+}
+
+/// Fails unless `fov_deg` is a perspective camera's field of view: above 0
+/// and below 180 degrees (not NaN).
+pub fn check_fov_deg(fov_deg: f32) -> std::result::Result<(), String> {
+    if fov_deg > 0.0 && fov_deg < 180.0 {
+        Ok(())
+    } else {
+        Err(format!(
+            "the field of view must be between 0 and 180 degrees, got {fov_deg}"
+        ))
     }
 }
 

@@ -435,10 +435,8 @@ impl<'a, 'input> Reader<'a, 'input> {
         let eye = world.transform_point3(Vec3::ZERO);
         let forward = world.transform_vector3(Vec3::NEG_Z);
         let up = world.transform_vector3(Vec3::Y);
-        if forward.cross(up).length_squared() == 0.0 {
-            return Err(self.error(item, "camera transform is degenerate"));
-        }
-        let pose = CameraPose::look_at(eye, eye + forward, up);
+        let pose = CameraPose::try_look_at(eye, eye + forward, up)
+            .map_err(|m| self.error(item, format!("camera transform: {m}")))?;
         self.scene.view = Some(SceneView {
             pose,
             fov_y_deg,

@@ -43,11 +43,11 @@ const MAX_NODE_DEPTH: usize = 256;
 const MAX_NODE_VISITS: usize = 1_000_000;
 
 /// Reads a `.gltf` or `.glb` file; external buffers are read from beside it.
-pub fn load_gltf(path: &Path) -> Result<LoadedScene> {
+pub fn load_gltf(path: &Path, scope: &super::ReadScope) -> Result<LoadedScene> {
     let bytes = std::fs::read(path).map_err(|e| super::io_error(path, e))?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     parse_gltf(&bytes, path, &|uri| {
-        let file = dir.join(uri);
+        let file = scope.check(&dir.join(uri)).map_err(|e| e.to_string())?;
         std::fs::read(&file).map_err(|e| format!("{}: {e}", file.display()))
     })
 }
@@ -143,8 +143,10 @@ pub fn parse_gltf(
     Ok(LoadedScene::completed(scene, options, cameras, warnings, "glTF"))
 }
 
-/// The GLB header's length must cover the 12-byte header itself and fit the
-/// file; the gltf crate subtracts before it checks (found by fuzzing).
+/// The GLB header's length must be the file's (the glTF 2.0 specification,
+/// "Binary glTF Layout"): shorter, and what follows it would be dropped
+/// silently; longer, and the gltf crate subtracts before it checks (found
+/// by fuzzing).
 fn check_glb_header(bytes: &[u8]) -> std::result::Result<(), String> {
     if !bytes.starts_with(b"glTF") {
         return Ok(());
@@ -160,7 +162,7 @@ fn check_glb_header(bytes: &[u8]) -> std::result::Result<(), String> {
     if version != 2 {
         return Err(format!("GLB version {version}; lenspath reads glTF 2.0"));
     }
-    if length < 12 + 8 || length > bytes.len() {
+    if length < 12 + 8 || length != bytes.len() {
         return Err(format!(
             "GLB header gives a length of {length} bytes, but the file has {} (and a GLB needs at least 20)",
             bytes.len()
@@ -428,14 +430,10 @@ impl Loader<'_> {
         let eye = world.transform_point3(Vec3::ZERO);
         let forward = world.transform_vector3(Vec3::NEG_Z);
         let up = world.transform_vector3(Vec3::Y);
-        if forward.cross(up).length_squared() == 0.0 {
-            return Err((self.fail)(format!(
-                "node {}: camera transform is degenerate",
-                node.index()
-            )));
-        }
+        let pose = CameraPose::try_look_at(eye, eye + forward, up)
+            .map_err(|m| (self.fail)(format!("node {}: camera transform: {m}", node.index())))?;
         self.scene.view = Some(SceneView {
-            pose: CameraPose::look_at(eye, eye + forward, up),
+            pose,
             fov_y_deg,
             focus_distance: 0.0, // set from the bounds once everything is loaded
         });

@@ -23,19 +23,83 @@ pub use import::{LensOptions, LoadedScene, SceneOptions, Warnings};
 /// Scene file extensions [`load_scene`] reads, lower case.
 pub const SCENE_EXTENSIONS: [&str; 6] = ["dae", "obj", "ply", "gltf", "glb", "toml"];
 
-/// Loads a scene file, choosing the loader by its extension.
+/// The folders a scene may read the files it names from (buffers, material
+/// libraries, base scenes, meshes, lens tables): the folder of the scene
+/// file the user named, and folders the user allows explicitly. A scene
+/// downloaded from the internet cannot read the user's other files
+/// (`/etc/passwd` as a glTF buffer, `../../secrets` as a mesh).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ReadScope {
+    /// Canonical folders; a file is readable when its canonical path is in one.
+    roots: Vec<PathBuf>,
+}
+
+impl ReadScope {
+    /// The scope of the scene file `scene`: the folder it is named in and the
+    /// `allowed` ones (which must exist).
+    pub fn of_scene(scene: &Path, allowed: &[PathBuf]) -> Result<ReadScope> {
+        let canonical = |p: &Path| p.canonicalize().map_err(|e| io_error(p, e));
+        let folder = scene
+            .parent()
+            .filter(|f| !f.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        // A missing folder is a missing scene file: name the file.
+        let mut roots = vec![folder.canonicalize().map_err(|e| io_error(scene, e))?];
+        for dir in allowed {
+            roots.push(canonical(dir)?);
+        }
+        Ok(ReadScope { roots })
+    }
+
+    /// `file` (named by a scene) as a path to read, or why it may not be read:
+    /// it is outside every folder of the scope (symbolic links and `..`
+    /// resolved first).
+    pub fn check(&self, file: &Path) -> Result<PathBuf> {
+        let canonical = file.canonicalize().map_err(|e| io_error(file, e))?;
+        if self.roots.iter().any(|root| canonical.starts_with(root)) {
+            return Ok(canonical);
+        }
+        let roots: Vec<String> = self.roots.iter().map(|r| r.display().to_string()).collect();
+        Err(Error::InvalidScene(format!(
+            "{} is outside the folders this scene may read ({}); allow its folder explicitly \
+             (lenspath --allow-read DIR, Python lenspath.load(..., allow_read=[DIR]))",
+            file.display(),
+            roots.join(", ")
+        )))
+    }
+}
+
+/// Loads a scene file, choosing the loader by its extension; it may read
+/// the files it names from its own folder ([`ReadScope::of_scene`]).
 pub fn load_scene(path: &Path) -> Result<LoadedScene> {
+    load_scene_in(path, &ReadScope::of_scene(path, &[])?)
+}
+
+/// [`load_scene`], reading the files the scene names within `scope`.
+pub fn load_scene_in(path: &Path, scope: &ReadScope) -> Result<LoadedScene> {
+    let loaded = load_scene_as_written(path, scope)?;
+    // What compiling would refuse, refused now, naming the file.
+    loaded.scene.validate().map_err(|e| Error::Parse {
+        kind: crate::FileKind::Scene,
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    })?;
+    Ok(loaded)
+}
+
+/// [`load_scene_in`] without the final check of the scene as a whole.
+fn load_scene_as_written(path: &Path, scope: &ReadScope) -> Result<LoadedScene> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     match ext.as_deref() {
         Some("dae") => collada::load_collada(path),
-        Some("obj") => obj::load_obj(path),
+        Some("obj") => obj::load_obj(path, scope),
         Some("ply") => {
             let mut warnings = Warnings::default();
             let mesh = ply::load_ply(path, &mut warnings)?;
             Ok(import::mesh_scene(mesh, warnings, "PLY"))
         }
-        Some("gltf" | "glb") => gltf::load_gltf(path),
-        Some("toml") => scene_file::load_scene_file(path),
+        Some("gltf" | "glb") => gltf::load_gltf(path, scope),
+        Some("toml") => scene_file::load_scene_file(path, scope),
         _ => Err(Error::InvalidArgument(format!(
             "{}: unknown scene format; lenspath reads .{}",
             path.display(),
@@ -64,6 +128,38 @@ pub fn read_text(path: &Path, kind: FileKind) -> Result<String> {
         path: path.to_path_buf(),
         message: format!("not UTF-8 text (byte {} is invalid)", e.utf8_error().valid_up_to()),
     })
+}
+
+/// Removes the temporary files beside `path` that writers killed before
+/// their rename left (`.NAME.PID.tmp` of a process no longer running, on
+/// systems with `/proc`); best effort, silent.
+pub fn remove_stale_temporaries(path: &Path) {
+    let proc = Path::new("/proc");
+    let Some(name) = path.file_name() else {
+        return;
+    };
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    if !proc.is_dir() {
+        return;
+    }
+    let prefix = format!(".{}.", name.to_string_lossy());
+    for entry in entries.flatten() {
+        let file = entry.file_name();
+        let pid = file
+            .to_str()
+            .and_then(|f| f.strip_prefix(&prefix))
+            .and_then(|rest| rest.strip_suffix(".tmp"))
+            .and_then(|pid| pid.parse::<u32>().ok());
+        if pid.is_some_and(|pid| !proc.join(pid.to_string()).exists()) {
+            let _ = std::fs::remove_file(entry.path());
+        }
+    }
 }
 
 /// A hidden name beside `path`, unique to this process.

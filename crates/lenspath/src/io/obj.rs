@@ -31,11 +31,23 @@ use crate::scene::Scene;
 use crate::shapes::TriangleMesh;
 use crate::spectrum::Emission;
 
-/// Reads an OBJ file and the MTL files it names (beside it).
-pub fn load_obj(path: &Path) -> Result<LoadedScene> {
+/// Reads an OBJ file and the MTL files it names (beside it, within `scope`).
+pub fn load_obj(path: &Path, scope: &super::ReadScope) -> Result<LoadedScene> {
     let text = super::read_text(path, crate::FileKind::Scene)?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    parse_obj(&text, path, &|mtl| tobj::load_mtl(dir.join(mtl)))
+    // tobj's error for a library cannot say why; a refused one is told in a warning.
+    let refused = std::cell::RefCell::new(None);
+    let mut loaded = parse_obj(&text, path, &|mtl| match scope.check(&dir.join(mtl)) {
+        Ok(file) => tobj::load_mtl(file),
+        Err(e) => {
+            *refused.borrow_mut() = Some(e.to_string());
+            Err(tobj::LoadError::OpenFileFailed)
+        }
+    })?;
+    if let Some(why) = refused.into_inner() {
+        loaded.warnings.add(format!("material library not read: {why}"));
+    }
+    Ok(loaded)
 }
 
 /// Parses OBJ text; `load_mtl` reads a material library named by `mtllib`.

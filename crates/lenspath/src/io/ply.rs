@@ -3,7 +3,7 @@
 //! (fan-triangulated). Also a binary PLY writer, so other renderers can be run
 //! on exactly lenspath's triangles.
 
-use std::io::{BufRead, BufReader, BufWriter, Seek, Write};
+use std::io::{BufRead, BufReader, BufWriter, Read, Seek, Write};
 use std::path::Path;
 
 use glam::Vec3;
@@ -53,8 +53,11 @@ impl PropertyAccess for PlyVertex {
     }
 }
 
+/// A face's vertex indices as the file wrote them (signed, so a negative or
+/// over-large index is reported as written); `None` when they were not
+/// integers.
 #[derive(Default)]
-struct PlyFace(Vec<u32>);
+struct PlyFace(Option<Vec<i64>>);
 
 impl PropertyAccess for PlyFace {
     fn new() -> Self {
@@ -64,15 +67,14 @@ impl PropertyAccess for PlyFace {
         if name != "vertex_indices" && name != "vertex_index" {
             return;
         }
-        // Negative indices become huge and are caught by the range check.
         self.0 = match property {
-            Property::ListInt(v) => v.iter().map(|&i| i as u32).collect(),
-            Property::ListUInt(v) => v,
-            Property::ListShort(v) => v.iter().map(|&i| i as u32).collect(),
-            Property::ListUShort(v) => v.iter().map(|&i| u32::from(i)).collect(),
-            Property::ListChar(v) => v.iter().map(|&i| i as u32).collect(),
-            Property::ListUChar(v) => v.iter().map(|&i| u32::from(i)).collect(),
-            _ => Vec::new(),
+            Property::ListInt(v) => Some(v.into_iter().map(i64::from).collect()),
+            Property::ListUInt(v) => Some(v.into_iter().map(i64::from).collect()),
+            Property::ListShort(v) => Some(v.into_iter().map(i64::from).collect()),
+            Property::ListUShort(v) => Some(v.into_iter().map(i64::from).collect()),
+            Property::ListChar(v) => Some(v.into_iter().map(i64::from).collect()),
+            Property::ListUChar(v) => Some(v.into_iter().map(i64::from).collect()),
+            _ => None,
         };
     }
 }
@@ -187,15 +189,21 @@ fn read_ply<R: BufRead + Seek>(
             }
         }
     }
+    check_nothing_follows(reader, &header, &fail)?;
     let n = builder.mesh.positions.len();
+    let mut corners = Vec::new();
     for (f, face) in faces.iter().enumerate() {
-        if let Some(&v) = face.0.iter().find(|&&v| v as usize >= n) {
+        let Some(indices) = &face.0 else {
+            return Err(fail(format!("face {f}'s vertex indices are not integers")));
+        };
+        if let Some(&v) = indices.iter().find(|&&v| !(0..n as i64).contains(&v)) {
             return Err(fail(format!(
-                "face {f} refers to vertex {} but there are {n} vertices",
-                v as i32
+                "face {f} refers to vertex {v} but there are {n} vertices"
             )));
         }
-        builder.polygon(&face.0);
+        corners.clear();
+        corners.extend(indices.iter().map(|&v| v as u32));
+        builder.polygon(&corners);
     }
     let name = path.display().to_string();
     let mesh = builder.finish(&name, warnings);
@@ -203,6 +211,29 @@ fn read_ply<R: BufRead + Seek>(
         return Err(fail("no faces with area: nothing to render".into()));
     }
     Ok(mesh)
+}
+
+/// Fails if data follows the elements the header declares (beyond
+/// whitespace): a header that declares fewer elements than the file holds
+/// would otherwise drop the rest silently.
+fn check_nothing_follows<R: BufRead>(reader: &mut R, header: &Header, fail: &dyn Fn(String) -> Error) -> Result<()> {
+    let mut rest = Vec::new();
+    reader
+        .take(1 << 16)
+        .read_to_end(&mut rest)
+        .map_err(|e| fail(format!("cannot read past the elements: {e}")))?;
+    if rest.iter().all(u8::is_ascii_whitespace) {
+        return Ok(());
+    }
+    let declared: Vec<String> = header
+        .elements
+        .iter()
+        .map(|(name, e)| format!("{} '{name}'", e.count))
+        .collect();
+    Err(fail(format!(
+        "data follows the {} elements the header declares: it declares fewer than the file holds",
+        declared.join(" and ")
+    )))
 }
 
 /// Writes the mesh's positions and triangles as binary little-endian PLY

@@ -369,9 +369,10 @@ enum ShapeSpec {
     },
 }
 
-/// Reads a lenspath TOML scene file.
-pub fn load_scene_file(path: &Path) -> Result<LoadedScene> {
-    load_included(path, &[])
+/// Reads a lenspath TOML scene file; the files it names (base scene,
+/// meshes, a lens table), and theirs, must be within `scope`.
+pub fn load_scene_file(path: &Path, scope: &super::ReadScope) -> Result<LoadedScene> {
+    load_included(path, &[], scope)
 }
 
 /// Most scene files deep a chain of `base` and mesh files may go: far more
@@ -380,7 +381,7 @@ pub fn load_scene_file(path: &Path) -> Result<LoadedScene> {
 pub const MAX_INCLUDE_DEPTH: usize = 64;
 
 /// Loads `path`, which `including` (outermost first) reached through `base` or mesh files.
-fn load_included(path: &Path, including: &[PathBuf]) -> Result<LoadedScene> {
+fn load_included(path: &Path, including: &[PathBuf], scope: &super::ReadScope) -> Result<LoadedScene> {
     if including.len() >= MAX_INCLUDE_DEPTH {
         return Err(Error::InvalidScene(too_deep(&including[0], path)));
     }
@@ -391,6 +392,7 @@ fn load_included(path: &Path, including: &[PathBuf]) -> Result<LoadedScene> {
     chain.push(canonical);
     parse_scene_file(&text, path, &|file: &Path| {
         let file = dir.join(file);
+        scope.check(&file)?;
         if file.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml")) {
             if file.canonicalize().is_ok_and(|c| chain.contains(&c)) {
                 return Err(Error::InvalidArgument(format!(
@@ -398,19 +400,25 @@ fn load_included(path: &Path, including: &[PathBuf]) -> Result<LoadedScene> {
                     file.display()
                 )));
             }
-            load_included(&file, &chain)
+            load_included(&file, &chain, scope)
         } else {
-            super::load_scene(&file)
+            super::load_scene_in(&file, scope)
         }
     })
-    .map(|mut loaded| {
-        // Lens files named in the scene are relative to it.
+    .and_then(|mut loaded| {
+        // Lens files named in the scene are relative to it, and within its scope.
         if let Some(lens) = loaded.options.lens.as_mut().and_then(|l| l.lens.as_mut()) {
-            if lens.contains(['/', '\\', '.']) && Path::new(lens).is_relative() {
-                *lens = dir.join(&*lens).display().to_string();
+            if lens.contains(['/', '\\', '.']) {
+                let file = dir.join(&*lens);
+                scope.check(&file).map_err(|e| Error::Parse {
+                    kind: crate::FileKind::Scene,
+                    path: path.to_path_buf(),
+                    message: format!("[camera] lens: {e}"),
+                })?;
+                *lens = file.display().to_string();
             }
         }
-        loaded
+        Ok(loaded)
     })
 }
 
@@ -620,18 +628,9 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
             Vec3::from_array(cam.look_at),
             Vec3::from_array(cam.up),
         );
-        if (target - eye).cross(up).length_squared() == 0.0 || !(eye.is_finite() && target.is_finite()) {
-            return Err(fail(
-                "[camera]: eye, look_at and up must be finite and not collinear".into(),
-            ));
-        }
-        let pose = CameraPose::look_at(eye, target, up);
+        let pose = CameraPose::try_look_at(eye, target, up).map_err(|m| fail(format!("[camera]: {m}")))?;
         let fov_y_deg = cam.fov_y_deg.unwrap_or(super::import::DEFAULT_FOV_Y_DEG);
-        if !(fov_y_deg > 0.0 && fov_y_deg < 180.0) {
-            return Err(fail(format!(
-                "[camera]: fov_y_deg must be between 0 and 180, got {fov_y_deg}"
-            )));
-        }
+        crate::camera::check_fov_deg(fov_y_deg).map_err(|m| fail(format!("[camera] fov_y_deg: {m}")))?;
         let focus_distance = match cam.focus_distance {
             Some(d) if d > 0.0 && d.is_finite() => d,
             Some(d) => return Err(fail(format!("[camera]: focus_distance must be positive, got {d}"))),

@@ -12,7 +12,7 @@ use lenspath::camera::{Camera, CameraSample, PerspectiveCamera};
 use lenspath::film::{Filter, PixelRect};
 use lenspath::glass::{C_LINE_NM, F_LINE_NM};
 use lenspath::integrator::Integrator;
-use lenspath::io::scene_file::load_scene_file;
+use lenspath::io::load_scene;
 use lenspath::materials::Material;
 use lenspath::render::{render, RenderSettings};
 use lenspath::scene::Scene;
@@ -167,7 +167,7 @@ fn measured_columns(image: &lenspath::film::Image, around: &[f64]) -> Vec<f64> {
 #[test]
 fn a_prism_spreads_the_slit_where_snells_law_puts_each_wavelength() {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/prism.toml");
-    let loaded = load_scene_file(&path).unwrap();
+    let loaded = load_scene(&path).unwrap();
     let view = loaded.scene.view.expect("the scene file gives its camera");
     let geometry = Geometry::of(&loaded.scene);
     let camera = PerspectiveCamera::pinhole(view.pose, view.fov_y_deg, WIDTH, HEIGHT);

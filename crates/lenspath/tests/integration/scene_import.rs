@@ -185,7 +185,13 @@ fn shipped_example_scenes_load() {
         if text.contains("../shared") && shared("ASSETS.md").is_none() {
             continue;
         }
-        let loaded = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+        // Those naming ../shared read from it when allowed to (`--allow-read ../shared`).
+        let allowed: Vec<PathBuf> = shared("ASSETS.md")
+            .map(|f| f.parent().unwrap().to_path_buf())
+            .into_iter()
+            .collect();
+        let scope = lenspath::io::ReadScope::of_scene(&path, &allowed).unwrap();
+        let loaded = lenspath::io::load_scene_in(&path, &scope).unwrap_or_else(|e| panic!("{e}"));
         assert!(
             loaded.scene.triangle_count() + loaded.scene.spheres.len() > 0,
             "{}",
@@ -584,4 +590,77 @@ fn a_deep_chain_of_base_files_is_refused_not_a_stack_overflow() {
     let err_at = |start: usize| load_scene(&dir.path().join(name(start))).map(|_| ());
     assert!(err_at(2000 - limit + 1).is_ok());
     assert!(err_at(2000 - limit).is_err());
+}
+
+/// A scene reads the files it names only from its own folder (`..` and
+/// symbolic links resolved), unless a folder is allowed explicitly: a glTF
+/// buffer, a TOML base or mesh file, an OBJ material library outside it is
+/// refused (the library skipped with a warning), never read.
+#[test]
+fn a_scene_reads_only_from_its_folder_unless_another_is_allowed() {
+    use lenspath::io::{load_scene_in, ReadScope};
+    let dir = tempfile::tempdir().unwrap();
+    let (inside, outside) = (dir.path().join("scene"), dir.path().join("elsewhere"));
+    std::fs::create_dir_all(inside.join("sub")).unwrap();
+    std::fs::create_dir_all(&outside).unwrap();
+    let triangle = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    std::fs::write(outside.join("mesh.obj"), triangle).unwrap();
+    std::fs::write(inside.join("sub/mesh.obj"), triangle).unwrap();
+    std::fs::write(outside.join("red.mtl"), "newmtl red\nKd 1 0 0\n").unwrap();
+    #[cfg(unix)]
+    std::os::unix::fs::symlink(outside.join("mesh.obj"), inside.join("link.obj")).unwrap();
+    let mesh_scene =
+        |file: &str| format!("builtin = \"cornell-empty\"\n[[shapes]]\ntype = \"mesh\"\nfile = \"{file}\"\n");
+    let cases = [
+        ("up.toml", mesh_scene("../elsewhere/mesh.obj")),
+        (
+            "absolute.toml",
+            mesh_scene(&outside.join("mesh.obj").display().to_string()),
+        ),
+        ("base.toml", "base = \"../elsewhere/mesh.obj\"\n".to_string()),
+        #[cfg(unix)]
+        ("link.toml", mesh_scene("link.obj")),
+    ];
+    for (name, text) in &cases {
+        let path = inside.join(name);
+        std::fs::write(&path, text).unwrap();
+        let err = load_scene(&path).unwrap_err().to_string();
+        assert!(
+            err.contains(name) && err.contains("is outside the folders this scene may read"),
+            "{name}: {err}"
+        );
+        // Allowed explicitly, it loads.
+        let scope = ReadScope::of_scene(&path, std::slice::from_ref(&outside)).unwrap();
+        load_scene_in(&path, &scope).unwrap_or_else(|e| panic!("{name} with the folder allowed: {e}"));
+    }
+    std::fs::write(inside.join("fine.toml"), mesh_scene("sub/mesh.obj")).unwrap();
+    load_scene(&inside.join("fine.toml")).unwrap();
+
+    let gltf = |uri: &str| {
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},"buffers":[{{"uri":"{uri}","byteLength":4}}],"scenes":[{{"nodes":[]}}],"scene":0}}"#
+        )
+    };
+    for uri in ["/etc/passwd", "../elsewhere/mesh.obj"] {
+        std::fs::write(inside.join("b.gltf"), gltf(uri)).unwrap();
+        let err = load_scene(&inside.join("b.gltf")).unwrap_err().to_string();
+        assert!(
+            err.contains("is outside the folders this scene may read"),
+            "{uri}: {err}"
+        );
+    }
+
+    std::fs::write(
+        inside.join("m.obj"),
+        format!("mtllib ../elsewhere/red.mtl\nusemtl red\n{triangle}"),
+    )
+    .unwrap();
+    let loaded = load_scene(&inside.join("m.obj")).unwrap();
+    let warnings = loaded.warnings.to_string();
+    assert!(warnings.contains("material library not read"), "{warnings}");
+    assert!(loaded
+        .scene
+        .materials
+        .iter()
+        .all(|m| !matches!(m, Material::Diffuse { reflectance } if reflectance.x == 1.0 && reflectance.y == 0.0)));
 }

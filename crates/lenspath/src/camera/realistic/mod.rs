@@ -49,6 +49,10 @@ use crate::spectrum::{LAMBDA_MAX_NM, LAMBDA_MIN_NM};
 /// Real-ray height used when focusing, in mm (the CS184 lens simulator's).
 const FOCUS_RAY_HEIGHT_MM: f64 = 0.1;
 
+/// The most a sensor position may magnify (a bellows at 10:1; macro lenses
+/// reach 5:1).
+pub const MAX_MAGNIFICATION: f64 = 10.0;
+
 /// How the sensor is divided into patches with a pupil grid each.
 #[derive(Clone, Copy, Debug)]
 enum PupilLayout {
@@ -200,6 +204,17 @@ impl RealisticCamera {
                         "sensor position {z} mm must lie behind the rear element ({:.3} mm behind the stop)",
                         system.rear_z()
                     )));
+                }
+                // Newton's equation x' = m f: past m = MAX_MAGNIFICATION the
+                // image is too dim and too large to be what was meant.
+                if let Ok(p) = system.paraxial() {
+                    let farthest = p.rear_focal_point_z_mm + MAX_MAGNIFICATION * p.effective_focal_length_mm.abs();
+                    if z > farthest {
+                        return Err(Error::InvalidArgument(format!(
+                            "sensor position {z} mm is beyond {farthest:.3} mm, where {} would magnify {MAX_MAGNIFICATION}x (the image would be black)",
+                            settings.lens.name()
+                        )));
+                    }
                 }
                 z
             }
