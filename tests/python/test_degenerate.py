@@ -93,6 +93,10 @@ def test_an_empty_image_blurs_to_itself(image: np.ndarray) -> None:
         (lambda: lenspath.render("cornell-spheres", seed=-1), "seed must be a whole number from 0, got -1"),
         (lambda: lenspath.render("cornell-spheres", threads=-2), "threads must be a whole number from 0, got -2"),
         (
+            lambda: lenspath.autofocus("cornell-spheres", (0.4, 0.4, 0.2, 0.2), spp=-1),
+            "spp must be a whole number from 0, got -1",
+        ),
+        (
             _scene_with(lambda s, m: s.add_mesh(np.eye(3), np.array([[0, 1, 1.7]]), m)),
             "indices must be whole numbers from 0; triangle 0 has 1.7",
         ),

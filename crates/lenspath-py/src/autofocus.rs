@@ -10,7 +10,7 @@ use numpy::{IntoPyArray, PyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
 use crate::camera::Camera;
-use crate::error::{deprecated, guarded, to_py};
+use crate::error::{deprecated, guarded, to_py, whole_number};
 use crate::scene::Scene;
 use crate::sensor::Sensor;
 
@@ -86,12 +86,12 @@ pub(crate) fn autofocus(
     camera: Option<&Camera>,
     metric: Option<String>,
     strategy: Option<String>,
-    patience: Option<usize>,
-    spp: Option<u32>,
+    patience: Option<i64>,
+    spp: Option<i64>,
     resolution: Option<(u32, u32)>,
-    seed: Option<u32>,
-    max_depth: Option<u32>,
-    threads: Option<usize>,
+    seed: Option<i64>,
+    max_depth: Option<i64>,
+    threads: Option<i64>,
     sensor: Option<&Sensor>,
     sensor_signal: Option<String>,
 ) -> PyResult<AutofocusResult> {
@@ -103,13 +103,13 @@ pub(crate) fn autofocus(
     };
     let overrides = AutofocusOverrides {
         resolution,
-        spp,
-        max_depth,
-        seed,
-        threads,
+        spp: whole_number("spp", spp)?,
+        max_depth: whole_number("max_depth", max_depth)?,
+        seed: whole_number("seed", seed)?,
+        threads: whole_number("threads", threads)?,
         metric,
         strategy,
-        patience,
+        patience: whole_number("patience", patience)?,
         camera: description.clone(),
         sensor: sensor.map(|s| s.description.clone()),
         sensor_signal,

@@ -95,3 +95,11 @@ pub(crate) fn guarded<T>(f: impl FnOnce() -> T) -> PyResult<T> {
         ))
     })
 }
+
+/// An integer argument as the type the library takes, or a `ValueError`
+/// naming it (pyo3's own `OverflowError` for -1 names no argument).
+pub(crate) fn whole_number<T: TryFrom<i64>>(name: &str, value: Option<i64>) -> PyResult<Option<T>> {
+    value
+        .map(|v| T::try_from(v).map_err(|_| value_error(format!("{name} must be a whole number from 0, got {v}"))))
+        .transpose()
+}

@@ -16,7 +16,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::camera::Camera;
-use crate::error::{guarded, to_py, value_error};
+use crate::error::{guarded, to_py, value_error, whole_number};
 use crate::scene::Scene;
 use crate::sensor::{RawFrame, Sensor};
 
@@ -83,14 +83,14 @@ pub(crate) fn render<'py>(
     };
     let overrides = RenderOverrides {
         resolution,
-        spp: whole("spp", spp)?,
+        spp: whole_number("spp", spp)?,
         integrator,
-        max_depth: whole("max_depth", max_depth)?,
-        light_samples: whole("light_samples", light_samples)?,
-        seed: whole("seed", seed)?,
+        max_depth: whole_number("max_depth", max_depth)?,
+        light_samples: whole_number("light_samples", light_samples)?,
+        seed: whole_number("seed", seed)?,
         sampler,
         filter: None,
-        threads: whole("threads", threads)?,
+        threads: whole_number("threads", threads)?,
         crop: crop.map(|(x0, y0, width, height)| PixelRect { x0, y0, width, height }),
         depth: Some(want_depth),
         wavelength_nm,
@@ -183,12 +183,4 @@ pub(crate) fn render<'py>(
     d.set_item("rgb", rgb)?;
     d.set_item("depth", depth)?;
     Ok(d.into_any())
-}
-
-/// An integer argument as the type the library takes, or a `ValueError`
-/// naming it (pyo3's own `OverflowError` for -1 names no argument).
-fn whole<T: TryFrom<i64>>(name: &str, value: Option<i64>) -> PyResult<Option<T>> {
-    value
-        .map(|v| T::try_from(v).map_err(|_| value_error(format!("{name} must be a whole number from 0, got {v}"))))
-        .transpose()
 }
