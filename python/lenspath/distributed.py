@@ -67,6 +67,11 @@ def _file_sha256(path: str) -> str:
     return digest.hexdigest()
 
 
+def _file_key(path: str, allow_read: tuple[str, ...]) -> str:
+    """The cache key of a scene file: its content, and the folders it may read."""
+    return f"sha256:{_file_sha256(path)}" + "".join(f":{a}" for a in allow_read)
+
+
 def _scene_ref(scene: Scene | str | os.PathLike[str]) -> _SceneRef:
     """The reference workers make ``scene`` from: a built-in name or a file with its hash."""
     allow_read: tuple[str, ...] = ()
@@ -86,8 +91,7 @@ def _scene_ref(scene: Scene | str | os.PathLike[str]) -> _SceneRef:
         path = os.path.abspath(os.fspath(scene))
         if not os.path.isfile(path):
             raise FileNotFoundError(f"{path}: no such scene file")
-        key = f"sha256:{_file_sha256(path)}" + "".join(f":{a}" for a in allow_read)
-        return _SceneRef(key=key, path=path, allow_read=allow_read)
+        return _SceneRef(key=_file_key(path, allow_read), path=path, allow_read=allow_read)
     raise TypeError(f"scene must be a lenspath.Scene, a built-in scene name or a path, not {type(scene).__name__}")
 
 
@@ -114,7 +118,7 @@ def _worker_scene(ref: _SceneRef) -> Scene:
             )
         else:
             assert ref.path is not None
-            here = f"sha256:{_file_sha256(ref.path)}" + "".join(f":{a}" for a in ref.allow_read)
+            here = _file_key(ref.path, ref.allow_read)
             if here != ref.key:
                 raise RuntimeError(
                     f"{ref.path} differs on this worker from the client's copy "

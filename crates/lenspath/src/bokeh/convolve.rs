@@ -56,6 +56,14 @@ pub fn choose_method(width: usize, height: usize, kernel: &Kernel) -> Method {
     }
 }
 
+/// `method`, with [`Method::Auto`] made the one [`choose_method`] picks.
+fn resolved(method: Method, width: usize, height: usize, kernel: &Kernel) -> Method {
+    match method {
+        Method::Auto => choose_method(width, height, kernel),
+        m => m,
+    }
+}
+
 /// The three channel planes of an interleaved RGB image (3 floats a pixel).
 pub fn rgb_planes(rgb: &[f32]) -> Vec<Vec<f32>> {
     (0..3).map(|c| rgb.chunks_exact(3).map(|px| px[c]).collect()).collect()
@@ -80,11 +88,7 @@ pub fn convolve_rgb(rgb: &mut [f32], width: usize, height: usize, kernel: &Kerne
 /// Fails when blurring a `width`×`height` image with `kernel` by `method`
 /// would need more memory than [`crate::memory::budget_bytes`] allows.
 pub fn check_blur_memory(width: usize, height: usize, kernel: &Kernel, method: Method) -> crate::error::Result<()> {
-    let method = match method {
-        Method::Auto => choose_method(width, height, kernel),
-        m => m,
-    };
-    let bytes = match method {
+    let bytes = match resolved(method, width, height, kernel) {
         // Three planes in, three out.
         Method::Direct => (width * height) as u64 * 24,
         _ => {
@@ -116,10 +120,7 @@ pub fn convolve_planes(
     if width == 0 || height == 0 {
         return planes.to_vec();
     }
-    let method = match method {
-        Method::Auto => choose_method(width, height, kernel),
-        m => m,
-    };
+    let method = resolved(method, width, height, kernel);
     let mut out: Vec<Vec<f32>> = match method {
         Method::Direct => planes.iter().map(|p| direct(p, width, height, kernel)).collect(),
         _ => {

@@ -392,9 +392,9 @@ fn load_included(path: &Path, including: &[PathBuf], scope: &super::ReadScope) -
     chain.push(canonical);
     parse_scene_file(&text, path, &|file: &Path| {
         let file = dir.join(file);
-        scope.check(&file)?;
+        let canonical = scope.check(&file)?;
         if file.extension().is_some_and(|e| e.eq_ignore_ascii_case("toml")) {
-            if file.canonicalize().is_ok_and(|c| chain.contains(&c)) {
+            if chain.contains(&canonical) {
                 return Err(Error::InvalidArgument(format!(
                     "{} includes itself (a cycle of base or mesh files)",
                     file.display()
