@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The whole test suite (the README's test command): the Rust workspace, then
-# the Python package, installed with `pip install .` into a virtual
-# environment made here (target/python-venv), tested with pytest.
+# the Python package, built as a wheel by pip (what `pip install .` does) and
+# installed into a virtual environment made here (target/python-venv), tested
+# with pytest.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -22,8 +23,15 @@ fi
 # The package's wheel is a release build (fat LTO, one codegen unit: minutes
 # with long single-threaded stretches), so it builds in its own target
 # directory while the Rust tests build and run, not after them.
+# The wheel is kept in target/wheels: the packaging tests check it (twine, stripped, its files).
 pip_log=target/pip-install.log
-CARGO_TARGET_DIR=target/wheel "$venv/bin/python" -m pip install --quiet ".[test]" >"$pip_log" 2>&1 &
+build_and_install() {
+    rm -rf target/wheels
+    CARGO_TARGET_DIR=target/wheel "$venv/bin/python" -m pip wheel --quiet --no-deps -w target/wheels . &&
+        "$venv/bin/python" -m pip uninstall --quiet -y lenspath &&
+        "$venv/bin/python" -m pip install --quiet "$(ls target/wheels/lenspath-*.whl)[test]"
+}
+build_and_install >"$pip_log" 2>&1 &
 pip_pid=$!
 trap 'kill "$pip_pid" 2>/dev/null || true' EXIT
 
@@ -31,7 +39,7 @@ cargo test --workspace
 
 if ! wait "$pip_pid"; then
     cat "$pip_log" >&2
-    echo "pip install .[test] failed (log above, also in $pip_log)" >&2
+    echo "building or installing the wheel failed (log above, also in $pip_log)" >&2
     exit 1
 fi
 trap - EXIT

@@ -41,8 +41,10 @@ from ._core import (
     lens_blur,
     load,
     read,
+    read_exr,
     sensor_models,
     write,
+    write_exr,
 )
 
 __version__: str = _core.__version__
@@ -69,10 +71,12 @@ __all__ = [
     "lens_blur",
     "load",
     "read",
+    "read_exr",
     "render",
     "sensor",
     "sensor_models",
     "write",
+    "write_exr",
 ]
 
 

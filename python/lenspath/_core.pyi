@@ -7,9 +7,9 @@ position is its distance behind the stop. Scene distances are in scene units
 of shape (height, width, 3); array arguments may be any array-like, converted.
 """
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from os import PathLike
-from typing import Any, Literal, final, overload
+from typing import Any, Literal, TypeAlias, final, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -35,6 +35,9 @@ __all__ = [
     "render",
     "read",
     "write",
+    "read_exr",
+    "write_exr",
+    "run_cli",
     "focus_measure",
     "focus_measures",
     "bokeh",
@@ -174,6 +177,10 @@ def load(path: str | PathLike[str], allow_read: Sequence[str | PathLike[str]] | 
     only from its own folder and the ``allow_read`` folders (a scene from elsewhere cannot read
     your other files). Raises SceneError for a broken file or a file named outside those folders,
     OSError when it cannot be read."""
+
+def run_cli(argv: Sequence[str | PathLike[str]]) -> int:
+    """Runs the ``lenspath`` command line ``argv`` (the program's name first) in this process and
+    returns its exit code (what ``python -m lenspath`` and the ``lenspath`` script call)."""
 
 def builtin_scenes() -> list[str]:
     """The built-in scenes' names."""
@@ -520,12 +527,50 @@ def defaults() -> dict[str, Any]:
 def read(path: str | PathLike[str]) -> npt.NDArray[np.float32]:
     """Reads a PNG, JPEG (decoded from sRGB) or EXR image as linear RGB (H, W, 3)."""
 
-def write(path: str | PathLike[str], image: npt.ArrayLike, exposure: float = 0.0) -> None:
-    """Writes linear RGB (H, W, 3): .png as sRGB after ``exposure`` stops, .exr as floats;
-    atomically (a temporary file renamed)."""
+def write(
+    path: str | PathLike[str],
+    image: npt.ArrayLike,
+    exposure: float = 0.0,
+    *,
+    depth: npt.ArrayLike | None = None,
+    attributes: Mapping[str, _ExrAttribute] | None = None,
+) -> None:
+    """Writes an image: .png as sRGB after ``exposure`` stops, .exr as floats (R, G, B, and Z
+    when ``depth``, (H, W), is given; ``attributes`` in the header, as ``read_exr`` gives
+    them); atomically (a temporary file renamed). Images, here and wherever a function takes
+    one, are (H, W, 3) RGB or (H, W) grey arrays; floats are linear light, uint8 and uint16 are
+    sRGB-encoded values (what Pillow, imageio and OpenCV read from a PNG or JPEG) and are
+    decoded to linear."""
+
+_ExrAttribute: TypeAlias = (
+    int | float | str | tuple[int, int] | tuple[float, float] | tuple[float, ...] | npt.NDArray[Any]
+)
+
+def read_exr(path: str | PathLike[str]) -> dict[str, Any]:
+    """Every channel of an EXR and its header: ``{"channels": {name: (H, W) float32},
+    "attributes": {name: value}, "display_window": (width, height), "data_origin": (x, y)}``.
+    A crop rendered with ``lenspath render --crop`` keeps the whole frame as its display window
+    and its place as the data window's origin. Attribute values: ``int``; ``float`` (OpenEXR
+    float) or ``numpy.float64`` (double); ``str``; two ints (v2i) or two floats (v2f); a
+    (4, 4) float32 array (m44f, row-major as stored: OpenEXR's row-vector convention); 8
+    floats (chromaticities: red, green, blue, white xy). Other attribute types are skipped.
+    ``write_exr(path, **read_exr(other))`` writes the same image and header."""
+
+def write_exr(
+    path: str | PathLike[str],
+    channels: Mapping[str, npt.ArrayLike],
+    attributes: Mapping[str, _ExrAttribute] | None = None,
+    display_window: tuple[int, int] | None = None,
+    data_origin: tuple[int, int] | None = None,
+) -> None:
+    """Writes named (H, W) channels as a 32-bit float EXR, atomically, with ``attributes``
+    (as ``read_exr`` gives them; Rec. 709 chromaticities unless given), the frame
+    ``display_window`` (default: the channels' size) and the channels' top-left pixel at
+    ``data_origin`` in it (default (0, 0)). Attributes are written in name order, so the same input gives the
+    same bytes."""
 
 def focus_measure(image: npt.ArrayLike, metric: str = "tenengrad") -> float:
-    """A focus measure of an (H, W, 3) image: ``focus_measures()`` lists them
+    """A focus measure of an image (RGB or grey, as ``write`` takes): ``focus_measures()`` lists them
     (variance, normalized-variance, sml, tenengrad, brenner, laplacian-energy, vollath)."""
 
 def focus_measures() -> list[str]:
@@ -540,7 +585,7 @@ def bokeh(
     edges: Literal["renormalize", "black"] = "renormalize",
     method: Literal["auto", "direct", "fft"] = "auto",
 ) -> npt.NDArray[np.float32]:
-    """Blurs an (H, W, 3) image with a bokeh kernel: an ``aperture`` shape ``diameter_px``
+    """Blurs an image (RGB or grey, as ``write`` takes) with a bokeh kernel: an ``aperture`` shape ``diameter_px``
     across, or a 2-D ``mask`` (resized so its longer side is ``diameter_px``, if given)."""
 
 @final
@@ -574,6 +619,11 @@ class AutofocusResult:
     @property
     def camera_rays(self) -> int:
         """Camera rays traced (patch render and light-field samples and range-finder probes)."""
+    @property
+    def fallbacks(self) -> list[str]:
+        """What the strategy could not do as its name says, and what it did instead (empty when it
+        did all of it): no surface in the patch to range on, or too little budget left for the
+        contrast refinement."""
     @property
     def seconds(self) -> float:
         """Wall time."""

@@ -35,6 +35,24 @@ def test_same_settings_give_the_clis_answer(cli, strategy: str) -> None:
     assert ours.patch_renders == theirs["patch_renders"]
     assert ours.light_fields == theirs["light_fields"]
     assert ours.depth_of_focus_mm == theirs["depth_of_focus_mm"]
+    assert ours.fallbacks == theirs["fallbacks"]
+
+
+def test_a_strategy_that_cannot_do_what_it_is_named_for_says_so() -> None:
+    # At 64x48 and 1 spp the fast search's budget leaves too few rays for its light field.
+    starved = lenspath.autofocus("cornell-spheres", NEAR_SPHERE, strategy="fast", spp=1, resolution=(64, 48))
+    assert starved.light_fields == 0
+    assert len(starved.fallbacks) == 1
+    assert "under 2 samples per pixel" in starved.fallbacks[0]
+    assert "fallbacks=" in repr(starved)
+    # Only sky in the patch: no probe ray hits anything, so range finding falls back to contrast.
+    sky = lenspath.Scene()
+    grey = sky.add_material("diffuse")
+    sky.add_sphere((0.0, -1.0, 0.0), 0.5, grey)
+    sky.add_environment((1.0, 1.0, 1.0))
+    sky.look_at((0.0, 0.0, 5.0), (0.0, 0.0, 0.0))
+    blind = lenspath.autofocus(sky, (0.0, 0.0, 0.2, 0.2), strategy="rangefinder", spp=1, resolution=(64, 48))
+    assert any("no surface in the patch to range on" in f for f in blind.fallbacks), blind.fallbacks
 
 
 @pytest.mark.parametrize("signal", ["raw-green", "luminance"])

@@ -30,6 +30,40 @@ def test_png_round_trips_within_one_code_value(tmp_path) -> None:
     assert np.abs(back - image).max() < 0.01
 
 
+@pytest.mark.parametrize(("dtype", "full_scale"), [(np.uint8, 255), (np.uint16, 65535)])
+def test_integer_images_are_srgb_encoded(tmp_path, dtype, full_scale: int) -> None:
+    # An 8- or 16-bit image is what Pillow, imageio and OpenCV give for a PNG: its values are
+    # sRGB-encoded, so a uint8 render written back must match the float one, not turn white.
+    linear = np.random.default_rng(5).random((12, 16, 3), dtype=np.float32)
+    encoded = np.where(linear <= 0.0031308, 12.92 * linear, 1.055 * linear ** (1 / 2.4) - 0.055)
+    ints = np.round(encoded * full_scale).astype(dtype)
+    lenspath.write(tmp_path / "ints.exr", ints)
+    # Half a code value, times the decoding's steepest slope (2.28, at white).
+    np.testing.assert_allclose(lenspath.read(tmp_path / "ints.exr"), linear, atol=0.5 * 2.28 / full_scale)
+
+
+def test_grey_images_are_2d_arrays(tmp_path) -> None:
+    grey = np.random.default_rng(6).random((10, 14), dtype=np.float32)
+    lenspath.write(tmp_path / "grey.exr", grey)
+    np.testing.assert_array_equal(lenspath.read(tmp_path / "grey.exr"), np.repeat(grey[:, :, None], 3, axis=2))
+    board = _checker()
+    assert lenspath.focus_measure(board[:, :, 0]) == lenspath.focus_measure(board)
+    blurred = lenspath.bokeh(board[:, :, 0], aperture="circle", diameter_px=5)
+    assert blurred.shape == (64, 64, 3)
+    with pytest.raises(ValueError, match=r"drop the alpha channel with image\[\.\.\., :3\]"):
+        lenspath.write(tmp_path / "rgba.exr", np.zeros((4, 4, 4), dtype=np.float32))
+
+
+def test_classes_say_what_they_are() -> None:
+    lens = lenspath.Lens.builtin("dgauss50")
+    camera = lenspath.Camera.realistic(lens, f_number=2.8, focus_distance=2.5)
+    assert repr(camera) == "Camera.realistic(lens='dgauss50', focus_distance=2.5, f_number=2.8)"
+    assert repr(lenspath.Camera.pinhole(fov_deg=30)) == "Camera.pinhole(fov_deg=30)"
+    assert repr(lenspath.Camera.thin_lens()) == "Camera.thin_lens()"
+    for thing in (lens, lenspath.Scene.builtin("cornell-empty"), lenspath.Glass("N-BK7"), lenspath.Sensor("ideal")):
+        assert " object at 0x" not in repr(thing), repr(thing)
+
+
 def test_image_errors(tmp_path) -> None:
     with pytest.raises(ValueError, match="H x W x 3"):
         lenspath.write(tmp_path / "a.exr", np.zeros((4, 4, 2), dtype=np.float32))

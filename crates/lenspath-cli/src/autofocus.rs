@@ -90,7 +90,7 @@ pub fn summary_line(r: &AutofocusResult, metric: &str, scene_unit_m: f64) -> Str
         (Some(t), Some(iso)) => format!(", frames at {t:.4} s and ISO {iso:.0}"),
         _ => String::new(),
     };
-    format!(
+    let mut line = format!(
         "autofocus ({}, {metric}): sensor {:.4} mm behind the stop, {distance}; {} patch renders, {} light fields, {:.2} M camera rays, {:.2} s{exposure}",
         r.strategy,
         r.sensor_z_mm,
@@ -98,7 +98,11 @@ pub fn summary_line(r: &AutofocusResult, metric: &str, scene_unit_m: f64) -> Str
         r.light_fields,
         r.camera_rays as f64 / 1e6,
         r.seconds
-    )
+    );
+    for fallback in &r.fallbacks {
+        line += &format!("\n  not as '{}' says: {fallback}", r.strategy);
+    }
+    line
 }
 
 /// Runs `lenspath autofocus`.
@@ -135,6 +139,7 @@ pub fn run(args: AutofocusArgs) -> Result<Outcome> {
             "seconds": result.seconds,
             "exposure_time_s": result.exposure_time_s,
             "iso": result.iso,
+            "fallbacks": result.fallbacks,
             "depth_of_focus_mm": focuser.depth_of_focus_mm(result.sensor_z_mm),
             "points": result.evaluations,
         });

@@ -6,10 +6,10 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use clap::{Args, ValueEnum};
-use lenspath::builtin::{builtin_scene, DEFAULT_MESH_TRIANGLES};
+use lenspath::builtin::{BUILTIN_SCENES, DEFAULT_MESH_TRIANGLES};
 use lenspath::camera::{Aperture, ApertureShape, Radiometry};
 use lenspath::film::{NormalizedRect, PixelRect};
-use lenspath::io::{load_scene_in, LoadedScene, ReadScope};
+use lenspath::io::{load_named_scene, LoadedScene};
 use lenspath::lens::LensPrescription;
 use lenspath::options::SceneOptions;
 use lenspath::sampling::SamplerKind;
@@ -152,8 +152,8 @@ pub fn parse_duration(s: &str) -> std::result::Result<Duration, String> {
 /// Which scene: a file or a built-in one (`render` and `autofocus`).
 #[derive(Args, Debug)]
 pub struct SceneArgs {
-    /// Scene file: .dae (COLLADA, CS184), .obj, .ply, .gltf/.glb or .toml (lenspath). Default: the
-    /// built-in scene named by --scene.
+    /// Scene file: .dae (COLLADA, CS184), .obj, .ply, .gltf/.glb or .toml (lenspath), or a
+    /// built-in scene's name. Default: the built-in scene named by --scene.
     pub file: Option<PathBuf>,
     /// Built-in scene: cornell-spheres, cornell-empty or cornell-mesh.
     #[arg(long, default_value = "cornell-spheres", conflicts_with = "file")]
@@ -175,32 +175,39 @@ pub struct AllowRead {
 }
 
 impl AllowRead {
-    /// Loads the scene file `path` within its folder and these.
-    pub fn load_scene(&self, path: &Path) -> Result<LoadedScene> {
-        load_scene_in(path, &ReadScope::of_scene(path, &self.dirs)?)
+    /// Loads the scene `name` (a built-in scene's name, else a file read within its folder and
+    /// these; [`load_named_scene`]).
+    pub fn load_scene(&self, name: &Path, mesh_triangles: usize) -> Result<LoadedScene> {
+        load_named_scene(name, &self.dirs, mesh_triangles)
     }
 }
 
 impl SceneArgs {
+    /// The built-in scene these flags name (by --scene, or by its name as the file), if any.
+    pub fn builtin(&self) -> Option<&str> {
+        match &self.file {
+            None => Some(&self.scene),
+            Some(file) => file.to_str().filter(|f| BUILTIN_SCENES.contains(f)),
+        }
+    }
+
     /// The scene's name, the scene and the settings its file gives; warnings go to stderr.
     pub fn load(&self) -> Result<(String, Scene, SceneOptions)> {
-        match &self.file {
-            Some(path) => {
-                let loaded = self.allow_read.load_scene(path)?;
-                for (what, n) in loaded.warnings.iter() {
-                    eprintln!(
-                        "warning: {what}{}",
-                        if n > 1 { format!(" (×{n})") } else { String::new() }
-                    );
-                }
-                Ok((path.display().to_string(), loaded.scene, loaded.options))
-            }
-            None => Ok((
-                self.scene.clone(),
-                builtin_scene(&self.scene, self.mesh_triangles)?,
-                SceneOptions::default(),
-            )),
+        let loaded = match &self.file {
+            Some(path) => self.allow_read.load_scene(path, self.mesh_triangles)?,
+            None => LoadedScene::builtin(&self.scene, self.mesh_triangles)?,
+        };
+        for (what, n) in loaded.warnings.iter() {
+            eprintln!(
+                "warning: {what}{}",
+                if n > 1 { format!(" (×{n})") } else { String::new() }
+            );
         }
+        let name = self
+            .file
+            .as_ref()
+            .map_or(self.scene.clone(), |f| f.display().to_string());
+        Ok((name, loaded.scene, loaded.options))
     }
 }
 

@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use clap::Args;
+use lenspath::builtin::DEFAULT_MESH_TRIANGLES;
 use lenspath::io::import::scene_bounds;
 use lenspath::io::LoadedScene;
 use lenspath::lights::Light;
@@ -15,7 +16,7 @@ use crate::Outcome;
 /// Options of `lenspath info`.
 #[derive(Args, Debug)]
 pub struct InfoArgs {
-    /// Scene file (.dae, .obj, .ply, .gltf, .glb, .toml).
+    /// Scene file (.dae, .obj, .ply, .gltf, .glb, .toml) or a built-in scene's name.
     file: PathBuf,
     /// Print one JSON object instead of text.
     #[arg(long)]
@@ -26,7 +27,7 @@ pub struct InfoArgs {
 
 /// Runs `lenspath info`.
 pub fn run(args: InfoArgs) -> Result<Outcome> {
-    let loaded = args.allow_read.load_scene(&args.file)?;
+    let loaded = args.allow_read.load_scene(&args.file, DEFAULT_MESH_TRIANGLES)?;
     let summary = summarize(&loaded);
     if args.json {
         println!(
@@ -40,24 +41,24 @@ pub fn run(args: InfoArgs) -> Result<Outcome> {
     println!("  meshes      {}", s.meshes.len());
     println!("  triangles   {}", s.triangle_count());
     println!("  spheres     {}", s.spheres.len());
+    // " (2 diffuse, 1 mirror)", or nothing when there are none.
     let by_kind = |v: &serde_json::Value| {
-        v.as_object()
-            .map(|o| {
-                o.iter()
-                    .filter(|(_, n)| n.as_u64() != Some(0))
-                    .map(|(k, n)| format!("{n} {k}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            })
-            .unwrap_or_default()
+        let kinds: Vec<String> = v
+            .as_object()
+            .into_iter()
+            .flatten()
+            .filter(|(_, n)| n.as_u64() != Some(0))
+            .map(|(k, n)| format!("{n} {k}"))
+            .collect();
+        if kinds.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", kinds.join(", "))
+        }
     };
-    println!(
-        "  materials   {} ({})",
-        s.materials.len(),
-        by_kind(&summary["materials"])
-    );
+    println!("  materials   {}{}", s.materials.len(), by_kind(&summary["materials"]));
     println!("  emitters    {} (area lights)", summary["emitters"]);
-    println!("  lights      {} ({})", s.lights.len(), by_kind(&summary["lights"]));
+    println!("  lights      {}{}", s.lights.len(), by_kind(&summary["lights"]));
     println!("  cameras     {}", loaded.cameras);
     let b = &summary["bounds"];
     println!("  bounds      min {} max {}", b["min"], b["max"]);

@@ -13,7 +13,7 @@ use lenspath::defaults;
 use lenspath::film::{Filter, NormalizedRect, PixelRect};
 use lenspath::integrator::IntegratorKind;
 use lenspath::io::checkpoint::{read_checkpoint, write_checkpoint};
-use lenspath::io::image::{check_output_path, write_image};
+use lenspath::io::image::{check_output_path, write_image_with_header};
 use lenspath::render::{render_from, Accumulation, Checkpoints, RenderSettings};
 use lenspath::sampling::SamplerKind;
 use lenspath::scene::Scene;
@@ -388,10 +388,14 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
             if let Some(raw) = &args.raw {
                 write_raw(raw, &frame)?;
             }
-            write_image(&args.out, &develop(&frame, &development), args.exposure)?;
+            let header = setup.image_header(&scene_name, Some(&frame))?;
+            write_image_with_header(&args.out, &develop(&frame, &development), args.exposure, &header)?;
             eprintln!("{}", exposure_line(&frame));
         }
-        None => write_image(&args.out, &output.image, args.exposure)?,
+        None => {
+            let header = setup.image_header(&scene_name, None)?;
+            write_image_with_header(&args.out, &output.image, args.exposure, &header)?;
+        }
     }
 
     let s = &output.stats;

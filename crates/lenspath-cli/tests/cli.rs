@@ -495,6 +495,26 @@ fn scene_files_render_and_describe_themselves() {
     assert_eq!(info["cameras"], 1);
     assert_eq!(info["bounds"]["min"], serde_json::json!([-1.0, -1.0, -1.0]));
 
+    // A built-in scene's name works wherever a scene file does.
+    let o = lenspath(&["info", "cornell-spheres", "--json"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let info: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(
+        (info["format"].as_str(), info["spheres"].as_u64()),
+        (Some("built-in"), Some(2))
+    );
+    let o = lenspath(&[
+        "render",
+        "cornell-empty",
+        "--res",
+        "8x6",
+        "--spp",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(stderr(&o).contains("rendered cornell-empty 8x6"), "{}", stderr(&o));
+
     let broken = dir.path().join("broken.obj");
     std::fs::write(&broken, "v 0 0 0\nv 1 0 0\nf 1 2 3\n").unwrap();
     let never = dir.path().join("never.png");

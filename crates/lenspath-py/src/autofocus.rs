@@ -44,6 +44,9 @@ pub(crate) struct AutofocusResult {
     pub(crate) exposure_time_s: Option<f64>,
     /// Through a sensor: the ISO speed its frames were taken at.
     pub(crate) iso: Option<f64>,
+    /// What the strategy could not do as its name says, and what it did instead (empty when it
+    /// did all of it).
+    pub(crate) fallbacks: Vec<String>,
 }
 
 #[pymethods]
@@ -61,13 +64,14 @@ impl AutofocusResult {
             .map_or_else(|| "None".to_string(), |d| format!("{d:.4}"));
         format!(
             "AutofocusResult(strategy='{}', metric='{}', sensor_depth_mm={:.4}, focus_distance={distance}, \
-             evaluations={}, patch_renders={}, camera_rays={})",
+             evaluations={}, patch_renders={}, camera_rays={}, fallbacks={:?})",
             self.strategy,
             self.metric,
             self.sensor_depth_mm,
             self.evaluations.bind(py).shape()[0],
             self.patch_renders,
-            self.camera_rays
+            self.camera_rays,
+            self.fallbacks
         )
     }
 }
@@ -156,5 +160,6 @@ pub(crate) fn autofocus(
         })),
         exposure_time_s: result.exposure_time_s,
         iso: result.iso,
+        fallbacks: result.fallbacks,
     })
 }

@@ -115,8 +115,71 @@ pub(crate) fn aperture_to_py<'py>(py: Python<'py>, shape: &ApertureShape) -> PyR
     })
 }
 
+/// An aperture shape as `repr` shows it: its name, or the mask's size.
+fn aperture_repr(shape: &ApertureShape) -> String {
+    match shape {
+        ApertureShape::Mask(mask) => format!("<{}x{} mask>", mask.width, mask.height),
+        ApertureShape::Circle => "'circle'".into(),
+        ApertureShape::Blades {
+            count,
+            rotation_deg,
+            curvature,
+        } => format!("'blades:{count}:{rotation_deg}:{curvature}'"),
+        ApertureShape::Star {
+            points,
+            inner_ratio,
+            rotation_deg,
+        } => format!("'star:{points}:{inner_ratio}:{rotation_deg}'"),
+    }
+}
+
 #[pymethods]
 impl Camera {
+    /// The constructor call that makes this camera, naming the settings given (the rest come from
+    /// the scene): `Camera.realistic(lens='dgauss50', f_number=2.8)`.
+    pub(crate) fn __repr__(&self) -> String {
+        fn set<T: std::fmt::Display>(name: &str, value: Option<T>) -> Option<String> {
+            value.map(|v| format!("{name}={v}"))
+        }
+        let python_bool = |b: bool| if b { "True" } else { "False" };
+        let (kind, given): (&str, Vec<Option<String>>) = match &self.description {
+            CameraDescription::Pinhole { fov_y_deg } => ("pinhole", vec![set("fov_deg", *fov_y_deg)]),
+            CameraDescription::ThinLens {
+                fov_y_deg,
+                aperture_radius,
+                focus_distance,
+                aperture,
+            } => (
+                "thin_lens",
+                vec![
+                    set("fov_deg", *fov_y_deg),
+                    set("aperture_radius", *aperture_radius),
+                    set("focus_distance", *focus_distance),
+                    set("aperture", aperture.as_ref().map(aperture_repr)),
+                ],
+            ),
+            CameraDescription::Realistic(r) => (
+                "realistic",
+                vec![
+                    set("lens", r.lens.as_ref().map(|l| format!("'{}'", l.name()))),
+                    match r.focus {
+                        Some(LensFocus::Distance(d)) => set("focus_distance", Some(d)),
+                        Some(LensFocus::SensorPositionMm(mm)) => set("sensor_depth_mm", Some(mm)),
+                        None => None,
+                    },
+                    set("f_number", r.f_number),
+                    set("sensor_width_mm", r.sensor_width_mm),
+                    set("aperture", r.aperture.as_ref().map(aperture_repr)),
+                    set("scene_unit_m", r.scene_unit_m),
+                    set("dispersion", r.dispersion.map(python_bool)),
+                    set("desqueeze", r.desqueeze.map(python_bool)),
+                ],
+            ),
+        };
+        let given: Vec<String> = given.into_iter().flatten().collect();
+        format!("Camera.{kind}({})", given.join(", "))
+    }
+
     /// Pickles as its kind and settings (`Camera._from_state`).
     pub(crate) fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
         let none = || py.None().into_bound(py);

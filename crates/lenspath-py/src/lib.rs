@@ -7,12 +7,13 @@
 //! `lenspath.LensError`, I/O failures `OSError`. Renders release the GIL and
 //! poll for Ctrl-C (see [`render::render`]).
 //!
-//! One module per concept, as the library: `error` (exceptions), `scene`,
+//! One module per concept, as the library: `error` (exceptions), `cli` (the `lenspath` command), `scene`,
 //! `emission` (light spectra), `glass`, `lens`, `camera`, `sensor`, `render`, `autofocus`, `image`; this file only
 //! registers them.
 
 mod autofocus;
 mod camera;
+mod cli;
 mod emission;
 mod error;
 mod glass;
@@ -49,12 +50,15 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(render::render, m)?)?;
     m.add_function(wrap_pyfunction!(image::read, m)?)?;
     m.add_function(wrap_pyfunction!(image::write, m)?)?;
+    m.add_function(wrap_pyfunction!(image::read_exr, m)?)?;
+    m.add_function(wrap_pyfunction!(image::write_exr, m)?)?;
     m.add_function(wrap_pyfunction!(image::focus_measure, m)?)?;
     m.add_function(wrap_pyfunction!(image::focus_measures, m)?)?;
     m.add_function(wrap_pyfunction!(image::bokeh, m)?)?;
     m.add_function(wrap_pyfunction!(image::lens_blur, m)?)?;
     m.add_class::<autofocus::AutofocusResult>()?;
     m.add_function(wrap_pyfunction!(autofocus::autofocus, m)?)?;
+    m.add_function(wrap_pyfunction!(cli::run_cli, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())
 }

@@ -197,6 +197,10 @@ pub struct AutofocusResult {
     pub exposure_time_s: Option<f64>,
     /// The ISO speed the search held.
     pub iso: Option<f64>,
+    /// What the strategy could not do as its name says, and what it did
+    /// instead (empty when it did all of it): no surface in the patch to
+    /// range on, or too little budget left for the contrast refinement.
+    pub fallbacks: Vec<String>,
 }
 
 impl AutofocusResult {
@@ -226,6 +230,8 @@ pub struct Focuser<'a> {
     pub(super) camera_rays: u64,
     /// The sensor exposure of the running search, from its first frame ([`Focuser::seen`]).
     pub(super) held_exposure: Option<SensorSettings>,
+    /// What the running search could not do ([`AutofocusResult::fallbacks`]).
+    pub(super) fallbacks: Vec<String>,
 }
 
 impl<'a> Focuser<'a> {
@@ -272,6 +278,7 @@ impl<'a> Focuser<'a> {
             light_fields: 0,
             camera_rays: 0,
             held_exposure: None,
+            fallbacks: Vec::new(),
         })
     }
 
@@ -528,6 +535,7 @@ impl<'a> Focuser<'a> {
         self.light_fields = 0;
         self.camera_rays = 0;
         self.held_exposure = None;
+        self.fallbacks.clear();
         let z = match strategy {
             Strategy::Sweep => self.sweep(None)?,
             Strategy::EarlyExit { patience } => self.sweep(Some(patience.max(1)))?,
@@ -545,6 +553,7 @@ impl<'a> Focuser<'a> {
             seconds: started.elapsed().as_secs_f64(),
             exposure_time_s: self.held_exposure.as_ref().map(|e| e.exposure_time_s),
             iso: self.held_exposure.as_ref().map(|e| e.iso),
+            fallbacks: std::mem::take(&mut self.fallbacks),
         })
     }
 
@@ -594,8 +603,11 @@ impl<'a> Focuser<'a> {
     }
 
     /// The contrast search from nothing: the coarse scan's peak, refined from
-    /// a light field. What `fast` does when there is nothing to range on.
+    /// a light field. What the range-finding strategies do when no probe hits
+    /// anything (only sky in the patch), saying so in the result.
     pub(super) fn contrast_search(&mut self) -> Result<f64> {
+        self.fallbacks
+            .push("no surface in the patch to range on (every probe ray missed): a contrast search instead".into());
         let z0 = self.coarse_peak()?;
         self.refocused_peak(z0, (z0, z0), FAST_BUDGET_OF_SWEEP)
     }
@@ -637,6 +649,11 @@ impl<'a> Focuser<'a> {
         let region_pixels = f64::from(region.width) * f64::from(region.height);
         let spp = (left.min(LIGHT_FIELD_MAX_SAMPLES as f64) / region_pixels).floor() as u32;
         if spp < 2 {
+            self.fallbacks.push(format!(
+                "the budget left {left:.0} camera rays for the contrast refinement, under 2 samples per pixel of \
+                 its {}x{} light field: the start, unrefined (more samples per pixel or a larger patch allow it)",
+                region.width, region.height
+            ));
             return Ok(z0);
         }
         let fields = self.record_light_fields(z0, region, spp)?;

@@ -1,17 +1,35 @@
 //! Image output by file extension: PNG (8-bit sRGB with exposure) and
-//! OpenEXR (linear float RGB plus a `Z` depth channel). Files are written
-//! to a temporary name beside the target and renamed, so a reader never
-//! sees a half-written file and a failed write never destroys the old one.
+//! OpenEXR (linear float RGB plus a `Z` depth channel, placed in its frame
+//! and described by its header: [`super::exr`]). Files are written to a
+//! temporary name beside the target and renamed, so a reader never sees a
+//! half-written file and a failed write never destroys the old one.
 
+use std::collections::BTreeMap;
 use std::path::Path;
 
+use super::exr::{encode_exr, read_exr_image, ExrImage, HeaderValue};
 use super::{io_error, write_atomically};
 use crate::color::{srgb_to_linear, to_srgb8};
 use crate::error::{Error, Result};
 use crate::film::Image;
 
-/// EXR header attribute holding (samples per pixel reached, requested).
-pub const SPP_ATTRIBUTE: &str = "lenspathSpp";
+/// EXR attribute: the samples per pixel every pixel reached.
+pub const SPP_ATTRIBUTE: &str = "lenspath/spp";
+/// EXR attribute: the samples per pixel asked for.
+pub const SPP_REQUESTED_ATTRIBUTE: &str = "lenspath/sppRequested";
+/// The (reached, requested) pair lenspath wrote before 0.1.0's EXR headers; still read.
+const OLD_SPP_ATTRIBUTE: &str = "lenspathSpp";
+
+/// What an EXR says beyond its pixels: the frame the image lies in and the
+/// attributes of the render that made it. PNG keeps none of it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ImageHeader {
+    /// For a crop: the whole frame's size and the image's top-left pixel in
+    /// it (the EXR display window and data window). `None`: the image is the frame.
+    pub frame: Option<((u32, u32), (i32, i32))>,
+    /// Attributes by OpenEXR name (standard ones and `lenspath/...`).
+    pub attributes: BTreeMap<String, HeaderValue>,
+}
 
 /// Supported output formats.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -124,8 +142,16 @@ pub fn check_output_path(path: &Path) -> Result<ImageFormat> {
 /// Writes `image` to `path` atomically, in the format its extension names.
 /// `exposure` (in stops) scales PNG output only; EXR stays linear.
 pub fn write_image(path: &Path, image: &Image, exposure: f32) -> Result<()> {
+    write_image_with_header(path, image, exposure, &ImageHeader::default())
+}
+
+/// [`write_image`], an EXR carrying `header` (a PNG ignores it).
+pub fn write_image_with_header(path: &Path, image: &Image, exposure: f32, header: &ImageHeader) -> Result<()> {
     let format = ImageFormat::from_path(path)?;
-    let bytes = encode_image(image, format, exposure)?;
+    let bytes = match format {
+        ImageFormat::Png => encode_8bit(image, exposure, ::image::ImageFormat::Png)?,
+        ImageFormat::Exr => encode_exr(&exr_of_image(image, header))?,
+    };
     write_atomically(path, |tmp| std::fs::write(tmp, &bytes).map_err(|e| io_error(tmp, e)))
 }
 
@@ -133,13 +159,37 @@ pub fn write_image(path: &Path, image: &Image, exposure: f32) -> Result<()> {
 pub fn encode_image(image: &Image, format: ImageFormat, exposure: f32) -> Result<Vec<u8>> {
     match format {
         ImageFormat::Png => encode_8bit(image, exposure, ::image::ImageFormat::Png),
-        ImageFormat::Exr => encode_exr(image),
+        ImageFormat::Exr => encode_exr(&exr_of_image(image, &ImageHeader::default())),
     }
 }
 
 /// A JPEG of `image` (sRGB, `exposure` stops): the small frames `lenspath view` streams.
 pub fn encode_jpeg(image: &Image, exposure: f32) -> Result<Vec<u8>> {
     encode_8bit(image, exposure, ::image::ImageFormat::Jpeg)
+}
+
+/// `image` as an EXR: R, G, B and Z, placed and described by `header`, with
+/// the samples per pixel when it was rendered.
+pub fn exr_of_image(image: &Image, header: &ImageHeader) -> ExrImage {
+    let mut exr = ExrImage::new(image.width, image.height);
+    let n = image.width as usize * image.height as usize;
+    for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
+        exr.channels
+            .insert(name.into(), (0..n).map(|i| image.rgb[3 * i + c]).collect());
+    }
+    exr.channels.insert("Z".into(), image.depth.clone());
+    if let Some((display_size, data_origin)) = header.frame {
+        (exr.display_size, exr.data_origin) = (display_size, data_origin);
+    }
+    if image.spp_requested > 0 {
+        let int = |v: u32| HeaderValue::Int(v.min(i32::MAX as u32) as i32);
+        exr.attributes.insert(SPP_ATTRIBUTE.into(), int(image.spp_min));
+        exr.attributes
+            .insert(SPP_REQUESTED_ATTRIBUTE.into(), int(image.spp_requested));
+    }
+    exr.attributes
+        .extend(header.attributes.iter().map(|(k, v)| (k.clone(), v.clone())));
+    exr
 }
 
 fn encode_8bit(image: &Image, exposure: f32, format: ::image::ImageFormat) -> Result<Vec<u8>> {
@@ -157,87 +207,62 @@ fn encode_8bit(image: &Image, exposure: f32, format: ::image::ImageFormat) -> Re
     Ok(out.into_inner())
 }
 
-fn encode_exr(image: &Image) -> Result<Vec<u8>> {
-    use exr::prelude::{
-        AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Layer, LayerAttributes, LineOrder, SmallVec,
-        Text, WritableImage,
-    };
-    let n = image.width as usize * image.height as usize;
-    let channel = |c: usize| (0..n).map(|i| image.rgb[3 * i + c]).collect::<Vec<f32>>();
-    let mut list: SmallVec<[AnyChannel<FlatSamples>; 4]> = SmallVec::new();
-    list.push(AnyChannel::new("R", FlatSamples::F32(channel(0))));
-    list.push(AnyChannel::new("G", FlatSamples::F32(channel(1))));
-    list.push(AnyChannel::new("B", FlatSamples::F32(channel(2))));
-    list.push(AnyChannel::new("Z", FlatSamples::F32(image.depth.clone())));
-    let mut attributes = LayerAttributes::default();
-    // One attribute (samples reached, samples requested): exr keeps custom
-    // attributes in a HashMap, and a single entry keeps the bytes deterministic.
-    attributes.other.insert(
-        Text::from(SPP_ATTRIBUTE),
-        AttributeValue::IntVec2(exr::math::Vec2(image.spp_min as i32, image.spp_requested as i32)),
-    );
-    let layer = Layer::new(
-        (image.width as usize, image.height as usize),
-        attributes,
-        // Blocks in increasing order: exr compresses them in parallel, and in
-        // the order they finish the file's bytes would differ from run to run.
-        Encoding {
-            line_order: LineOrder::Increasing,
-            ..Encoding::FAST_LOSSLESS
-        },
-        AnyChannels::sort(list),
-    );
-    let mut out = std::io::Cursor::new(Vec::new());
-    exr::image::Image::from_layer(layer)
-        .write()
-        .to_buffered(&mut out)
-        .map_err(|e| Error::InvalidArgument(format!("cannot encode the image as EXR: {e}")))?;
-    Ok(out.into_inner())
+/// Reads an EXR: RGB (or a single gray channel, `Y` or the only one), `Z`
+/// if present (else infinite depth), and the samples per pixel if recorded.
+pub fn read_exr(path: &Path) -> Result<Image> {
+    Ok(image_of_exr(path, &read_exr_image(path)?)?.0)
 }
 
-/// Reads an EXR: RGB (or a single gray channel, `Y` or the only one), `Z`
-/// if present (else infinite depth), and lenspath's spp attribute if present.
-pub fn read_exr(path: &Path) -> Result<Image> {
-    use exr::prelude::{read_first_flat_layer_from_file, AttributeValue, Text};
-    let fail = |m: String| Error::Parse {
-        kind: crate::FileKind::Image,
-        path: path.to_path_buf(),
-        message: m,
-    };
-    let img = read_first_flat_layer_from_file(path).map_err(|e| fail(e.to_string()))?;
-    let size = img.layer_data.size;
-    let find = |name: &str| {
-        img.layer_data
-            .channel_data
-            .list
-            .iter()
-            .find(|c| c.name == *name)
-            .map(|c| c.sample_data.values_as_f32().collect::<Vec<f32>>())
-            .ok_or_else(|| fail(format!("no '{name}' channel")))
-    };
+/// [`read_exr`] with the file's header.
+pub fn read_exr_with_header(path: &Path) -> Result<(Image, ImageHeader)> {
+    image_of_exr(path, &read_exr_image(path)?)
+}
+
+/// The image an EXR holds (see [`read_exr`]) and its header.
+fn image_of_exr(path: &Path, exr: &ExrImage) -> Result<(Image, ImageHeader)> {
+    let find = |name: &str| exr.channels.get(name);
     // RGB, or one gray channel (Y, or the only one there is) for all three.
-    let channels = &img.layer_data.channel_data.list;
     let (r, g, b) = match (find("R"), find("G"), find("B")) {
-        (Ok(r), Ok(g), Ok(b)) => (r, g, b),
+        (Some(r), Some(g), Some(b)) => (r, g, b),
         _ => {
-            let gray = find("Y").or_else(|e| match &channels[..] {
-                [only] => Ok(only.sample_data.values_as_f32().collect()),
-                _ => Err(e),
+            let only = (exr.channels.len() == 1)
+                .then(|| exr.channels.values().next())
+                .flatten();
+            let gray = find("Y").or(only).ok_or_else(|| Error::Parse {
+                kind: crate::FileKind::Image,
+                path: path.to_path_buf(),
+                message: "no 'R' channel".into(),
             })?;
-            (gray.clone(), gray.clone(), gray)
+            (gray, gray, gray)
         }
     };
-    let depth = find("Z").unwrap_or_else(|_| vec![f32::INFINITY; r.len()]);
-    let (spp_min, spp_requested) = match img.layer_data.attributes.other.get(&Text::from(SPP_ATTRIBUTE)) {
-        Some(AttributeValue::IntVec2(v)) => (v.0.max(0) as u32, v.1.max(0) as u32),
-        _ => (0, 0),
+    let n = r.len();
+    let int = |name: &str| match exr.attributes.get(name) {
+        Some(HeaderValue::Int(v)) => Some(((*v).max(0) as u32, 0)),
+        Some(HeaderValue::IntPair([reached, requested])) => {
+            Some(((*reached).max(0) as u32, (*requested).max(0) as u32))
+        }
+        _ => None,
     };
-    Ok(Image {
-        width: size.0 as u32,
-        height: size.1 as u32,
-        rgb: (0..r.len()).flat_map(|i| [r[i], g[i], b[i]]).collect(),
-        depth,
+    let (spp_min, spp_requested) = match (int(SPP_ATTRIBUTE), int(SPP_REQUESTED_ATTRIBUTE)) {
+        (Some((reached, _)), Some((requested, _))) => (reached, requested),
+        _ => int(OLD_SPP_ATTRIBUTE).unwrap_or((0, 0)),
+    };
+    let frame = (exr.display_size != (exr.width, exr.height) || exr.data_origin != (0, 0))
+        .then_some((exr.display_size, exr.data_origin));
+    let image = Image {
+        width: exr.width,
+        height: exr.height,
+        rgb: (0..n).flat_map(|i| [r[i], g[i], b[i]]).collect(),
+        depth: find("Z").cloned().unwrap_or_else(|| vec![f32::INFINITY; n]),
         spp_min,
         spp_requested,
-    })
+    };
+    Ok((
+        image,
+        ImageHeader {
+            frame,
+            attributes: exr.attributes.clone(),
+        },
+    ))
 }

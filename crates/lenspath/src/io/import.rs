@@ -9,6 +9,7 @@ use std::fmt;
 use glam::{Mat4, Vec3};
 
 use crate::camera::CameraPose;
+use crate::error::Result;
 use crate::lights::Light;
 use crate::materials::Material;
 use crate::math::{Bounds3, Rgb};
@@ -63,6 +64,18 @@ impl LoadedScene {
             warnings,
             format,
         }
+    }
+
+    /// The built-in scene `name` as if loaded from a file: one camera, its
+    /// format "built-in", no settings and no warnings.
+    pub fn builtin(name: &str, mesh_triangles: usize) -> Result<Self> {
+        Ok(LoadedScene {
+            scene: crate::builtin::builtin_scene(name, mesh_triangles)?,
+            options: SceneOptions::default(),
+            cameras: 1,
+            warnings: Warnings::default(),
+            format: "built-in",
+        })
     }
 }
 

@@ -11,6 +11,7 @@ use crate::shapes::TriangleMesh;
 
 pub mod checkpoint;
 pub mod collada;
+pub mod exr;
 pub mod gltf;
 pub mod image;
 pub mod import;
@@ -66,6 +67,18 @@ impl ReadScope {
             file.display(),
             roots.join(", ")
         )))
+    }
+}
+
+/// The scene a command line or a script names: a built-in scene's name
+/// ([`BUILTIN_SCENES`](crate::builtin::BUILTIN_SCENES); `mesh_triangles`
+/// sizes `cornell-mesh`) is that scene, anything else a scene file read
+/// within its folder and `allowed` ([`load_scene_in`]). The one rule every
+/// front end applies to a scene argument.
+pub fn load_named_scene(name: &Path, allowed: &[PathBuf], mesh_triangles: usize) -> Result<LoadedScene> {
+    match name.to_str().filter(|n| crate::builtin::BUILTIN_SCENES.contains(n)) {
+        Some(builtin) => LoadedScene::builtin(builtin, mesh_triangles),
+        None => load_scene_in(name, &ReadScope::of_scene(name, allowed)?),
     }
 }
 
