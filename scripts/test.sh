@@ -20,12 +20,15 @@ if [ ! -x "$venv/bin/python" ]; then
 fi
 "$venv/bin/python" -m pip install --quiet --upgrade pip
 
-# The package's wheel is a release build (fat LTO, one codegen unit: minutes
-# with long single-threaded stretches), so it builds in its own target
-# directory while the Rust tests build and run, not after them.
+# The package's wheel is a release build, so it builds in its own target
+# directory while the Rust tests build and run, not after them. Built here
+# with thin LTO and 16 codegen units (then stripped, as pyproject says): the tests measure no
+# speed, and the shipping profile's fat LTO over one codegen unit (4-10%
+# faster renders, BENCHMARKS.md) costs minutes of the suite's time.
 # The wheel is kept in target/wheels: the packaging tests check it (twine, stripped, its files).
 pip_log=target/pip-install.log
 build_and_install() {
+    export CARGO_PROFILE_RELEASE_LTO=thin CARGO_PROFILE_RELEASE_CODEGEN_UNITS=16
     rm -rf target/wheels
     CARGO_TARGET_DIR=target/wheel "$venv/bin/python" -m pip wheel --quiet --no-deps -w target/wheels . &&
         "$venv/bin/python" -m pip uninstall --quiet -y lenspath &&
