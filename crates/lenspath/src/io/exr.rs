@@ -159,12 +159,7 @@ pub fn encode_exr(image: &ExrImage) -> Result<Vec<u8>> {
     let mut exr_image = exr::image::Image::from_layer(layer);
     exr_image.attributes.display_window =
         IntegerBounds::new((0, 0), (image.display_size.0 as usize, image.display_size.1 as usize));
-    exr_image.attributes.chromaticities = chromaticities.map(|c| Chromaticities {
-        red: Vec2(c[0], c[1]),
-        green: Vec2(c[2], c[3]),
-        blue: Vec2(c[4], c[5]),
-        white: Vec2(c[6], c[7]),
-    });
+    exr_image.attributes.chromaticities = chromaticities.map(to_exr_chromaticities);
     let mut out = std::io::Cursor::new(Vec::new());
     exr_image
         .write()
@@ -242,9 +237,7 @@ pub fn read_exr_image(path: &Path) -> Result<ExrImage> {
     if let Some(c) = &file.attributes.chromaticities {
         attributes.insert(
             "chromaticities".to_string(),
-            HeaderValue::Chromaticities([
-                c.red.0, c.red.1, c.green.0, c.green.1, c.blue.0, c.blue.1, c.white.0, c.white.1,
-            ]),
+            HeaderValue::Chromaticities(from_exr_chromaticities(c)),
         );
     }
     for (name, value) in a.other.iter().chain(file.attributes.other.iter()) {
@@ -273,6 +266,23 @@ fn from_exr_text(text: &Text) -> String {
     String::from_utf8_lossy(text.as_slice()).into_owned()
 }
 
+/// Red, green, blue and white xy as exr holds them.
+fn to_exr_chromaticities(c: [f32; 8]) -> Chromaticities {
+    Chromaticities {
+        red: Vec2(c[0], c[1]),
+        green: Vec2(c[2], c[3]),
+        blue: Vec2(c[4], c[5]),
+        white: Vec2(c[6], c[7]),
+    }
+}
+
+/// exr's chromaticities as red, green, blue and white xy.
+fn from_exr_chromaticities(c: &Chromaticities) -> [f32; 8] {
+    [
+        c.red.0, c.red.1, c.green.0, c.green.1, c.blue.0, c.blue.1, c.white.0, c.white.1,
+    ]
+}
+
 /// A value as exr writes it.
 fn exr_value(value: &HeaderValue) -> AttributeValue {
     match value {
@@ -283,12 +293,7 @@ fn exr_value(value: &HeaderValue) -> AttributeValue {
         HeaderValue::IntPair([x, y]) => AttributeValue::IntVec2(Vec2(*x, *y)),
         HeaderValue::FloatPair([x, y]) => AttributeValue::FloatVec2(Vec2(*x, *y)),
         HeaderValue::Matrix(m) => AttributeValue::Matrix4x4(*m),
-        HeaderValue::Chromaticities(c) => AttributeValue::Chromaticities(Chromaticities {
-            red: Vec2(c[0], c[1]),
-            green: Vec2(c[2], c[3]),
-            blue: Vec2(c[4], c[5]),
-            white: Vec2(c[6], c[7]),
-        }),
+        HeaderValue::Chromaticities(c) => AttributeValue::Chromaticities(to_exr_chromaticities(*c)),
     }
 }
 
@@ -302,9 +307,7 @@ fn header_value(value: &AttributeValue) -> Option<HeaderValue> {
         AttributeValue::IntVec2(v) => HeaderValue::IntPair([v.0, v.1]),
         AttributeValue::FloatVec2(v) => HeaderValue::FloatPair([v.0, v.1]),
         AttributeValue::Matrix4x4(m) => HeaderValue::Matrix(*m),
-        AttributeValue::Chromaticities(c) => HeaderValue::Chromaticities([
-            c.red.0, c.red.1, c.green.0, c.green.1, c.blue.0, c.blue.1, c.white.0, c.white.1,
-        ]),
+        AttributeValue::Chromaticities(c) => HeaderValue::Chromaticities(from_exr_chromaticities(c)),
         _ => return None,
     })
 }
