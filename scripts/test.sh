@@ -20,30 +20,25 @@ if [ ! -x "$venv/bin/python" ]; then
 fi
 "$venv/bin/python" -m pip install --quiet --upgrade pip
 
-# The package's wheel is a release build, so it builds in its own target
-# directory while the Rust tests build and run, not after them. Built here
-# with thin LTO and 16 codegen units (then stripped, as pyproject says): the tests measure no
-# speed, and the shipping profile's fat LTO over one codegen unit (4-10%
-# faster renders, BENCHMARKS.md) costs minutes of the suite's time.
-# The wheel is kept in target/wheels: the packaging tests check it (twine, stripped, its files).
+# The package's wheel is built with the dev profile (optimised: Cargo.toml),
+# whose settings the test profile shares, into the same target directory as
+# the Rust tests: cargo then compiles the dependencies and the library once
+# for both (the crates' features are equal: crates/lenspath-py/Cargo.toml),
+# and the tests measure no speed. `strip` (pyproject.toml) still drops the
+# line tables. The shipping wheel (`pip install .`, scripts/build-wheel.sh)
+# is the release profile's. The wheel is kept in target/wheels: the packaging
+# tests check it (twine, stripped, its files).
 pip_log=target/pip-install.log
-build_and_install() {
-    export CARGO_PROFILE_RELEASE_LTO=thin CARGO_PROFILE_RELEASE_CODEGEN_UNITS=16
-    rm -rf target/wheels
-    CARGO_TARGET_DIR=target/wheel "$venv/bin/python" -m pip wheel --quiet --no-deps -w target/wheels . &&
-        "$venv/bin/python" -m pip uninstall --quiet -y lenspath &&
-        "$venv/bin/python" -m pip install --quiet "$(ls target/wheels/lenspath-*.whl)[test]"
-}
-build_and_install >"$pip_log" 2>&1 &
-pip_pid=$!
-trap 'kill "$pip_pid" 2>/dev/null || true' EXIT
-
-cargo test --workspace
-
-if ! wait "$pip_pid"; then
+rm -rf target/wheels
+echo "building the package's wheel (log: $pip_log)" >&2
+if ! MATURIN_PEP517_ARGS="--profile dev" "$venv/bin/python" -m pip wheel --quiet --no-deps -w target/wheels . >"$pip_log" 2>&1 ||
+    ! "$venv/bin/python" -m pip uninstall --quiet -y lenspath >>"$pip_log" 2>&1 ||
+    ! "$venv/bin/python" -m pip install --quiet "$(ls target/wheels/lenspath-*.whl)[test]" >>"$pip_log" 2>&1; then
     cat "$pip_log" >&2
     echo "building or installing the wheel failed (log above, also in $pip_log)" >&2
     exit 1
 fi
-trap - EXIT
+
+cargo test --workspace
+
 "$venv/bin/python" -m pytest -q tests/python

@@ -13,7 +13,11 @@ lenspath's lens tests:
 - `lens::lentil::tests::the_anamorphic_prime_traces_as_rayoptics_does`: lentil's
   2004, whose cylinders rayoptics models as toroids; skew rays, and each meridian's
   focal length.
-- `tests/integration/lens_files.rs`: Zemax files, and ISET3d files whose stop sits on a
+- `lens::system::tests::a_toric_doublet_traces_as_rayoptics_does`: two toric
+  surfaces (one bent each way) and a cylinder on a cemented doublet; skew rays
+  and each meridian's focal length.
+- `tests/integration/lens_files.rs`: Zemax files (one with TOROIDAL surfaces, which
+  rayoptics reads as `YToroid`), and ISET3d files whose stop sits on a
   curved surface's vertex, read by both tools.
 - `crates/lenspath/lenses/README.md`: the shipped tables taken from rayoptics'
   own files (triplet50, nikon-z14, achromat100), their EFL and BFL there.
@@ -221,18 +225,66 @@ def skew_ray(opm: OpticalModel, start: tuple, direction: tuple):
     return path[-2][0], path[-2][1]
 
 
-for start, direction in [
+def print_skew_rays(name: str, opm: OpticalModel, rays: list, meridians: bool = True):
+    """Where each (start, direction) ray crosses the plane 10 mm behind the last surface and,
+    with `meridians`, each meridian's focal length from a parallel ray 0.01 mm off the axis."""
+    for start, direction in rays:
+        p, d = skew_ray(opm, start, direction)
+        behind = p + d * (10.0 - p[2]) / d[2]
+        print(f"{name} ray from {start} along {direction}: ({float(behind[0])!r}, {float(behind[1])!r})")
+    for axis in (0, 1) if meridians else ():
+        start = [0.0, 0.0, 0.0]
+        start[axis] = 0.01
+        p, d = skew_ray(opm, tuple(start), (0.0, 0.0, 1.0))
+        print(f"{name} meridian {'xy'[axis]}: focal length {float(-0.01 / d[axis] * d[2])!r} (0.01 mm ray)")
+
+
+print_skew_rays(
+    "lentil 2004",
+    anamorphic,
+    [
+        ((3.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
+        ((0.0, 3.0, 0.0), (0.0, 0.0, 1.0)),
+        ((2.0, -3.0, 0.0), (0.03, 0.05, 1.0)),
+        ((-6.0, 4.0, 0.0), (0.06, -0.03, 1.0)),
+        ((5.0, 5.0, 0.0), (-0.08, -0.04, 1.0)),
+    ],
+)
+
+
+# A toric doublet, as lenspath's table `TORIC_DOUBLET` (lens::system::tests) writes it:
+# stop in front, `toric=x:R` is rayoptics' YToroid (profile in y-z, swept with radius R
+# in x-z), `toric=y:R` its XToroid, `cylinder=y` an XToroid with no sweep curvature.
+# Skew rays start 50 mm in front of the stop; where they cross the plane 10 mm behind
+# the rear vertex, and each meridian's paraxial focal length from a parallel ray 0.01 mm
+# off the axis; `lens::system::tests::a_toric_doublet_traces_as_rayoptics_does`.
+toric = d_line_model(50.0)
+sm = toric["seq_model"]
+sm.add_surface([0.0, 4.0])
+sm.set_stop()
+for radius, thickness, index, profile in [
+    (40.0, 6.0, 1.62, YToroid(r=40.0, rR=25.0)),
+    (-30.0, 2.5, 1.72, XToroid(r=-30.0, rR=-55.0)),
+    (-90.0, 30.0, None, XToroid(r=-90.0, rR=0.0)),
+]:
+    sm.add_surface([radius, thickness] + ([] if index is None else [index, 50.0]))
+    sm.ifcs[-2].profile = profile
+toric.update_model()
+TORIC_RAYS = [
     ((3.0, 0.0, 0.0), (0.0, 0.0, 1.0)),
     ((0.0, 3.0, 0.0), (0.0, 0.0, 1.0)),
     ((2.0, -3.0, 0.0), (0.03, 0.05, 1.0)),
-    ((-6.0, 4.0, 0.0), (0.06, -0.03, 1.0)),
+    ((-5.0, 4.0, 0.0), (0.06, -0.03, 1.0)),
     ((5.0, 5.0, 0.0), (-0.08, -0.04, 1.0)),
-]:
-    p, d = skew_ray(anamorphic, start, direction)
-    behind = p + d * (10.0 - p[2]) / d[2]
-    print(f"lentil 2004 ray from {start} along {direction}: ({float(behind[0])!r}, {float(behind[1])!r})")
-for axis in (0, 1):
-    start = [0.0, 0.0, 0.0]
-    start[axis] = 0.01
-    p, d = skew_ray(anamorphic, tuple(start), (0.0, 0.0, 1.0))
-    print(f"lentil 2004 meridian {'xy'[axis]}: focal length {float(-0.01 / d[axis] * d[2])!r} (0.01 mm ray)")
+    ((-6.0, -2.0, 0.0), (0.1, 0.07, 1.0)),
+]
+print_skew_rays("toric doublet", toric, TORIC_RAYS)
+
+
+# The Zemax file with TOROIDAL surfaces, read by rayoptics (YToroid, rR = PARM 1);
+# `tests/integration/lens_files.rs::a_toroidal_zemax_file_traces_as_rayoptics_reads_it`.
+opm = open_model(str(LENS_FILES / "toric-doublet.zmx"))
+opm["optical_spec"]["wvls"] = WvlSpec([(D_LINE_NM, 1.0)], ref_wl=0)
+opm["seq_model"].gaps[0].thi = 50.0
+opm.update_model()
+print_skew_rays("toric-doublet.zmx", opm, TORIC_RAYS[:4], meridians=False)

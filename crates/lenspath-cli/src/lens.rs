@@ -168,7 +168,7 @@ pub fn run(mut args: LensArgs) -> Result<Outcome> {
     }
     if let Some(path) = &args.write_table {
         let header = format!(
-            "# {} as a lenspath table: radius, thickness to the next surface, n_d, aperture diameter (mm), glass; aspheric terms or the cylinder's axis\n",
+            "# {} as a lenspath table: radius, thickness to the next surface, n_d, aperture diameter (mm), glass; aspheric terms, a cylinder's axis or a toric surface's\n",
             prescription.name()
         );
         write_text(path, &(header + &prescription.table_text()))?;

@@ -322,12 +322,10 @@ mod tests {
             ([5.0, 5.0], [-0.08, -0.04], [-4.720651558119784, -1.9894628425375611]),
         ];
         for (start, slope, expected) in rayoptics {
-            let ray = LensRay {
-                origin: DVec3::new(start[0], start[1], lens.front_z() - 50.0),
-                direction: DVec3::new(slope[0], slope[1], 1.0).normalize(),
-            };
             let mut hits = Vec::new();
-            let out = lens.trace_visiting(&ray, Direction::ToSensor, |p| hits.push(p));
+            let out = lens.trace_visiting(&LensRay::skew(&lens, start, slope), Direction::ToSensor, |p| {
+                hits.push(p)
+            });
             let out = out.unwrap_or_else(|| panic!("{start:?} {slope:?} blocked: {hits:?}"));
             let behind = out.at_z(lens.rear_z() + 10.0).unwrap();
             assert!(

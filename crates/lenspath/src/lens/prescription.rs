@@ -21,11 +21,15 @@
 //! 0 stays the stop, as in pbrt and CS184 tables). `cylinder=x` or
 //! `cylinder=y` makes the surface a cylinder of the row's radius with its
 //! axis along x or y (lentil's `cyl-x`, `cyl-y`): `cylinder=y` curves in
-//! the horizontal meridian, across the sensor's width.
+//! the horizontal meridian, across the sensor's width. `toric=x:R` (or
+//! `toric=y:R`) is that cylinder with its axis bent into an arc of radius R
+//! mm, a toric surface ([`Toric`]): it curves with the row's radius in one
+//! meridian and with R in the other (Zemax's TOROIDAL, whose profile is the
+//! y–z one, is `toric=x:R`).
 
 use std::path::Path;
 
-use super::surface::{CylinderAxis, EvenAsphere, Meridian, SurfaceShape};
+use super::surface::{CylinderAxis, EvenAsphere, Meridian, SurfaceShape, Toric};
 use crate::error::{Error, Result};
 use crate::glass::{self, Dispersion};
 
@@ -121,6 +125,12 @@ impl LensSurface {
     pub fn sag_mm(&self, height_mm: f64, meridian: Meridian) -> Option<f64> {
         match self.shape {
             SurfaceShape::Cylindrical(axis) if axis.curved_meridian() != meridian => Some(0.0),
+            SurfaceShape::Toric(toric) => {
+                let point = meridian.across() * height_mm;
+                toric
+                    .sag_and_gradient(self.curvature(), point.x, point.y)
+                    .map(|(z, _, _)| z)
+            }
             _ => self.shape.sag(self.curvature(), height_mm * height_mm),
         }
     }
@@ -370,7 +380,17 @@ impl LensPrescription {
                         ),
                     ));
                 }
-                if !spherical
+                if let SurfaceShape::Toric(toric) = shape {
+                    if !toric_reaches(&toric, radius_mm, 0.5 * aperture_diameter_mm) {
+                        return Err(fail(
+                            line,
+                            format!(
+                                "aperture {aperture_diameter_mm} mm is wider than the toric surface (radius {radius_mm} mm, rotation radius {} mm) reaches",
+                                toric.rotation_radius_mm
+                            ),
+                        ));
+                    }
+                } else if !spherical
                     && shape
                         .sag(1.0 / radius_mm, 0.25 * aperture_diameter_mm * aperture_diameter_mm)
                         .is_none()
@@ -434,6 +454,9 @@ impl LensPrescription {
                 let mut terms = String::new();
                 if let SurfaceShape::Cylindrical(axis) = &s.shape {
                     terms += &format!(" cylinder={}", axis.spelling());
+                }
+                if let SurfaceShape::Toric(t) = &s.shape {
+                    terms += &format!(" toric={}:{}", t.axis.spelling(), t.rotation_radius_mm);
                 }
                 if let SurfaceShape::EvenAsphere(a) = &s.shape {
                     if a.conic != 0.0 {
@@ -510,13 +533,19 @@ fn aspheric_terms(words: &[&str]) -> std::result::Result<SurfaceShape, String> {
                 .map(SurfaceShape::Cylindrical)
                 .ok_or_else(|| format!("cylinder={axis}: the cylinder's axis is x or y"));
         }
+        if let Some(value) = word.strip_prefix("toric=") {
+            return toric_of(value);
+        }
     }
     let mut asphere = EvenAsphere::SPHERE;
     let mut seen: Vec<&str> = Vec::new();
     for word in words {
         let (key, value) = word.split_once('=').expect("keyed words contain '='");
-        if key == "cylinder" {
-            return Err("a cylindrical surface takes no aspheric terms".into());
+        if let Some(kind) = [("cylinder", "cylindrical"), ("toric", "toric")]
+            .iter()
+            .find(|(k, _)| *k == key)
+        {
+            return Err(format!("a {} surface takes no aspheric terms", kind.1));
         }
         let number: f64 = value
             .parse()
@@ -544,6 +573,39 @@ fn aspheric_terms(words: &[&str]) -> std::result::Result<SurfaceShape, String> {
         *slot = number;
     }
     Ok(SurfaceShape::EvenAsphere(asphere))
+}
+
+/// The shape `toric=AXIS:RADIUS` gives (`value` is what follows `toric=`):
+/// a cylinder when the rotation radius is infinite (or a flat's huge one).
+fn toric_of(value: &str) -> std::result::Result<SurfaceShape, String> {
+    let usage = "write toric=AXIS:RADIUS (the axis x or y, the rotation radius in mm)";
+    let (axis, radius) = value.split_once(':').ok_or_else(|| format!("toric={value}: {usage}"))?;
+    let axis = CylinderAxis::from_spelling(axis).ok_or_else(|| format!("toric={value}: the axis is x or y"))?;
+    let rotation_radius_mm: f64 = radius
+        .parse()
+        .ok()
+        .filter(|r: &f64| !r.is_nan() && *r != 0.0)
+        .ok_or_else(|| format!("toric={value}: the rotation radius '{radius}' is not a nonzero number of mm"))?;
+    if rotation_radius_mm.abs() >= FLAT_RADIUS_MM {
+        return Ok(SurfaceShape::Cylindrical(axis));
+    }
+    Ok(SurfaceShape::Toric(Toric {
+        axis,
+        rotation_radius_mm,
+    }))
+}
+
+/// Whether the toric surface of vertex radius `radius_mm` is defined over
+/// its whole aperture, of radius `aperture_radius_mm`: its profile circle
+/// reaches the rim and every swept circle is wider than the aperture there
+/// (checked on the rim, where both are tightest, every 1/256 turn).
+fn toric_reaches(toric: &Toric, radius_mm: f64, aperture_radius_mm: f64) -> bool {
+    let curvature = if radius_mm.is_finite() { 1.0 / radius_mm } else { 0.0 };
+    (0..256).all(|k| {
+        let angle = k as f64 * std::f64::consts::TAU / 256.0;
+        let (x, y) = (aperture_radius_mm * angle.cos(), aperture_radius_mm * angle.sin());
+        toric.sag_and_gradient(curvature, x, y).is_some()
+    })
 }
 
 /// The most a named glass's n_d may differ from the table's index column.
@@ -695,6 +757,26 @@ mod tests {
                 "line 1: aperture 30 mm is wider than its sphere",
             ),
             (
+                "10 2 1.5 8 toric=x\n0 1 0 4\n",
+                "line 1: toric=x: write toric=AXIS:RADIUS",
+            ),
+            (
+                "10 2 1.5 8 toric=z:30\n0 1 0 4\n",
+                "line 1: toric=z:30: the axis is x or y",
+            ),
+            (
+                "10 2 1.5 8 toric=x:0\n0 1 0 4\n",
+                "line 1: toric=x:0: the rotation radius '0' is not a nonzero number of mm",
+            ),
+            (
+                "10 2 1.5 8 toric=x:30 conic=-1\n0 1 0 4\n",
+                "line 1: a toric surface takes no aspheric terms",
+            ),
+            (
+                "30 2 1.5 20 toric=y:6\n0 1 0 4\n",
+                "line 1: aperture 20 mm is wider than the toric surface (radius 30 mm, rotation radius 6 mm) reaches",
+            ),
+            (
                 "10 2 1.5 8 a4=x\n0 1 0 4\n",
                 "line 1: aspheric term a4 = 'x' is not a finite number",
             ),
@@ -754,7 +836,7 @@ mod tests {
     }
 
     /// A table written back by `table_text` reads as the same lens, glass
-    /// columns, older conventions and built-ins included.
+    /// columns, older conventions, toric surfaces and built-ins included.
     #[test]
     fn table_text_reads_back_to_the_same_lens() {
         let older = "# r axpos n ap\n20 0 1.5 10\n-20 3 1 10\n0 2 0 6\n";
@@ -766,6 +848,12 @@ mod tests {
             crate::lens::lentil::load("2004").unwrap(),
             LensPrescription::load("dgauss50").unwrap(),
             LensPrescription::parse(older, "older", TableConvention::Auto).unwrap(),
+            LensPrescription::parse(
+                "0 4 0 20\n40 6 1.62 24 toric=x:25.125\n-30 2.5 1.72 24 toric=y:-55\n-90 30 1 24\n",
+                "toric",
+                TableConvention::ThicknessToNext,
+            )
+            .unwrap(),
             LensPrescription::parse(
                 "61.07 4 1.5168 25 N-BK7\n-44.17 2.5 1.6727 25 schott:SF5\n-128.89 1 1 25\n0 5 0 20\n",
                 "achromat",

@@ -1,6 +1,7 @@
 //! The shapes of refracting surfaces: spheres, flats, even aspheres (a
-//! conic plus an even polynomial) and cylinders, with their sag, its slope,
-//! and the exact intersection of a ray with an asphere.
+//! conic plus an even polynomial), cylinders and toric surfaces, with their
+//! sag, its slope, and the exact intersection of a ray with an asphere or a
+//! toric surface.
 //!
 //! Sag is measured along the axis from the vertex, positive toward the
 //! sensor, as a function of the height `h` from the axis (for a cylinder,
@@ -20,6 +21,76 @@ pub enum SurfaceShape {
     /// `CylinderAxis` (lentil's `cyl-x` / `cyl-y`): it curves only in the
     /// other meridian, which is what makes a lens anamorphic.
     Cylindrical(CylinderAxis),
+    /// A cylinder whose axis is bent into an arc: the surface curves in
+    /// both meridians, with a different radius in each (a toric surface,
+    /// Zemax's TOROIDAL).
+    Toric(Toric),
+}
+
+/// A toric surface: the circle of the surface's vertex radius in one
+/// meridian (the profile) swept around an axis that is parallel to the
+/// other transverse axis and crosses the optical axis `rotation_radius_mm`
+/// behind the vertex. Equivalently the cylinder `Cylindrical(axis)` with
+/// its axis bent into an arc of that radius; an infinite radius leaves the
+/// cylinder, and a radius equal to the vertex radius gives a sphere.
+///
+/// With p the height in the profile's meridian and a along the bent axis,
+/// g(p) the profile circle's sag and c′ = 1 / (R − g(p)) (R the rotation
+/// radius): z = g(p) + c′·a² / (1 + √(1 − c′²·a²)), the sag of a circle of
+/// radius R − g(p) at a (the torus of Zemax's TOROIDAL and rayoptics'
+/// `YToroid` / `XToroid` with a spherical profile).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Toric {
+    /// The direction the unbent cylinder's axis runs in: the surface's
+    /// vertex radius curves the other meridian, the rotation radius this one.
+    pub axis: CylinderAxis,
+    /// Signed radius, mm, of the arc the axis is bent into (positive when its
+    /// centre lies toward the sensor, as a vertex radius): the surface's
+    /// radius in the axis's own meridian.
+    pub rotation_radius_mm: f64,
+}
+
+impl Toric {
+    /// Sag and its two partial derivatives (∂z/∂x, ∂z/∂y) at (x, y) on a
+    /// toric surface of vertex curvature `curvature`; `None` where the
+    /// surface does not reach.
+    #[inline]
+    pub fn sag_and_gradient(&self, curvature: f64, x: f64, y: f64) -> Option<(f64, f64, f64)> {
+        // p across the profile's meridian, a along the bent axis.
+        let (p, a) = match self.axis {
+            CylinderAxis::X => (y, x),
+            CylinderAxis::Y => (x, y),
+        };
+        let (c, rotation_curvature) = (curvature, 1.0 / self.rotation_radius_mm);
+        let profile_root = (1.0 - c * c * p * p).sqrt();
+        let profile = c * p * p / (1.0 + profile_root);
+        let profile_slope = c * p / profile_root;
+        // The circle the profile point sweeps: radius R − g(p), curvature c′.
+        let bend = 1.0 - rotation_curvature * profile;
+        let swept = rotation_curvature / bend;
+        let root = (1.0 - swept * swept * a * a).sqrt();
+        if !(root > 0.0 && profile_root > 0.0 && bend != 0.0) {
+            return None;
+        }
+        let swept_sag = swept * a * a / (1.0 + root);
+        let dz_da = swept * a / root;
+        // ∂/∂c′ of c′a²/(1 + √(1 − c′²a²)), and dc′/dp = c′²·g′(p).
+        let dz_dswept = a * a / (1.0 + root) + swept * swept * a.powi(4) / (root * (1.0 + root) * (1.0 + root));
+        let dz_dp = profile_slope * (1.0 + swept * swept * dz_dswept);
+        let sag = profile + swept_sag;
+        Some(match self.axis {
+            CylinderAxis::X => (sag, dz_da, dz_dp),
+            CylinderAxis::Y => (sag, dz_dp, dz_da),
+        })
+    }
+
+    /// The same surface on a lens with every length multiplied by `factor`.
+    pub fn scaled(&self, factor: f64) -> Toric {
+        Toric {
+            rotation_radius_mm: self.rotation_radius_mm * factor,
+            ..*self
+        }
+    }
 }
 
 /// The direction a cylindrical surface's axis runs in, across the optical axis.
@@ -106,6 +177,14 @@ impl SurfaceShape {
                 EvenAsphere::SPHERE.sag_and_slope(curvature, h2).map(|(z, _)| z)
             }
             SurfaceShape::EvenAsphere(a) => a.sag_and_slope(curvature, h2).map(|(z, _)| z),
+            // The profile's section, as for a cylinder.
+            SurfaceShape::Toric(t) => {
+                let (x, y) = match t.axis {
+                    CylinderAxis::X => (0.0, h2.sqrt()),
+                    CylinderAxis::Y => (h2.sqrt(), 0.0),
+                };
+                t.sag_and_gradient(curvature, x, y).map(|(z, _, _)| z)
+            }
         }
     }
 
@@ -117,12 +196,14 @@ impl SurfaceShape {
             SurfaceShape::EvenAsphere(a) => curvature + 2.0 * a.coefficients[0],
             SurfaceShape::Cylindrical(axis) if axis.curved_meridian() == meridian => curvature,
             SurfaceShape::Cylindrical(_) => 0.0,
+            SurfaceShape::Toric(t) if t.axis.curved_meridian() == meridian => curvature,
+            SurfaceShape::Toric(t) => 1.0 / t.rotation_radius_mm,
         }
     }
 
-    /// True unless the surface is a cylinder.
+    /// True unless the surface is a cylinder or a toric surface.
     pub fn is_rotationally_symmetric(&self) -> bool {
-        !matches!(self, SurfaceShape::Cylindrical(_))
+        !matches!(self, SurfaceShape::Cylindrical(_) | SurfaceShape::Toric(_))
     }
 
     /// The shape a lens file gives as a conic constant and the polynomial
@@ -150,6 +231,7 @@ impl SurfaceShape {
         match self {
             SurfaceShape::Spherical | SurfaceShape::Cylindrical(_) => *self,
             SurfaceShape::EvenAsphere(a) => SurfaceShape::EvenAsphere(a.scaled(factor)),
+            SurfaceShape::Toric(t) => SurfaceShape::Toric(t.scaled(factor)),
         }
     }
 }
@@ -226,13 +308,8 @@ pub const ASPHERE_TOLERANCE_MM: f64 = 1e-10;
 const ASPHERE_MAX_STEPS: usize = 40;
 
 /// The hit of the ray `origin + t·direction` on the even asphere of vertex
-/// `vertex_z` and curvature `curvature`, found by Newton's method on
-/// f(t) = vertex_z + sag(h²(t)) − z(t) from `t_start` (the hit on the
-/// vertex sphere or plane, which picks the right sheet), as Spencer & Murty
-/// (1962) trace general surfaces. Returns t and the unit normal (the
-/// gradient of f: (2x·s′, 2y·s′, −1) with s′ = dz/d(h²)); `None` when it does
-/// not converge to [`ASPHERE_TOLERANCE_MM`] within 40 steps, or the ray leaves
-/// the surface's domain.
+/// `vertex_z` and curvature `curvature`: [`intersect_by_newton`] with the
+/// asphere's sag, whose gradient is (2x·s′, 2y·s′) with s′ = dz/d(h²).
 #[inline]
 pub(crate) fn intersect_even_asphere(
     origin: DVec3,
@@ -242,11 +319,34 @@ pub(crate) fn intersect_even_asphere(
     asphere: &EvenAsphere,
     t_start: f64,
 ) -> Option<(f64, DVec3)> {
+    intersect_by_newton(origin, direction, vertex_z, t_start, |x, y| {
+        let (sag, slope) = asphere.sag_and_slope(curvature, x * x + y * y)?;
+        Some((sag, 2.0 * x * slope, 2.0 * y * slope))
+    })
+}
+
+/// The hit of the ray `origin + t·direction` on the surface of vertex
+/// `vertex_z` whose sag and its partial derivatives at (x, y) are
+/// `sag_and_gradient(x, y)` = (z, ∂z/∂x, ∂z/∂y), found by Newton's method on
+/// f(t) = vertex_z + sag(x(t), y(t)) − z(t) from `t_start` (the hit on a
+/// nearby sphere, cylinder or plane, which picks the right sheet), as
+/// Spencer & Murty (1962) trace general surfaces. Returns t and the unit
+/// normal (the gradient of f: (∂z/∂x, ∂z/∂y, −1)); `None` when it does not
+/// converge to [`ASPHERE_TOLERANCE_MM`] within 40 steps, or the ray leaves
+/// the surface's domain.
+#[inline]
+pub(crate) fn intersect_by_newton(
+    origin: DVec3,
+    direction: DVec3,
+    vertex_z: f64,
+    t_start: f64,
+    sag_and_gradient: impl Fn(f64, f64) -> Option<(f64, f64, f64)>,
+) -> Option<(f64, DVec3)> {
     let mut t = t_start;
     for _ in 0..ASPHERE_MAX_STEPS {
         let p = origin + direction * t;
-        let (sag, slope) = asphere.sag_and_slope(curvature, p.x * p.x + p.y * p.y)?;
-        let gradient = DVec3::new(2.0 * p.x * slope, 2.0 * p.y * slope, -1.0);
+        let (sag, dz_dx, dz_dy) = sag_and_gradient(p.x, p.y)?;
+        let gradient = DVec3::new(dz_dx, dz_dy, -1.0);
         let f = vertex_z + sag - p.z;
         let df_dt = gradient.dot(direction);
         if df_dt == 0.0 || !df_dt.is_finite() {
@@ -256,8 +356,8 @@ pub(crate) fn intersect_even_asphere(
         t -= step;
         if step.abs() <= ASPHERE_TOLERANCE_MM {
             let p = origin + direction * t;
-            let (_, slope) = asphere.sag_and_slope(curvature, p.x * p.x + p.y * p.y)?;
-            return Some((t, DVec3::new(2.0 * p.x * slope, 2.0 * p.y * slope, -1.0).normalize()));
+            let (_, dz_dx, dz_dy) = sag_and_gradient(p.x, p.y)?;
+            return Some((t, DVec3::new(dz_dx, dz_dy, -1.0).normalize()));
         }
     }
     None
@@ -325,6 +425,74 @@ mod tests {
             let z_big = big.sag_and_slope(c / factor, (factor * h) * (factor * h)).unwrap().0;
             assert!((z_big - factor * z).abs() < 1e-12, "h {h}: {z_big} vs {}", factor * z);
         }
+    }
+
+    /// A toric surface's sag lies on its torus, (z − R)² + a² = (R − g(p))²
+    /// (the profile point swept round the axis R behind the vertex), its
+    /// gradient is the sag's central difference, and an infinite rotation
+    /// radius leaves the cylinder while one equal to the vertex radius gives
+    /// the sphere.
+    #[test]
+    fn a_toric_sag_lies_on_its_torus() {
+        let c = 1.0 / 40.0;
+        for (axis, rotation_radius_mm) in [
+            (CylinderAxis::X, 25.0),
+            (CylinderAxis::Y, -55.0),
+            (CylinderAxis::X, -70.0),
+        ] {
+            let toric = Toric {
+                axis,
+                rotation_radius_mm,
+            };
+            for (x, y) in [
+                (0.0, 0.0),
+                (3.0, 0.0),
+                (0.0, 7.0),
+                (5.0, -6.0),
+                (-9.0, 8.0),
+                (10.5, 2.0),
+            ] {
+                let (z, dz_dx, dz_dy) = toric.sag_and_gradient(c, x, y).unwrap();
+                let (p, a) = match axis {
+                    CylinderAxis::X => (y, x),
+                    CylinderAxis::Y => (x, y),
+                };
+                let g = 40.0 - (40.0f64 * 40.0 - p * p).sqrt();
+                let r = rotation_radius_mm;
+                let torus = (z - r).powi(2) + a * a - (r - g).powi(2);
+                assert!(torus.abs() < 1e-9, "{axis:?} {r} at ({x}, {y}): {torus}");
+                let d = 1e-5;
+                let sag = |x: f64, y: f64| toric.sag_and_gradient(c, x, y).unwrap().0;
+                let numeric = (
+                    (sag(x + d, y) - sag(x - d, y)) / (2.0 * d),
+                    (sag(x, y + d) - sag(x, y - d)) / (2.0 * d),
+                );
+                assert!(
+                    (dz_dx - numeric.0).abs() < 1e-7 && (dz_dy - numeric.1).abs() < 1e-7,
+                    "{axis:?} {r} at ({x}, {y}): ({dz_dx}, {dz_dy}) vs {numeric:?}"
+                );
+            }
+        }
+        for (x, y) in [(3.0, 4.0), (-8.0, 1.0)] {
+            let flat_bend = Toric {
+                axis: CylinderAxis::X,
+                rotation_radius_mm: 1e300,
+            };
+            let cylinder = EvenAsphere::SPHERE.sag_and_slope(c, y * y).unwrap().0;
+            assert!((flat_bend.sag_and_gradient(c, x, y).unwrap().0 - cylinder).abs() < 1e-12);
+            let sphere_bend = Toric {
+                axis: CylinderAxis::Y,
+                rotation_radius_mm: 40.0,
+            };
+            let sphere = EvenAsphere::SPHERE.sag_and_slope(c, x * x + y * y).unwrap().0;
+            assert!((sphere_bend.sag_and_gradient(c, x, y).unwrap().0 - sphere).abs() < 1e-12);
+        }
+        // Beyond the swept circle (radius 25 − g at the rim) there is no surface.
+        let tight = Toric {
+            axis: CylinderAxis::X,
+            rotation_radius_mm: 25.0,
+        };
+        assert!(tight.sag_and_gradient(c, 25.5, 0.0).is_none());
     }
 
     /// Hits land on the surface to the tolerance, with the normal

@@ -9,7 +9,9 @@
 use glam::DVec3;
 
 use super::prescription::{LensPrescription, LensSurface};
-use super::surface::{intersect_even_asphere, CylinderAxis, EvenAsphere, Meridian, SurfaceShape};
+use super::surface::{
+    intersect_by_newton, intersect_even_asphere, CylinderAxis, EvenAsphere, Meridian, SurfaceShape, Toric,
+};
 use crate::error::{Error, Result};
 use crate::glass::D_LINE_NM;
 
@@ -77,6 +79,8 @@ enum Intersection {
     Asphere(EvenAsphere),
     /// A cylinder of the surface's radius with its axis along the given direction.
     Cylinder(CylinderAxis),
+    /// A toric surface, by Newton's method from its unbent cylinder's hit.
+    Toric(Toric),
 }
 
 /// One surface on the axis.
@@ -205,13 +209,15 @@ impl LensSystem {
             .map(|s| {
                 let ior = s.medium.index(wavelength_nm);
                 // A flat cylinder is a plane too.
-                let flat = s.curvature() == 0.0 && !matches!(s.shape, SurfaceShape::EvenAsphere(_));
+                let flat =
+                    s.curvature() == 0.0 && !matches!(s.shape, SurfaceShape::EvenAsphere(_) | SurfaceShape::Toric(_));
                 let intersection = match s.shape {
                     _ if flat && ior == ior_front => Intersection::Aperture,
                     _ if flat => Intersection::Plane,
                     SurfaceShape::Spherical => Intersection::Sphere,
                     SurfaceShape::EvenAsphere(asphere) => Intersection::Asphere(asphere),
                     SurfaceShape::Cylindrical(axis) => Intersection::Cylinder(axis),
+                    SurfaceShape::Toric(toric) => Intersection::Toric(toric),
                 };
                 let surface = Surface {
                     z,
@@ -391,6 +397,7 @@ impl LensSystem {
             Intersection::Sphere => intersect_sphere(ray, surface, direction)?,
             Intersection::Asphere(asphere) => intersect_asphere(ray, surface, asphere, direction)?,
             Intersection::Cylinder(axis) => intersect_cylinder(ray, surface, *axis, direction)?,
+            Intersection::Toric(toric) => intersect_toric(ray, surface, toric, direction)?,
         };
         // Also rejects NaN (a tangent ray).
         if t.is_nan() || t <= 0.0 {
@@ -753,6 +760,19 @@ impl LensSystem {
     }
 }
 
+#[cfg(test)]
+impl LensRay {
+    /// The ray from (x, y) = `start`, 50 mm in front of `lens`'s front
+    /// vertex, along (`slope`, 1): how the tests launch the skew rays they
+    /// compare with rayoptics (`bench/peers/lens_vs_rayoptics.py`).
+    pub(crate) fn skew(lens: &LensSystem, start: [f64; 2], slope: [f64; 2]) -> LensRay {
+        LensRay {
+            origin: DVec3::new(start[0], start[1], lens.front_z() - 50.0),
+            direction: DVec3::new(slope[0], slope[1], 1.0).normalize(),
+        }
+    }
+}
+
 /// The hit of `ray` on the spherical `surface`, on the cap around its
 /// vertex, with the unit normal there
 /// (pointing away from the centre), for a ray travelling `travel`.
@@ -832,6 +852,23 @@ fn intersect_asphere(
         asphere,
         t_start,
     )
+}
+
+/// The hit of `ray` on a toric `surface`, with the unit normal there:
+/// Newton's method from the hit on the cylinder of its profile (the surface
+/// before its axis is bent), or on the vertex plane for a flat profile or a
+/// cylinder the ray misses.
+#[inline(always)]
+fn intersect_toric(ray: &LensRay, surface: &Surface, toric: &Toric, travel: Direction) -> Option<(f64, DVec3)> {
+    let t_start = match surface.radius.is_finite() {
+        true => intersect_cylinder(ray, surface, toric.axis, travel).map(|(t, _)| t),
+        false => None,
+    }
+    .unwrap_or((surface.z - ray.origin.z) / ray.direction.z);
+    let curvature = 1.0 / surface.radius;
+    intersect_by_newton(ray.origin, ray.direction, surface.z, t_start, |x, y| {
+        toric.sag_and_gradient(curvature, x, y)
+    })
 }
 
 /// Snell's law in vector form (pbrt-v4 `Refract`), `eta = n1 / n2`; `None`
@@ -943,6 +980,74 @@ mod tests {
         let sphere = LensSystem::new(&sphere);
         let spread = sphere.real_focus_at_infinity(1.0).unwrap().0 - sphere.real_focus_at_infinity(24.0).unwrap().0;
         assert!(spread > 2.0, "{spread}");
+    }
+
+    /// A cemented doublet of two toric surfaces, bent each way, and a
+    /// cylinder behind them (indices 1.62 and 1.72; the stop 4 mm in front).
+    const TORIC_DOUBLET: &str = "0 4 0 20\n\
+        40 6 1.62 24 toric=x:25\n\
+        -30 2.5 1.72 24 toric=y:-55\n\
+        -90 30 1 24 cylinder=y\n";
+
+    /// The doublet against rayoptics 0.9.8 given the same surfaces (its
+    /// `YToroid` and `XToroid` profiles, its own intersection; numbers from
+    /// `bench/peers/lens_vs_rayoptics.py`): where skew rays from 50 mm in
+    /// front of the stop cross the plane 10 mm behind the rear vertex, and
+    /// each meridian's focal length (rayoptics: a parallel ray 0.01 mm off
+    /// the axis; here paraxial). A toric surface whose rotation radius equals
+    /// its vertex radius is the sphere: the same rays through that lens and
+    /// through the spherical one agree to 1e-9 mm.
+    #[test]
+    fn a_toric_doublet_traces_as_rayoptics_does() {
+        let parse = |table: &str| {
+            LensSystem::new(&LensPrescription::parse(table, "toric", TableConvention::ThicknessToNext).unwrap())
+        };
+        let lens = parse(TORIC_DOUBLET);
+        assert!(!lens.is_rotationally_symmetric());
+        let rayoptics = [
+            ([3.0, 0.0], [0.0, 0.0], [1.7646003152678418, 0.0]),
+            ([0.0, 3.0], [0.0, 0.0], [0.0, 2.3562714843778347]),
+            ([2.0, -3.0], [0.03, 0.05], [2.572718041603636, 0.5305933728825611]),
+            ([-5.0, 4.0], [0.06, -0.03], [-0.13752418734624894, 1.4084580619388918]),
+            ([5.0, 5.0], [-0.08, -0.04], [-0.7939871738920763, 1.6163819915061635]),
+            ([-6.0, -2.0], [0.1, 0.07], [1.1351628807279583, 2.458333875159638]),
+        ];
+        for (start, slope, expected) in rayoptics {
+            let out = lens.trace(&LensRay::skew(&lens, start, slope), Direction::ToSensor);
+            let behind = out.and_then(|o| o.at_z(lens.rear_z() + 10.0)).expect("passes");
+            assert!(
+                (behind.x - expected[0]).abs() < 1e-9 && (behind.y - expected[1]).abs() < 1e-9,
+                "{start:?} {slope:?}: {behind} vs rayoptics {expected:?}"
+            );
+            // And back: the exit ray traced toward the scene returns to the start.
+            let back = lens.trace(
+                &LensRay {
+                    origin: DVec3::new(behind.x, behind.y, lens.rear_z() + 10.0),
+                    direction: -out.unwrap().direction,
+                },
+                Direction::ToScene,
+            );
+            let start_again = back.and_then(|b| b.at_z(lens.front_z() - 50.0)).expect("returns");
+            assert!(
+                (start_again.x - start[0]).abs() < 1e-9 && (start_again.y - start[1]).abs() < 1e-9,
+                "{start:?}: back at {start_again}"
+            );
+        }
+        for (meridian, expected) in Meridian::BOTH.into_iter().zip([34.740491534574026, 72.53632743773711]) {
+            let efl = lens.paraxial_in(meridian).unwrap().effective_focal_length_mm;
+            assert!((efl - expected).abs() < 1e-5, "{meridian:?}: {efl} vs {expected}");
+        }
+        let as_toric = parse("0 4 0 20\n40 6 1.62 24 toric=y:40\n-30 2.5 1.72 24 toric=x:-30\n-90 30 1 24\n");
+        let spherical = parse("0 4 0 20\n40 6 1.62 24\n-30 2.5 1.72 24\n-90 30 1 24\n");
+        for (start, slope, _) in rayoptics {
+            let [a, b] = [&as_toric, &spherical].map(|lens| {
+                let out = lens
+                    .trace(&LensRay::skew(lens, start, slope), Direction::ToSensor)
+                    .unwrap();
+                out.at_z(lens.rear_z() + 10.0).unwrap()
+            });
+            assert!((a - b).length() < 1e-9, "{start:?} {slope:?}: {a} vs {b}");
+        }
     }
 
     #[test]

@@ -1,10 +1,13 @@
 //! Zemax OpticStudio sequential lens files (`.zmx`): the subset lens
 //! makers and patent collections publish.
 //!
-//! Read: `UNIT` (MM, CM, IN, METER), and per `SURF` block `TYPE` (STANDARD
-//! or EVENASPH), `CURV` (curvature, 1/unit), `DISZ` (thickness to the next
-//! surface), `GLAS`, `DIAM` (semi-diameter), `CONI` (conic constant), `PARM
-//! k` (EVENASPH: the coefficient of r^2k) and `STOP`. Other commands (notes,
+//! Read: `UNIT` (MM, CM, IN, METER), and per `SURF` block `TYPE` (STANDARD,
+//! EVENASPH or TOROIDAL), `CURV` (curvature, 1/unit), `DISZ` (thickness to
+//! the next surface), `GLAS`, `DIAM` (semi-diameter), `CONI` (conic
+//! constant), `PARM k` (EVENASPH: the coefficient of r^2k; TOROIDAL: 1 is
+//! the radius of rotation, 0 for a cylinder) and `STOP`. A TOROIDAL surface
+//! is read with a circular profile only: a conic, profile polynomial terms
+//! (PARM 2–9) or Zernike terms (XDAT) on it are refused. Other commands (notes,
 //! fields, wavelengths, tolerances, coatings, drawing) do not change the
 //! lens and are skipped; anything that would change it and is not read here
 //! (other surface types, mirrors, non-sequential mode) is refused, naming
@@ -26,7 +29,7 @@
 use std::path::Path;
 
 use super::prescription::{LensPrescription, TableRow};
-use super::surface::SurfaceShape;
+use super::surface::{CylinderAxis, SurfaceShape, Toric};
 use crate::error::{Error, Result};
 use crate::glass;
 
@@ -48,7 +51,11 @@ struct ZSurface {
     semi_diameter: f64,
     conic: f64,
     aspheric: bool,
-    /// PARM 1..8: the coefficients of r², r⁴, …, r¹⁶.
+    /// A TOROIDAL surface: its profile in the y–z plane swept round an axis
+    /// parallel to y, PARM 1 (the radius of rotation) behind the vertex.
+    toroidal: bool,
+    /// PARM 1..8: EVENASPH's coefficients of r², r⁴, …, r¹⁶; TOROIDAL's
+    /// radius of rotation in PARM 1.
     parm: [f64; 8],
     stop: bool,
 }
@@ -147,13 +154,14 @@ pub fn parse(bytes: &[u8], source: &str) -> Result<LensPrescription> {
         };
         match command {
             "TYPE" => match words.get(1).copied() {
-                Some("STANDARD") => surface.aspheric = false,
-                Some("EVENASPH") => surface.aspheric = true,
+                Some("STANDARD") => (surface.aspheric, surface.toroidal) = (false, false),
+                Some("EVENASPH") => (surface.aspheric, surface.toroidal) = (true, false),
+                Some("TOROIDAL") => (surface.aspheric, surface.toroidal) = (false, true),
                 other => {
                     return Err(fail(
                         line,
                         format!(
-                            "surface type {} is not supported (STANDARD and EVENASPH are)",
+                            "surface type {} is not supported (STANDARD, EVENASPH and TOROIDAL are)",
                             other.unwrap_or("(none)")
                         ),
                     ))
@@ -172,6 +180,26 @@ pub fn parse(bytes: &[u8], source: &str) -> Result<LensPrescription> {
                         return Err(fail(line, format!("EVENASPH has parameters 1 to 8, not {k}")));
                     }
                     surface.parm[k as usize - 1] = value;
+                }
+                if surface.toroidal && k == 1.0 {
+                    surface.parm[0] = value;
+                } else if surface.toroidal && value != 0.0 {
+                    return Err(fail(
+                        line,
+                        format!("TOROIDAL parameter {k} (a profile polynomial term) is not supported: lenspath's toric profile is a circle"),
+                    ));
+                }
+            }
+            // TOROIDAL's extra data: 1 is its number of Zernike terms, 2 their
+            // normalisation radius, from 3 on the terms.
+            "XDAT" if surface.toroidal => {
+                let k = number(1, "extra data number")?;
+                let value = number(2, "value")?;
+                if k != 2.0 && value != 0.0 {
+                    return Err(fail(
+                        line,
+                        format!("TOROIDAL extra data {k} (Zernike terms) is not supported: lenspath's toric profile is a circle"),
+                    ));
                 }
             }
             "GLAS" => {
@@ -219,9 +247,26 @@ pub fn parse(bytes: &[u8], source: &str) -> Result<LensPrescription> {
         let glass_behind = ior_d != 1.0;
         // STANDARD surfaces have a conic only; PARMs count on EVENASPH.
         let terms: &[f64] = if s.aspheric { &s.parm } else { &[] };
-        let shape = SurfaceShape::from_terms(s.conic, 2, terms)
-            .expect("eight terms from h² fit")
-            .scaled(unit_mm);
+        let shape = match s.toroidal {
+            true if s.conic != 0.0 => {
+                return Err(fail(
+                    s.line,
+                    format!(
+                        "a TOROIDAL surface with a conic ({}) is not supported: lenspath's toric profile is a circle",
+                        s.conic
+                    ),
+                ))
+            }
+            // A radius of rotation of 0 is infinite: a cylinder, its axis along x.
+            true if s.parm[0] == 0.0 && s.curvature != 0.0 => SurfaceShape::Cylindrical(CylinderAxis::X),
+            true if s.parm[0] == 0.0 => SurfaceShape::Spherical,
+            true => SurfaceShape::Toric(Toric {
+                axis: CylinderAxis::X,
+                rotation_radius_mm: s.parm[0],
+            }),
+            false => SurfaceShape::from_terms(s.conic, 2, terms).expect("eight terms from h² fit"),
+        }
+        .scaled(unit_mm);
         let radius_mm = if s.curvature == 0.0 {
             f64::INFINITY
         } else {

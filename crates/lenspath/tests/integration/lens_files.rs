@@ -122,6 +122,40 @@ fn zemax_surfaces_glasses_and_encodings() {
     assert!((efl - 52.24).abs() < 0.01, "{efl}");
 }
 
+/// A Zemax file with TOROIDAL surfaces (a toric front, radius of rotation
+/// 25 mm, and a cylinder: PARM 1 = 0) against rayoptics 0.9.8 reading the
+/// same file (its `YToroid`): where skew rays from 50 mm in front of the stop
+/// cross the plane 10 mm behind the rear vertex.
+#[test]
+fn a_toroidal_zemax_file_traces_as_rayoptics_reads_it() {
+    let prescription = LensPrescription::load(&file("toric-doublet.zmx")).unwrap();
+    let shapes: Vec<_> = prescription.surfaces().iter().map(|s| s.shape).collect();
+    assert!(
+        matches!(shapes[1], SurfaceShape::Toric(t) if t.rotation_radius_mm == 25.0)
+            && matches!(shapes[2], SurfaceShape::Cylindrical(_)),
+        "{shapes:?}"
+    );
+    let lens = LensSystem::new(&prescription);
+    let rayoptics = [
+        ([3.0, 0.0], [0.0, 0.0], [1.6578589014660354, 0.0]),
+        ([0.0, 3.0], [0.0, 0.0], [0.0, 2.1815918145151674]),
+        ([2.0, -3.0], [0.03, 0.05], [2.438535871956864, 0.531420621228403]),
+        ([-5.0, 4.0], [0.06, -0.03], [-0.08104550931727705, 1.2775900612649351]),
+    ];
+    for (start, slope, expected) in rayoptics {
+        let ray = LensRay {
+            origin: DVec3::new(start[0], start[1], lens.front_z() - 50.0),
+            direction: DVec3::new(slope[0], slope[1], 1.0).normalize(),
+        };
+        let out = lens.trace(&ray, Direction::ToSensor).expect("passes");
+        let behind = out.at_z(lens.rear_z() + 10.0).unwrap();
+        assert!(
+            (behind.x - expected[0]).abs() < 1e-9 && (behind.y - expected[1]).abs() < 1e-9,
+            "{start:?} {slope:?}: {behind} vs rayoptics {expected:?}"
+        );
+    }
+}
+
 /// Files with what lenspath cannot trace are refused with the line and the
 /// reason, whatever their encoding.
 #[test]
@@ -133,7 +167,7 @@ fn unsupported_zemax_files_are_refused_by_line() {
         ),
         (
             "thorlabs-ASL5040-UV.zmx",
-            "line 76: surface type QED_TYPE is not supported (STANDARD and EVENASPH are)",
+            "line 76: surface type QED_TYPE is not supported (STANDARD, EVENASPH and TOROIDAL are)",
         ),
         ("HoO-V2C18Ex46.zmx", "line 80: surface type COORDBRK is not supported"),
         ("HoO-V2C18Ex03.zmx", "line 86: mirrors are not supported"),
@@ -147,7 +181,7 @@ fn unsupported_zemax_files_are_refused_by_line() {
 /// Malformed files give one clear error naming the line.
 #[test]
 fn malformed_zemax_text_names_the_line() {
-    let cases: [(&str, &str); 7] = [
+    let cases: [(&str, &str); 10] = [
         ("SURF 0\n  DISZ INFINITY\nSURF 1\n", "SURF blocks"),
         ("MODE NSC\n", "line 1: only sequential files"),
         ("UNIT FURLONG\n", "line 1: unknown lens unit"),
@@ -158,6 +192,18 @@ fn malformed_zemax_text_names_the_line() {
         (
             "SURF 0\nSURF 1\n  TYPE EVENASPH\n  PARM 9 1\nSURF 2\n",
             "line 4: EVENASPH has parameters 1 to 8",
+        ),
+        (
+            "SURF 0\nSURF 1\n  TYPE TOROIDAL\n  PARM 1 30\n  PARM 2 1e-4\nSURF 2\n",
+            "line 5: TOROIDAL parameter 2 (a profile polynomial term) is not supported",
+        ),
+        (
+            "SURF 0\nSURF 1\n  TYPE TOROIDAL\n  XDAT 1 3 0 0\nSURF 2\n",
+            "line 4: TOROIDAL extra data 1 (Zernike terms) is not supported",
+        ),
+        (
+            "SURF 0\nSURF 1\n  TYPE TOROIDAL\n  CONI -1\nSURF 2\n",
+            "line 2: a TOROIDAL surface with a conic (-1) is not supported",
         ),
         (
             "SURF 0\nSURF 1\n  DIAM 5\n  GLAS ___BLANK 1 0 0.5 40\n  DISZ 2\nSURF 2\n  DIAM 5\nSURF 3\n",
