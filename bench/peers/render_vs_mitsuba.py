@@ -182,7 +182,7 @@ def mitsuba_scene(mi, folder: Path, job: Job):
     )
 
 
-def render_lenspath(job: Job, sampler: str = "independent"):
+def render_lenspath(job: Job, sampler: str = "independent", seed: int = 0):
     import lenspath
 
     started = time.perf_counter()
@@ -195,11 +195,12 @@ def render_lenspath(job: Job, sampler: str = "independent"):
         resolution=resolution,
         max_depth=job.max_depth,
         sampler=sampler,
+        seed=seed,
     )
     return image, time.perf_counter() - started
 
 
-def render_mitsuba(variant: str, job: Job):
+def render_mitsuba(variant: str, job: Job, seed: int = 0):
     import mitsuba as mi
     import numpy as np
 
@@ -207,7 +208,7 @@ def render_mitsuba(variant: str, job: Job):
     with tempfile.TemporaryDirectory() as folder:
         started = time.perf_counter()
         scene = mitsuba_scene(mi, Path(folder), job)
-        image = np.array(mi.render(scene, spp=job.spp))
+        image = np.array(mi.render(scene, spp=job.spp, seed=seed))
     return image[:, :, :3], time.perf_counter() - started
 
 
