@@ -281,8 +281,8 @@ const GUIDED_MIN_ALPHA: f32 = 0.3;
 /// after the first (`depth > 1`), Mitsuba 3 at its fifth vertex (`rr_depth`
 /// 5). Measured on `cornell-spheres` and `glass-and-gold` against pbrt-v4's
 /// rule (BENCHMARKS.md, issue 34): starting after the fourth, with the cap
-/// below, costs 3–41% more time per sample and leaves 0.45–0.81 of the
-/// error, 0.64–0.82 of the error × time product.
+/// below, costs 2–51% more time per sample and leaves 0.45–0.81 of the
+/// error, 0.64–0.88 of the error × time product.
 const ROULETTE_MIN_DEPTH: u32 = 4;
 
 /// The most likely a roulette survives, whatever the throughput (Mitsuba 3's
