@@ -1,9 +1,9 @@
 //! The bounding volume hierarchy: binned SAH construction without recursion
-//! into a flattened depth-first binary tree, that tree collapsed to 4
+//! into a flattened depth-first binary tree, that tree collapsed to 8
 //! children a node with leaves of up to 8 primitives in packs of four
 //! triangles, and closest-hit / any-hit traversal of the wide tree (one SIMD
-//! slab test for four boxes, one SIMD watertight test for four triangles),
-//! checked against the binary tree's.
+//! slab test for eight boxes, AVX2 where the CPU has it, one SIMD watertight
+//! test for four triangles), checked against the binary tree's.
 //!
 //! Construction follows Wald, "On fast Construction of SAH-based Bounding
 //! Volume Hierarchies" (2007) and pbrt-v4 `BVHAggregate`: primitives are
@@ -135,19 +135,19 @@ impl Node {
     }
 }
 
-/// A node of the 4-wide tree: its children's boxes side by side (one SIMD
+/// A node of the wide tree: its children's boxes side by side (one SIMD
 /// lane each, as Embree and tinybvh lay them out), so one slab test meets all
-/// four. A child is a leaf when its `count` (of primitives) is non-zero:
+/// eight. 256 bytes, on four cache lines. A child is a leaf when its `count` (of primitives) is non-zero:
 /// `child` is then its first pack in `Bvh::packs`, and the leaf fills
 /// `count.div_ceil(4)` packs. Otherwise `child` indexes `Bvh::wide`. Lanes
 /// beyond `lanes` are unused.
 #[derive(Clone, Copy, Debug)]
-#[repr(C, align(16))]
+#[repr(C, align(64))]
 struct WideNode {
-    min: [Vec4; 3],
-    max: [Vec4; 3],
-    child: [u32; 4],
-    count: [u16; 4],
+    min: [[Vec4; QUADS]; 3],
+    max: [[Vec4; QUADS]; 3],
+    child: [u32; WIDTH],
+    count: [u16; WIDTH],
     /// Bit `k` set for the lanes in use.
     lanes: u16,
     /// Bit `k` set for the lanes that are leaves.
@@ -168,6 +168,17 @@ struct TrianglePack {
     /// Bit `k` set where lane `k` is a sphere.
     spheres: u32,
 }
+
+/// Children of a wide node: Embree's BVH8 on AVX2 machines. Measured
+/// against 4 (interleaved rounds, one thread, 300 k rays, median of the
+/// rounds' ratios): incoherent closest hits +17% on the dragon, +26% on the
+/// 1 M knot, +1 to +20% on Lucy; coherent ones −6 to +22%. A 256-byte node
+/// is fetched in parallel lines; what the tree loses is levels, each a
+/// dependent memory access.
+const WIDTH: usize = 8;
+
+/// The SIMD quads a wide node's boxes fill.
+const QUADS: usize = WIDTH / 4;
 
 /// Primitives in one [`TrianglePack`].
 const PACK: usize = 4;
@@ -195,7 +206,7 @@ const WIDE_LEAF_MAX_AREA_FRACTION: f32 = 0.01;
 pub struct Bvh<T> {
     /// The binary tree the build makes (kept as the reference traversal's).
     nodes: Vec<Node>,
-    /// The same tree collapsed to 4 children a node: what rays traverse.
+    /// The same tree collapsed to [`WIDTH`] children a node: what rays traverse.
     wide: Vec<WideNode>,
     /// The wide tree's leaves, four primitives a pack (see [`TrianglePack`]).
     packs: Vec<TrianglePack>,
@@ -254,22 +265,67 @@ impl TraversalRay {
     }
 
     /// Which of `node`'s children's boxes the ray meets before `t_max` (bit
-    /// `k` for lane `k`), and where it enters each.
+    /// `k` for lane `k`), and where it enters each: four lanes at a time.
     #[inline(always)]
-    fn wide_entries(&self, node: &WideNode, t_max: f32) -> (u32, [f32; 4]) {
+    fn wide_entries(&self, node: &WideNode, t_max: f32) -> (u32, [f32; WIDTH]) {
         let (o, inv) = (self.origin, self.inv_dir);
-        let slab = |axis: usize, o: f32, inv: f32| {
-            let t0 = (node.min[axis] - Vec4::splat(o)) * inv;
-            let t1 = (node.max[axis] - Vec4::splat(o)) * inv;
-            (t0.min(t1), t0.max(t1))
-        };
-        let (nx, fx) = slab(0, o.x, inv.x);
-        let (ny, fy) = slab(1, o.y, inv.y);
-        let (nz, fz) = slab(2, o.z, inv.z);
-        let t_near = nx.max(ny).max(nz).max(Vec4::ZERO);
-        let t_far = fx.min(fy).min(fz) * SLAB_SAFETY;
-        let hit = t_near.cmple(t_far.min(Vec4::splat(t_max))).bitmask() & u32::from(node.lanes);
-        (hit, t_near.to_array())
+        let mut hit = 0;
+        let mut entries = [0.0; WIDTH];
+        for q in 0..QUADS {
+            let slab = |axis: usize, o: f32, inv: f32| {
+                let t0 = (node.min[axis][q] - Vec4::splat(o)) * inv;
+                let t1 = (node.max[axis][q] - Vec4::splat(o)) * inv;
+                (t0.min(t1), t0.max(t1))
+            };
+            let (nx, fx) = slab(0, o.x, inv.x);
+            let (ny, fy) = slab(1, o.y, inv.y);
+            let (nz, fz) = slab(2, o.z, inv.z);
+            let t_near = nx.max(ny).max(nz).max(Vec4::ZERO);
+            let t_far = fx.min(fy).min(fz) * SLAB_SAFETY;
+            hit |= t_near.cmple(t_far.min(Vec4::splat(t_max))).bitmask() << (4 * q);
+            entries[4 * q..4 * q + 4].copy_from_slice(&t_near.to_array());
+        }
+        (hit & u32::from(node.lanes), entries)
+    }
+
+    /// [`Self::wide_entries`] for all eight lanes in one AVX step: the same
+    /// operations in the same order, so bit for bit the same result.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    #[inline]
+    fn wide_entries_avx2(&self, node: &WideNode, t_max: f32) -> (u32, [f32; WIDTH]) {
+        use std::arch::x86_64::*;
+        const { assert!(WIDTH == 8) };
+        let (o, inv) = (self.origin.to_array(), self.inv_dir.to_array());
+        let mut near = [_mm256_setzero_ps(); 3];
+        let mut far = [_mm256_setzero_ps(); 3];
+        for axis in 0..3 {
+            // SAFETY: `[Vec4; 2]` is eight contiguous floats.
+            let (lo, hi) = unsafe {
+                (
+                    _mm256_loadu_ps(node.min[axis].as_ptr().cast()),
+                    _mm256_loadu_ps(node.max[axis].as_ptr().cast()),
+                )
+            };
+            let (o, inv) = (_mm256_set1_ps(o[axis]), _mm256_set1_ps(inv[axis]));
+            let t0 = _mm256_mul_ps(_mm256_sub_ps(lo, o), inv);
+            let t1 = _mm256_mul_ps(_mm256_sub_ps(hi, o), inv);
+            near[axis] = _mm256_min_ps(t0, t1);
+            far[axis] = _mm256_max_ps(t0, t1);
+        }
+        let t_near = _mm256_max_ps(
+            _mm256_max_ps(_mm256_max_ps(near[0], near[1]), near[2]),
+            _mm256_setzero_ps(),
+        );
+        let t_far = _mm256_mul_ps(
+            _mm256_min_ps(_mm256_min_ps(far[0], far[1]), far[2]),
+            _mm256_set1_ps(SLAB_SAFETY),
+        );
+        let inside = _mm256_cmp_ps::<_CMP_LE_OQ>(t_near, _mm256_min_ps(t_far, _mm256_set1_ps(t_max)));
+        let mut entries = [0.0; WIDTH];
+        // SAFETY: `entries` holds eight floats.
+        unsafe { _mm256_storeu_ps(entries.as_mut_ptr(), t_near) };
+        (_mm256_movemask_ps(inside) as u32 & u32::from(node.lanes), entries)
     }
 
     #[cfg(test)]
@@ -558,22 +614,40 @@ impl<T: Copy> Bvh<T> {
 
     /// The closest hit with `0 < t < t_max`.
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
-        self.traverse_wide::<false>(ray, t_max)
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
+            // SAFETY: the CPU has the features the function is compiled for.
+            return unsafe { self.traverse_wide_avx2::<false>(ray, t_max) };
+        }
+        self.traverse_wide::<false, false>(ray, t_max)
     }
 
     /// True when anything lies on the ray in `0 < t < t_max` (shadow rays):
     /// stops at the first hit found.
     pub fn intersect_any(&self, ray: &Ray, t_max: f32) -> bool {
-        self.traverse_wide::<true>(ray, t_max).is_some()
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
+            // SAFETY: the CPU has the features the function is compiled for.
+            return unsafe { self.traverse_wide_avx2::<true>(ray, t_max) }.is_some();
+        }
+        self.traverse_wide::<true, false>(ray, t_max).is_some()
     }
 
-    /// The 4-wide traversal: one slab test for a node's four children; the
+    /// The traversal compiled for AVX2 (runtime dispatch: the binary stays
+    /// portable), its node test eight lanes wide.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn traverse_wide_avx2<const ANY: bool>(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        self.traverse_wide::<ANY, true>(ray, t_max)
+    }
+
+    /// The wide traversal: one slab test for a node's children; the
     /// leaves among the hit ones are intersected at once (shrinking `t_max`),
     /// then the interior ones are visited nearest first, the others pushed
     /// with their entry distance so a pop beyond the closest hit is dropped
     /// unvisited.
     #[inline(always)]
-    fn traverse_wide<const ANY: bool>(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+    fn traverse_wide<const ANY: bool, const AVX2: bool>(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         if self.wide.is_empty() {
             return None;
         }
@@ -587,6 +661,15 @@ impl<T: Copy> Bvh<T> {
         let mut current = 0usize;
         loop {
             let node = &self.wide[current];
+            #[cfg(target_arch = "x86_64")]
+            // SAFETY: `AVX2` is only set by `traverse_wide_avx2`, which runs
+            // on CPUs with the features.
+            let (mut mask, t_near) = if AVX2 {
+                unsafe { tr.wide_entries_avx2(node, t_max) }
+            } else {
+                tr.wide_entries(node, t_max)
+            };
+            #[cfg(not(target_arch = "x86_64"))]
             let (mut mask, t_near) = tr.wide_entries(node, t_max);
             // Leaves first: their hits shrink t_max for the interior children.
             let mut leaves = mask & u32::from(node.leaves);
@@ -643,7 +726,7 @@ impl<T: Copy> Bvh<T> {
         }
     }
 
-    /// The binary tree's traversal (pbrt-v4's): the reference the 4-wide
+    /// The binary tree's traversal (pbrt-v4's): the reference the wide
     /// one is checked against.
     #[cfg(test)]
     fn traverse<const ANY: bool>(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
@@ -874,15 +957,15 @@ fn bin_indices(v: Vec3A) -> [u32; 3] {
     }
 }
 
-/// Deepest the 4-wide traversal's stack can get: it pushes at most three
-/// children a level, and the wide tree is no deeper than the binary one
+/// Deepest the wide traversal's stack can get: it pushes at most
+/// `WIDTH - 1` children a level, and the wide tree is no deeper than the binary one
 /// (at most 32 SAH levels plus halving, see `BvhSettings::max_sah_depth`).
-const WIDE_STACK: usize = 3 * 64;
+const WIDE_STACK: usize = (WIDTH - 1) * 64;
 
-/// The binary tree `nodes` (flattened depth first, see [`Node`]) as a 4-wide
+/// The binary tree `nodes` (flattened depth first, see [`Node`]) as a wide
 /// tree: each wide node takes a binary node's children and keeps opening the
-/// interior one of largest surface area until it has four (Wald et al. 2008,
-/// "Getting rid of packets"; Embree's BVH4 collapse). A small subtree of at
+/// interior one of largest surface area until it has [`WIDTH`] (Wald et al.
+/// 2008, "Getting rid of packets"; Embree's BVH4 and BVH8 collapse). A small subtree of at
 /// most [`WIDE_LEAF_PRIMITIVES`] primitives is not opened but becomes one leaf,
 /// its triangles tested [`PACK`] at a time in one SIMD step (Embree's BVH4
 /// with `Triangle4` leaves): the last levels of box tests become one or two
@@ -895,10 +978,10 @@ fn collapse(nodes: &[Node], geometry: &[PrimGeometry]) -> (Vec<WideNode>, Vec<Tr
     let range = subtree_ranges(nodes);
     let leaf = leaf_choice(nodes, &range);
     let empty = WideNode {
-        min: [Vec4::ZERO; 3],
-        max: [Vec4::ZERO; 3],
-        child: [0; 4],
-        count: [0; 4],
+        min: [[Vec4::ZERO; QUADS]; 3],
+        max: [[Vec4::ZERO; QUADS]; 3],
+        child: [0; WIDTH],
+        count: [0; WIDTH],
         lanes: 0,
         leaves: 0,
     };
@@ -907,12 +990,17 @@ fn collapse(nodes: &[Node], geometry: &[PrimGeometry]) -> (Vec<WideNode>, Vec<Tr
     // A leaf root becomes one wide node with a single leaf lane.
     let mut pending = vec![(0usize, if leaf[0] { None } else { Some(0usize) })];
     while let Some((slot, binary)) = pending.pop() {
-        // Up to four children, on the stack (no allocation per node).
-        let (mut children, mut len) = match binary {
-            None => ([0, 0, 0, 0], 1),
-            Some(i) => ([i + 1, nodes[i].offset as usize, 0, 0], 2),
+        // Up to WIDTH children, on the stack (no allocation per node).
+        let mut children = [0; WIDTH];
+        let len = match binary {
+            None => 1,
+            Some(i) => {
+                children[..2].copy_from_slice(&[i + 1, nodes[i].offset as usize]);
+                2
+            }
         };
-        while len < 4 {
+        let mut len = len;
+        while len < WIDTH {
             let widest = children[..len]
                 .iter()
                 .enumerate()
@@ -928,8 +1016,8 @@ fn collapse(nodes: &[Node], geometry: &[PrimGeometry]) -> (Vec<WideNode>, Vec<Tr
         for (lane, &c) in children[..len].iter().enumerate() {
             let (lo, hi) = (nodes[c].min, nodes[c].max);
             for axis in 0..3 {
-                node.min[axis][lane] = lo[axis];
-                node.max[axis][lane] = hi[axis];
+                node.min[axis][lane / 4][lane % 4] = lo[axis];
+                node.max[axis][lane / 4][lane % 4] = hi[axis];
             }
             node.lanes |= 1 << lane;
             if leaf[c] {
@@ -1104,7 +1192,7 @@ mod tests {
         best
     }
 
-    /// 10^5 random rays: the BVH (its 4-wide traversal and the binary
+    /// 10^5 random rays: the BVH (its wide traversal and the binary
     /// reference) finds exactly the brute-force closest hit and the same
     /// any-hit answer, for several bin counts and leaf sizes.
     #[test]
@@ -1149,7 +1237,13 @@ mod tests {
                 let expected = brute_force(&prims, &ray);
                 let got = bvh.intersect(&ray, f32::INFINITY).map(|h| (h.t, bvh.tag(h.prim)));
                 assert_eq!(got, expected, "closest hit differs for {ray:?}");
-                // The binary tree's traversal, the 4-wide one's reference, agrees too.
+                // The portable traversal gives the very same hit as the
+                // dispatched one (AVX2 where the CPU has it).
+                assert_eq!(
+                    bvh.traverse_wide::<false, false>(&ray, f32::INFINITY),
+                    bvh.intersect(&ray, f32::INFINITY)
+                );
+                // The binary tree's traversal, the wide one's reference, agrees too.
                 let binary = bvh
                     .traverse::<false>(&ray, f32::INFINITY)
                     .map(|h| (h.t, bvh.tag(h.prim)));
@@ -1167,6 +1261,56 @@ mod tests {
             hits > 10_000,
             "too few rays hit anything ({hits}): the test would prove little"
         );
+    }
+
+    /// The AVX2 node test gives bit for bit the portable one's mask and
+    /// entry distances on every node of a tree, for random rays (some with
+    /// zero direction components) and closest-hit limits.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn avx2_node_test_matches_the_portable_one_lane_for_lane() {
+        if !(std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma")) {
+            eprintln!("skipped: this CPU has no AVX2 and FMA");
+            return;
+        }
+        let mut rng = Rng::new(11);
+        let mut prims = random_triangles(2000, &mut rng);
+        prims.extend(room_walls(20_000));
+        let bvh = Bvh::build(prims, &BvhSettings::default());
+        let mut compared = 0;
+        for i in 0..2000 {
+            let mut o = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 14.0 - 2.0;
+            let mut d = crate::sampling::uniform_sphere(rng.uniform(), rng.uniform());
+            if i % 4 == 0 {
+                d[i / 4 % 3] = 0.0;
+            } else if i % 4 == 1 {
+                // Aimed at a wall's flat box, where only the far distance's
+                // widening keeps the box: the same in both kernels.
+                let wall = [-1.0, 11.0][i / 4 % 2];
+                let mut target = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 12.0 - 1.0;
+                target[i / 8 % 3] = wall;
+                d = target - o;
+            } else if i % 4 == 2 {
+                // In a wall's plane: the flat box is met at one point.
+                o[i / 8 % 3] = [-1.0, 11.0][i / 4 % 2];
+                d[i / 8 % 3] = 0.0;
+            }
+            let tr = TraversalRay::new(&Ray::new(o, d.normalize()));
+            let t_max = if i % 2 == 0 {
+                f32::INFINITY
+            } else {
+                20.0 * rng.uniform()
+            };
+            for node in &bvh.wide {
+                let (mask, entries) = tr.wide_entries(node, t_max);
+                // SAFETY: the CPU has AVX2 and FMA (checked above).
+                let (mask_avx2, entries_avx2) = unsafe { tr.wide_entries_avx2(node, t_max) };
+                assert_eq!(mask, mask_avx2);
+                assert_eq!(entries.map(f32::to_bits), entries_avx2.map(f32::to_bits));
+                compared += mask.count_ones();
+            }
+        }
+        assert!(compared > 10_000, "too few boxes hit ({compared})");
     }
 
     #[test]
