@@ -2,7 +2,8 @@
 """lenspath's BVH against Embree (the `embreex` binding from PyPI) on the same
 triangles and the same rays, in one run: build time, closest-hit and any-hit
 Mrays/s on 1 M coherent camera rays and 1 M incoherent random rays, on one thread
-and on all cores; and whether the two agree on every hit distance.
+and on all cores; the bytes a triangle each holds; and whether the two agree on
+every hit distance.
 
     python3 bench/peers/bvh_vs_embree.py [--rays 1000000] [--rounds 3] [--json out.json]
 
@@ -82,6 +83,69 @@ def embree_measure(vertices, faces, ray_sets: dict, rounds: int) -> dict:
             result[f"{name}_{key}_mrays_s"] = len(origins) / min(times) / 1e6
     result["scene"] = scene
     return result
+
+
+def embree_memory_bytes(vertices, faces) -> int:
+    """Bytes Embree holds for a committed scene of the triangles (its BVH and its own
+    copies of the triangles), counted by its memory monitor callback, called through
+    ctypes on embreex's bundled libembree4 (embreex does not expose the callback). The
+    vertex and index buffers are shared with numpy, so not counted: the caller keeps
+    them (lenspath's figure includes its copy of the geometry)."""
+    import ctypes
+    from pathlib import Path
+
+    import embreex
+    import numpy as np
+
+    library = next((Path(embreex.__file__).parent.parent / "embreex.libs").glob("libembree4*.so*"))
+    embree = ctypes.CDLL(str(library))
+    monitor_type = ctypes.CFUNCTYPE(ctypes.c_bool, ctypes.c_void_p, ctypes.c_ssize_t, ctypes.c_bool)
+    held = [0]
+
+    def monitor(_user, change, _post):
+        held[0] += change
+        return True
+
+    callback = monitor_type(monitor)
+    pointer = ctypes.c_void_p
+    signatures = {
+        "rtcNewDevice": (pointer, [ctypes.c_char_p]),
+        "rtcSetDeviceMemoryMonitorFunction": (None, [pointer, monitor_type, pointer]),
+        "rtcNewScene": (pointer, [pointer]),
+        "rtcNewGeometry": (pointer, [pointer, ctypes.c_int]),
+        "rtcSetSharedGeometryBuffer": (
+            None,
+            [pointer, ctypes.c_int, ctypes.c_uint, ctypes.c_int, pointer] + [ctypes.c_size_t] * 3,
+        ),
+        "rtcCommitGeometry": (None, [pointer]),
+        "rtcAttachGeometry": (ctypes.c_uint, [pointer, pointer]),
+        "rtcReleaseGeometry": (None, [pointer]),
+        "rtcCommitScene": (None, [pointer]),
+        "rtcReleaseScene": (None, [pointer]),
+        "rtcReleaseDevice": (None, [pointer]),
+    }
+    for name, (result, arguments) in signatures.items():
+        getattr(embree, name).restype = result
+        getattr(embree, name).argtypes = arguments
+    # Embree reads vertices with 16-byte loads: one float of padding after the last.
+    padded = np.zeros(vertices.size + 1, np.float32)
+    padded[: vertices.size] = vertices.ravel()
+    indices = np.ascontiguousarray(faces, np.uint32)
+    device = embree.rtcNewDevice(None)
+    embree.rtcSetDeviceMemoryMonitorFunction(device, callback, None)
+    scene = embree.rtcNewScene(device)
+    geometry = embree.rtcNewGeometry(device, 0)  # RTC_GEOMETRY_TYPE_TRIANGLE
+    # RTC_BUFFER_TYPE_VERTEX with RTC_FORMAT_FLOAT3, RTC_BUFFER_TYPE_INDEX with RTC_FORMAT_UINT3.
+    embree.rtcSetSharedGeometryBuffer(geometry, 1, 0, 0x9003, padded.ctypes.data, 0, 12, len(vertices))
+    embree.rtcSetSharedGeometryBuffer(geometry, 0, 0, 0x5003, indices.ctypes.data, 0, 12, len(indices))
+    embree.rtcCommitGeometry(geometry)
+    embree.rtcAttachGeometry(scene, geometry)
+    embree.rtcReleaseGeometry(geometry)
+    embree.rtcCommitScene(scene)
+    bytes_held = held[0]
+    embree.rtcReleaseScene(scene)
+    embree.rtcReleaseDevice(device)
+    return bytes_held
 
 
 def _embree_share(vertices, faces, origins, directions, barrier, results) -> None:
@@ -180,10 +244,13 @@ def main() -> int:
         row = {
             "mesh": name,
             "triangles": len(faces),
+            "vertices": len(vertices),
             "lenspath_build_ms": min(r["build_ms"] for r in ours),
             "embree_build_ms": embree["build_ms"],
             "agreement": checks,
             "lenspath_threads": ours_all["threads"],
+            "lenspath_memory_bytes": ours[0]["memory_bytes"],
+            "embree_memory_bytes": embree_memory_bytes(vertices, faces),
         }
         for kind in ("coherent", "incoherent"):
             row[f"{kind}_closest"] = (best(f"{kind}_mrays_s"), embree[f"{kind}_closest_mrays_s"])
@@ -205,6 +272,13 @@ def print_row(row: dict) -> None:
     print(
         f"  build            lenspath {row['lenspath_build_ms']:8.1f} ms (1 thread)   "
         f"Embree {row['embree_build_ms']:8.1f} ms (default builder)   lenspath speed {build_ratio:.2f}x Embree's"
+    )
+    triangles = row["triangles"]
+    ours, theirs = row["lenspath_memory_bytes"] / triangles, row["embree_memory_bytes"] / triangles
+    buffers = (12 * triangles + 12 * row["vertices"]) / triangles
+    print(
+        f"  memory           lenspath {ours:6.1f} B/triangle (nodes, packs, geometry, tags)   Embree {theirs:6.1f} "
+        f"B/triangle (BVH and its triangles; the caller's {buffers:.1f} B/triangle of buffers besides)"
     )
     for key in ("coherent_closest", "incoherent_closest", "coherent_any_hit", "incoherent_any_hit"):
         ours, theirs = row[key]

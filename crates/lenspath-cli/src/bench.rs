@@ -168,6 +168,7 @@ pub fn run_bvh(args: BvhArgs) -> Result<Outcome> {
             "leaves": stats.leaves,
             "max_depth": stats.max_depth,
             "sah_cost": stats.sah_cost,
+            "memory_bytes": stats.memory_bytes,
             "threads": threads,
             "rays": args.rays,
             "coherent_mrays_s": coherent_mrays,
@@ -189,6 +190,11 @@ pub fn run_bvh(args: BvhArgs) -> Result<Outcome> {
         println!(
             "tree                {} nodes, {} leaves, depth {}, SAH cost {:.2}",
             stats.nodes, stats.leaves, stats.max_depth, stats.sah_cost
+        );
+        println!(
+            "memory              {:.1} MB ({:.1} bytes a triangle: wide nodes, packs, geometry, tags)",
+            stats.memory_bytes as f64 / 1e6,
+            stats.memory_bytes as f64 / mesh.indices.len() as f64
         );
         println!(
             "coherent rays       {coherent_mrays:.2} M rays/s on {threads} threads ({:.0}% hit)",
