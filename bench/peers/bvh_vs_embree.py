@@ -90,7 +90,7 @@ def embree_memory_bytes(vertices, faces) -> int:
     copies of the triangles), counted by its memory monitor callback, called through
     ctypes on embreex's bundled libembree4 (embreex does not expose the callback). The
     vertex and index buffers are shared with numpy, so not counted: the caller keeps
-    them (lenspath's figure includes its copy of the geometry)."""
+    them alive (lenspath's figure is all its traversal needs: its packs hold the corners)."""
     import ctypes
     from pathlib import Path
 
@@ -277,8 +277,8 @@ def print_row(row: dict) -> None:
     ours, theirs = row["lenspath_memory_bytes"] / triangles, row["embree_memory_bytes"] / triangles
     buffers = (12 * triangles + 12 * row["vertices"]) / triangles
     print(
-        f"  memory           lenspath {ours:6.1f} B/triangle (nodes, packs, geometry, tags)   Embree {theirs:6.1f} "
-        f"B/triangle (BVH and its triangles; the caller's {buffers:.1f} B/triangle of buffers besides)"
+        f"  memory           lenspath {ours:6.1f} B/triangle (nodes, packs with the geometry, slots, tags)   "
+        f"Embree {theirs:6.1f} B/triangle (BVH and its triangles; the caller's {buffers:.1f} of buffers besides)"
     )
     for key in ("coherent_closest", "incoherent_closest", "coherent_any_hit", "incoherent_any_hit"):
         ours, theirs = row[key]

@@ -71,12 +71,12 @@ pub struct BuildStats {
     /// Wall time of the build, in milliseconds.
     pub build_ms: f64,
     /// Bytes the tree holds for traversal and shading: its wide nodes, leaf
-    /// packs, primitives' geometry and tags (the binary tree the build makes
-    /// is dropped).
+    /// packs (which hold the primitives' geometry), each primitive's place in
+    /// them and its tag (the binary tree the build makes is dropped).
     pub memory_bytes: usize,
 }
 
-/// One primitive's geometry, stored inline in traversal order.
+/// One primitive's geometry (the tree keeps it in its leaf packs).
 #[derive(Clone, Copy, Debug)]
 pub enum PrimGeometry {
     /// A triangle by its three corners.
@@ -161,7 +161,9 @@ struct WideNode {
 /// Up to four consecutive primitives of a wide leaf, triangles' corners side
 /// by side (`corners[k][axis]`, one lane each, as Embree's `Triangle4`), so
 /// one SIMD watertight test meets all four. Lane `k` is primitive
-/// `first + k`; spheres (rare) are tested one by one.
+/// `first + k`. A sphere's lane holds its centre in `corners[0]` and its
+/// radius in `corners[1][0]`; spheres (rare) are tested one by one. The
+/// packs are the tree's only copy of the geometry.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(16))]
 struct TrianglePack {
@@ -218,7 +220,8 @@ pub struct Bvh<T> {
     wide: Vec<WideNode>,
     /// The wide tree's leaves, four primitives a pack (see [`TrianglePack`]).
     packs: Vec<TrianglePack>,
-    geometry: Vec<PrimGeometry>,
+    /// Where each primitive (traversal order) sits: pack index · 4 + lane.
+    slots: Vec<u32>,
     tags: Vec<T>,
     stats: BuildStats,
 }
@@ -589,10 +592,18 @@ impl<T: Copy> Bvh<T> {
         let (mut wide, mut packs) = collapse(&nodes, &geometry);
         wide.shrink_to_fit();
         packs.shrink_to_fit();
+        let mut slots = vec![0u32; geometry.len()];
+        for (index, pack) in packs.iter().enumerate() {
+            for lane in 0..PACK as u32 {
+                if (pack.triangles | pack.spheres) & (1 << lane) != 0 {
+                    slots[(pack.first + lane) as usize] = index as u32 * PACK as u32 + lane;
+                }
+            }
+        }
         stats.build_ms = started.elapsed().as_secs_f64() * 1e3;
         stats.memory_bytes = size_of_val(wide.as_slice())
             + size_of_val(packs.as_slice())
-            + size_of_val(geometry.as_slice())
+            + size_of_val(slots.as_slice())
             + size_of_val(tags.as_slice());
         Bvh {
             bounds: nodes.first().map_or(Bounds3::EMPTY, Node::bounds),
@@ -600,7 +611,7 @@ impl<T: Copy> Bvh<T> {
             nodes,
             wide,
             packs,
-            geometry,
+            slots,
             tags,
             stats,
         }
@@ -624,8 +635,9 @@ impl<T: Copy> Bvh<T> {
 
     /// The geometry of primitive `prim` (traversal order).
     #[inline]
-    pub fn primitive(&self, prim: u32) -> &PrimGeometry {
-        &self.geometry[prim as usize]
+    pub fn primitive(&self, prim: u32) -> PrimGeometry {
+        let slot = self.slots[prim as usize] as usize;
+        self.packs[slot / PACK].lane(slot % PACK)
     }
 
     /// The closest hit with `0 < t < t_max`.
@@ -778,7 +790,7 @@ impl<T: Copy> Bvh<T> {
                 if node.count > 0 {
                     let first = node.offset as usize;
                     for prim in first..first + node.count as usize {
-                        if let Some(hit) = self.intersect_prim(&tr, ray, prim, t_max) {
+                        if let Some(hit) = intersect_prim(&tr, ray, self.primitive(prim as u32), prim as u32, t_max) {
                             if ANY {
                                 return Some(hit);
                             }
@@ -846,10 +858,10 @@ impl<T: Copy> Bvh<T> {
         while scalar != 0 {
             let lane = scalar.trailing_zeros();
             scalar &= scalar - 1;
-            let prim = (pack.first + lane) as usize;
+            let prim = pack.first + lane;
             // Tested against the pack's own range, so a lane before the best
             // hit so far wins a tie, as in a scalar loop over the pack.
-            if let Some(hit) = self.intersect_prim(tr, ray, prim, t_limit) {
+            if let Some(hit) = intersect_prim(tr, ray, pack.lane(lane as usize), prim, t_limit) {
                 if closest.is_none_or(|c| hit.t < c.t || (hit.t == c.t && hit.prim < c.prim)) {
                     closest = Some(hit);
                     if ANY {
@@ -860,22 +872,40 @@ impl<T: Copy> Bvh<T> {
         }
         closest
     }
+}
 
-    #[inline(always)]
-    fn intersect_prim(&self, tr: &TraversalRay, ray: &Ray, prim: usize, t_max: f32) -> Option<Hit> {
-        match &self.geometry[prim] {
-            PrimGeometry::Triangle(p) => intersect_triangle(&tr.tri, p, t_max).map(|(t, b1, b2)| Hit {
-                t,
-                prim: prim as u32,
-                b1,
-                b2,
-            }),
-            PrimGeometry::Sphere { center, radius } => intersect_sphere(ray, *center, *radius, t_max).map(|t| Hit {
-                t,
-                prim: prim as u32,
-                b1: 0.0,
-                b2: 0.0,
-            }),
+/// The hit of `ray` with `geometry` (primitive `prim`) before `t_max`.
+#[inline(always)]
+fn intersect_prim(tr: &TraversalRay, ray: &Ray, geometry: PrimGeometry, prim: u32, t_max: f32) -> Option<Hit> {
+    match geometry {
+        PrimGeometry::Triangle(p) => intersect_triangle(&tr.tri, &p, t_max).map(|(t, b1, b2)| Hit { t, prim, b1, b2 }),
+        PrimGeometry::Sphere { center, radius } => intersect_sphere(ray, center, radius, t_max).map(|t| Hit {
+            t,
+            prim,
+            b1: 0.0,
+            b2: 0.0,
+        }),
+    }
+}
+
+impl TrianglePack {
+    /// The geometry in `lane`.
+    #[inline]
+    fn lane(&self, lane: usize) -> PrimGeometry {
+        let corner = |k: usize| {
+            Vec3::new(
+                self.corners[k][0][lane],
+                self.corners[k][1][lane],
+                self.corners[k][2][lane],
+            )
+        };
+        if self.spheres & (1 << lane) != 0 {
+            PrimGeometry::Sphere {
+                center: corner(0),
+                radius: self.corners[1][0][lane],
+            }
+        } else {
+            PrimGeometry::Triangle([corner(0), corner(1), corner(2)])
         }
     }
 }
@@ -1146,7 +1176,13 @@ fn pack(geometry: &[PrimGeometry], first: u32, end: u32) -> TrianglePack {
                 }
                 pack.triangles |= 1 << lane;
             }
-            PrimGeometry::Sphere { .. } => pack.spheres |= 1 << lane,
+            PrimGeometry::Sphere { center, radius } => {
+                for axis in 0..3 {
+                    pack.corners[0][axis][lane] = center[axis];
+                }
+                pack.corners[1][0][lane] = *radius;
+                pack.spheres |= 1 << lane;
+            }
         }
     }
     pack
@@ -1381,12 +1417,12 @@ mod tests {
         // A flat list would cost 8 · 5000 = 40000.
         assert!(s.sah_cost < 400.0, "SAH cost {}", s.sah_cost);
         assert!(s.max_depth < 40);
-        // What traversal holds: 40 bytes of geometry and 4 of tag a triangle,
-        // 40 a triangle in full packs (more in part-filled ones), some for the
-        // nodes: 125 on this random soup, 105-108 on scanned meshes. The binary tree
-        // (another 60 or so) is not kept, nor are half-empty allocations.
+        // What traversal holds: 40 bytes a triangle in full packs (more in
+        // part-filled ones), 4 of slot, 4 of tag, some for the nodes: 89 on
+        // this random soup, 72 on scanned meshes. A second copy of the
+        // geometry (40 more) or the binary tree (60 or so) would show.
         let per_triangle = s.memory_bytes as f32 / 5000.0;
-        assert!((84.0..140.0).contains(&per_triangle), "{per_triangle} bytes a triangle");
+        assert!((60.0..100.0).contains(&per_triangle), "{per_triangle} bytes a triangle");
     }
 
     /// Primitives spread over 15 orders of magnitude (exponential spacing):

@@ -349,9 +349,9 @@ impl CompiledScene {
     pub fn intersect(&self, ray: &Ray) -> Option<SurfaceHit> {
         let hit = self.bvh.intersect(ray, f32::INFINITY)?;
         let PrimRef { shape, triangle } = self.bvh.tag(hit.prim);
-        // The corners and centres from the BVH's copy (in traversal order,
-        // near the nodes just visited), not through the mesh's indices.
-        Some(match *self.bvh.primitive(hit.prim) {
+        // The corners and centres from the BVH's leaf packs (the ones just
+        // tested, so in the cache), not through the mesh's indices.
+        Some(match self.bvh.primitive(hit.prim) {
             PrimGeometry::Triangle([p0, p1, p2]) => {
                 let m = &self.scene.meshes[shape as usize];
                 let b0 = 1.0 - hit.b1 - hit.b2;
