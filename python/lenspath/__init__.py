@@ -84,10 +84,9 @@ def _as_scene(scene: Scene | str | os.PathLike[str]) -> Scene:
     """A Scene as given, a built-in scene by name, or a scene file by path."""
     if isinstance(scene, Scene):
         return scene
-    if isinstance(scene, str) and scene in builtin_scenes():
-        return Scene.builtin(scene)
     if isinstance(scene, (str, os.PathLike)):
-        return load(scene)
+        builtin = _core.builtin_scene_named(scene)
+        return Scene.builtin(builtin) if builtin is not None else load(scene)
     raise TypeError(f"scene must be a lenspath.Scene, a built-in scene name or a path, not {type(scene).__name__}")
 
 

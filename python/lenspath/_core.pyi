@@ -30,6 +30,7 @@ __all__ = [
     "_sensor_from_settings",
     "load",
     "builtin_scenes",
+    "builtin_scene_named",
     "builtin_lenses",
     "defaults",
     "render",
@@ -184,6 +185,10 @@ def run_cli(argv: Sequence[str | PathLike[str]]) -> int:
 
 def builtin_scenes() -> list[str]:
     """The built-in scenes' names."""
+
+def builtin_scene_named(name: str | PathLike[str]) -> str | None:
+    """The built-in scene a scene argument names, if any (the rule every front end applies: a
+    built-in scene's name is that scene, anything else a scene file's path)."""
 
 @final
 class Emission:

@@ -31,7 +31,7 @@ import numpy as np
 import numpy.typing as npt
 
 from . import _core
-from ._core import Camera, Scene, builtin_scenes
+from ._core import Camera, Scene
 
 if TYPE_CHECKING:
     from distributed import Client
@@ -84,9 +84,10 @@ def _scene_ref(scene: Scene | str | os.PathLike[str]) -> _SceneRef:
         else:
             name, triangles = args
             return _SceneRef(key=f"builtin:{name}:{triangles}", builtin=name, mesh_triangles=triangles)
-    if isinstance(scene, str) and scene in builtin_scenes():
+    builtin = _core.builtin_scene_named(scene) if isinstance(scene, (str, os.PathLike)) else None
+    if builtin is not None:
         # By name: the worker makes it (cornell-mesh has a million triangles to build).
-        return _SceneRef(key=f"builtin:{scene}", builtin=scene)
+        return _SceneRef(key=f"builtin:{builtin}", builtin=builtin)
     if isinstance(scene, (str, os.PathLike)):
         path = os.path.abspath(os.fspath(scene))
         if not os.path.isfile(path):

@@ -4,6 +4,7 @@ analytic scenes built in Python, the GIL, interrupts and leaks."""
 from __future__ import annotations
 
 import os
+import pathlib
 import signal
 import subprocess
 import threading
@@ -22,6 +23,15 @@ def test_builtin_scenes_render_to_float_arrays(name: str) -> None:
     assert np.isfinite(image).all()
     # A lit Cornell box: everything visible is lit or is the light.
     assert 0.01 < image.mean() < 10.0
+
+
+def test_a_path_naming_a_builtin_scene_is_that_scene_as_on_the_command_line() -> None:
+    # The library's rule (lenspath::io::builtin_scene_named), whatever the argument's type.
+    assert lenspath._core.builtin_scene_named(pathlib.Path("cornell-spheres")) == "cornell-spheres"
+    assert lenspath._core.builtin_scene_named("scenes/cornell-spheres.toml") is None
+    by_path = lenspath.render(pathlib.Path("cornell-spheres"), spp=1, resolution=(16, 12))
+    by_name = lenspath.render("cornell-spheres", spp=1, resolution=(16, 12))
+    assert np.array_equal(by_path, by_name)
 
 
 def test_the_mesh_scene_takes_a_triangle_count() -> None:

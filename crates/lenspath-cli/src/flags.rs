@@ -6,9 +6,10 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use clap::{Args, ValueEnum};
-use lenspath::builtin::{BUILTIN_SCENES, DEFAULT_MESH_TRIANGLES};
+use lenspath::builtin::DEFAULT_MESH_TRIANGLES;
 use lenspath::camera::{Aperture, ApertureShape, Radiometry};
 use lenspath::film::{NormalizedRect, PixelRect};
+use lenspath::io::builtin_scene_named;
 use lenspath::io::{load_named_scene, LoadedScene};
 use lenspath::lens::LensPrescription;
 use lenspath::options::SceneOptions;
@@ -187,7 +188,7 @@ impl SceneArgs {
     pub fn builtin(&self) -> Option<&str> {
         match &self.file {
             None => Some(&self.scene),
-            Some(file) => file.to_str().filter(|f| BUILTIN_SCENES.contains(f)),
+            Some(file) => builtin_scene_named(file),
         }
     }
 

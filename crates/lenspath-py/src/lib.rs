@@ -45,6 +45,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sensor::_sensor_from_settings, m)?)?;
     m.add_function(wrap_pyfunction!(scene::load, m)?)?;
     m.add_function(wrap_pyfunction!(scene::builtin_scenes, m)?)?;
+    m.add_function(wrap_pyfunction!(scene::builtin_scene_named, m)?)?;
     m.add_function(wrap_pyfunction!(scene::defaults, m)?)?;
     m.add_function(wrap_pyfunction!(lens::builtin_lenses, m)?)?;
     m.add_function(wrap_pyfunction!(render::render, m)?)?;

@@ -472,6 +472,13 @@ pub(crate) fn builtin_scenes() -> Vec<&'static str> {
     BUILTIN_SCENES.to_vec()
 }
 
+/// The built-in scene a scene argument names, if any (the library's rule,
+/// [`lenspath::io::builtin_scene_named`]).
+#[pyfunction]
+pub(crate) fn builtin_scene_named(name: PathBuf) -> Option<&'static str> {
+    lenspath::io::builtin_scene_named(&name)
+}
+
 /// An amount of light as Python gives it: RGB, or a spectrum.
 #[derive(FromPyObject)]
 pub(crate) enum LightAmount {

@@ -141,10 +141,10 @@ impl Node {
 
 /// A node of the wide tree: its children's boxes side by side (one SIMD
 /// lane each, as Embree and tinybvh lay them out), so one slab test meets all
-/// eight. 256 bytes, on four cache lines. A child is a leaf when its `count` (of primitives) is non-zero:
-/// `child` is then its first pack in `Bvh::packs`, and the leaf fills
-/// `count.div_ceil(4)` packs. Otherwise `child` indexes `Bvh::wide`. Lanes
-/// beyond `lanes` are unused.
+/// eight; 256 bytes, on four cache lines. A child is a leaf when its `count`
+/// (of primitives) is non-zero: `child` is then its first pack in
+/// `Bvh::packs`, and the leaf fills `count.div_ceil(4)` packs. Otherwise
+/// `child` indexes `Bvh::wide`. Lanes beyond `lanes` are unused.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 struct WideNode {
@@ -1053,11 +1053,11 @@ const WIDE_STACK: usize = (WIDTH - 1) * 64;
 /// The binary tree `nodes` (flattened depth first, see [`Node`]) as a wide
 /// tree: each wide node takes a binary node's children and keeps opening the
 /// interior one of largest surface area until it has [`WIDTH`] (Wald et al.
-/// 2008, "Getting rid of packets"; Embree's BVH4 and BVH8 collapse). A small subtree of at
-/// most [`WIDE_LEAF_PRIMITIVES`] primitives is not opened but becomes one leaf,
-/// its triangles tested [`PACK`] at a time in one SIMD step (Embree's BVH4
-/// with `Triangle4` leaves): the last levels of box tests become one or two
-/// triangle tests. Returns the wide nodes and the leaves' packs of
+/// 2008, "Getting rid of packets"; Embree's BVH4 and BVH8 collapse). A
+/// small subtree of at most [`WIDE_LEAF_PRIMITIVES`] primitives is not opened
+/// but becomes one leaf, its triangles tested [`PACK`] at a time in one SIMD
+/// step (Embree's `Triangle4` leaves): the last levels of box tests become
+/// one or two triangle tests. Returns the wide nodes and the leaves' packs of
 /// `geometry` (in traversal order).
 fn collapse(nodes: &[Node], geometry: &[PrimGeometry]) -> (Vec<WideNode>, Vec<TrianglePack>) {
     if nodes.is_empty() {

@@ -76,10 +76,20 @@ impl ReadScope {
 /// within its folder and `allowed` ([`load_scene_in`]). The one rule every
 /// front end applies to a scene argument.
 pub fn load_named_scene(name: &Path, allowed: &[PathBuf], mesh_triangles: usize) -> Result<LoadedScene> {
-    match name.to_str().filter(|n| crate::builtin::BUILTIN_SCENES.contains(n)) {
+    match builtin_scene_named(name) {
         Some(builtin) => LoadedScene::builtin(builtin, mesh_triangles),
         None => load_scene_in(name, &ReadScope::of_scene(name, allowed)?),
     }
+}
+
+/// The built-in scene a scene argument names, if it names one (the rule
+/// [`load_named_scene`] applies; front ends that hold on to the choice ask
+/// this).
+pub fn builtin_scene_named(name: &Path) -> Option<&'static str> {
+    let name = name.to_str()?;
+    crate::builtin::BUILTIN_SCENES
+        .into_iter()
+        .find(|builtin| *builtin == name)
 }
 
 /// Loads a scene file, choosing the loader by its extension; it may read

@@ -541,11 +541,13 @@ fn aspheric_terms(words: &[&str]) -> std::result::Result<SurfaceShape, String> {
     let mut seen: Vec<&str> = Vec::new();
     for word in words {
         let (key, value) = word.split_once('=').expect("keyed words contain '='");
-        if let Some(kind) = [("cylinder", "cylindrical"), ("toric", "toric")]
-            .iter()
-            .find(|(k, _)| *k == key)
-        {
-            return Err(format!("a {} surface takes no aspheric terms", kind.1));
+        let shape = match key {
+            "cylinder" => Some("cylindrical"),
+            "toric" => Some("toric"),
+            _ => None,
+        };
+        if let Some(shape) = shape {
+            return Err(format!("a {shape} surface takes no aspheric terms"));
         }
         let number: f64 = value
             .parse()
