@@ -299,6 +299,18 @@ impl TraversalRay {
         (hit & u32::from(node.lanes), entries)
     }
 
+    /// [`Self::wide_entries`], or with `AVX2` [`Self::wide_entries_avx2`].
+    #[inline(always)]
+    fn entries<const AVX2: bool>(&self, node: &WideNode, t_max: f32) -> (u32, [f32; WIDTH]) {
+        #[cfg(target_arch = "x86_64")]
+        if AVX2 {
+            // SAFETY: `AVX2` is only set by `traverse_wide_avx2`, which runs
+            // on CPUs with the features.
+            return unsafe { self.wide_entries_avx2(node, t_max) };
+        }
+        self.wide_entries(node, t_max)
+    }
+
     /// [`Self::wide_entries`] for all eight lanes in one AVX step: the same
     /// operations in the same order, so bit for bit the same result.
     #[cfg(target_arch = "x86_64")]
@@ -642,27 +654,28 @@ impl<T: Copy> Bvh<T> {
 
     /// The closest hit with `0 < t < t_max`.
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
-        #[cfg(target_arch = "x86_64")]
-        if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
-            // SAFETY: the CPU has the features the function is compiled for.
-            return unsafe { self.traverse_wide_avx2::<false>(ray, t_max) };
-        }
-        self.traverse_wide::<false, false>(ray, t_max)
+        self.traverse_for_this_cpu::<false>(ray, t_max)
     }
 
     /// True when anything lies on the ray in `0 < t < t_max` (shadow rays):
     /// stops at the first hit found.
     pub fn intersect_any(&self, ray: &Ray, t_max: f32) -> bool {
-        #[cfg(target_arch = "x86_64")]
-        if std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma") {
-            // SAFETY: the CPU has the features the function is compiled for.
-            return unsafe { self.traverse_wide_avx2::<true>(ray, t_max) }.is_some();
-        }
-        self.traverse_wide::<true, false>(ray, t_max).is_some()
+        self.traverse_for_this_cpu::<true>(ray, t_max).is_some()
     }
 
-    /// The traversal compiled for AVX2 (runtime dispatch: the binary stays
-    /// portable), its node test eight lanes wide.
+    /// The wide traversal compiled for AVX2 where the CPU has it, else the
+    /// portable one (runtime dispatch: the binary stays portable).
+    #[inline(always)]
+    fn traverse_for_this_cpu<const ANY: bool>(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        #[cfg(target_arch = "x86_64")]
+        if cpu_has_avx2() {
+            // SAFETY: the CPU has the features the function is compiled for.
+            return unsafe { self.traverse_wide_avx2::<ANY>(ray, t_max) };
+        }
+        self.traverse_wide::<ANY, false>(ray, t_max)
+    }
+
+    /// The traversal compiled for AVX2, its node test eight lanes wide.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     fn traverse_wide_avx2<const ANY: bool>(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
@@ -689,16 +702,7 @@ impl<T: Copy> Bvh<T> {
         let mut current = 0usize;
         loop {
             let node = &self.wide[current];
-            #[cfg(target_arch = "x86_64")]
-            // SAFETY: `AVX2` is only set by `traverse_wide_avx2`, which runs
-            // on CPUs with the features.
-            let (mut mask, t_near) = if AVX2 {
-                unsafe { tr.wide_entries_avx2(node, t_max) }
-            } else {
-                tr.wide_entries(node, t_max)
-            };
-            #[cfg(not(target_arch = "x86_64"))]
-            let (mut mask, t_near) = tr.wide_entries(node, t_max);
+            let (mut mask, t_near) = tr.entries::<AVX2>(node, t_max);
             // Everything the ray enters is fetched at once, overlapping the
             // cache misses that otherwise come one after another.
             let mut fetch = mask;
@@ -1018,6 +1022,12 @@ fn bin_indices(v: Vec3A) -> [u32; 3] {
     {
         [v.x as u32, v.y as u32, v.z as u32]
     }
+}
+
+/// Whether this CPU runs the AVX2 traversal (it needs AVX2 and FMA).
+#[cfg(target_arch = "x86_64")]
+fn cpu_has_avx2() -> bool {
+    std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma")
 }
 
 /// Asks for the `bytes` from `start` to be brought into the cache (a hint:
@@ -1363,7 +1373,7 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn avx2_node_test_matches_the_portable_one_lane_for_lane() {
-        if !(std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma")) {
+        if !cpu_has_avx2() {
             eprintln!("skipped: this CPU has no AVX2 and FMA");
             return;
         }
