@@ -52,7 +52,7 @@ pub struct RenderArgs {
     /// Samples per pixel.
     #[arg(long)]
     spp: Option<u32>,
-    /// Shadow rays per light at every non-specular hit.
+    /// Shadow rays per area or environment light at every non-specular hit (point, spot and directional lights take one).
     #[arg(long)]
     light_samples: Option<u32>,
     /// Maximum path depth, 1 = direct lighting only.

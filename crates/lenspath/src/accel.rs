@@ -19,6 +19,9 @@ use crate::math::Bounds3;
 use crate::ray::Ray;
 use crate::shapes::{intersect_sphere, intersect_triangle, intersect_triangles4, triangle_bounds, TriangleRay};
 
+mod packet;
+pub use packet::SHADOW_PACKET;
+
 /// Everything that tunes the BVH, in one place (as tinybvh's settings).
 #[derive(Clone, Copy, Debug)]
 pub struct BvhSettings {
@@ -318,6 +321,21 @@ impl TraversalRay {
     #[inline]
     fn wide_entries_avx2(&self, node: &WideNode, t_max: f32) -> (u32, [f32; WIDTH]) {
         use std::arch::x86_64::*;
+        let (inside, t_near) = self.wide_slabs_avx2(node, t_max);
+        let mut entries = [0.0; WIDTH];
+        // SAFETY: `entries` holds eight floats.
+        unsafe { _mm256_storeu_ps(entries.as_mut_ptr(), t_near) };
+        (_mm256_movemask_ps(inside) as u32 & u32::from(node.lanes), entries)
+    }
+
+    /// The AVX2 slab test of `node`'s eight boxes: all ones in the lanes the
+    /// ray enters before `t_max` (unused lanes included), and the entry
+    /// distances.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    #[inline]
+    fn wide_slabs_avx2(&self, node: &WideNode, t_max: f32) -> (std::arch::x86_64::__m256, std::arch::x86_64::__m256) {
+        use std::arch::x86_64::*;
         const { assert!(WIDTH == 8) };
         let (o, inv) = (self.origin.to_array(), self.inv_dir.to_array());
         let mut near = [_mm256_setzero_ps(); 3];
@@ -345,10 +363,7 @@ impl TraversalRay {
             _mm256_set1_ps(SLAB_SAFETY),
         );
         let inside = _mm256_cmp_ps::<_CMP_LE_OQ>(t_near, _mm256_min_ps(t_far, _mm256_set1_ps(t_max)));
-        let mut entries = [0.0; WIDTH];
-        // SAFETY: `entries` holds eight floats.
-        unsafe { _mm256_storeu_ps(entries.as_mut_ptr(), t_near) };
-        (_mm256_movemask_ps(inside) as u32 & u32::from(node.lanes), entries)
+        (inside, t_near)
     }
 
     #[cfg(test)]
@@ -705,28 +720,13 @@ impl<T: Copy> Bvh<T> {
             let (mut mask, t_near) = tr.entries::<AVX2>(node, t_max);
             // Everything the ray enters is fetched at once, overlapping the
             // cache misses that otherwise come one after another.
-            let mut fetch = mask;
-            while fetch != 0 {
-                let lane = fetch.trailing_zeros() as usize;
-                fetch &= fetch - 1;
-                let child = node.child[lane] as usize;
-                if node.leaves & (1 << lane) != 0 {
-                    let packs = (node.count[lane] as usize).div_ceil(PACK);
-                    prefetch(
-                        self.packs.as_ptr().wrapping_add(child),
-                        packs * size_of::<TrianglePack>(),
-                    );
-                } else {
-                    prefetch(self.wide.as_ptr().wrapping_add(child), size_of::<WideNode>());
-                }
-            }
+            self.prefetch_children(node, mask);
             // Leaves first: their hits shrink t_max for the interior children.
             let mut leaves = mask & u32::from(node.leaves);
             while leaves != 0 {
                 let lane = leaves.trailing_zeros() as usize;
                 leaves &= leaves - 1;
-                let first = node.child[lane] as usize;
-                for pack in &self.packs[first..first + (node.count[lane] as usize).div_ceil(PACK)] {
+                for pack in self.leaf_packs(node, lane) {
                     if let Some(hit) = self.intersect_pack::<ANY>(&tr, ray, pack, t_max) {
                         if ANY {
                             return Some(hit);
@@ -771,6 +771,34 @@ impl<T: Copy> Bvh<T> {
                     current = node as usize;
                     break;
                 }
+            }
+        }
+    }
+
+    /// The packs of the leaf in `node`'s lane `lane`.
+    #[inline(always)]
+    fn leaf_packs(&self, node: &WideNode, lane: usize) -> &[TrianglePack] {
+        let first = node.child[lane] as usize;
+        &self.packs[first..first + (node.count[lane] as usize).div_ceil(PACK)]
+    }
+
+    /// Asks for the children of `node` in `lanes` (nodes, or a leaf's
+    /// packs) to be brought into the cache.
+    #[inline(always)]
+    fn prefetch_children(&self, node: &WideNode, lanes: u32) {
+        let mut fetch = lanes;
+        while fetch != 0 {
+            let lane = fetch.trailing_zeros() as usize;
+            fetch &= fetch - 1;
+            let child = node.child[lane] as usize;
+            if node.leaves & (1 << lane) != 0 {
+                let packs = (node.count[lane] as usize).div_ceil(PACK);
+                prefetch(
+                    self.packs.as_ptr().wrapping_add(child),
+                    packs * size_of::<TrianglePack>(),
+                );
+            } else {
+                prefetch(self.wide.as_ptr().wrapping_add(child), size_of::<WideNode>());
             }
         }
     }
@@ -1213,7 +1241,7 @@ mod tests {
     use super::*;
     use crate::sampling::Rng;
 
-    fn random_triangles(n: usize, rng: &mut Rng) -> Vec<(PrimGeometry, u32)> {
+    pub(super) fn random_triangles(n: usize, rng: &mut Rng) -> Vec<(PrimGeometry, u32)> {
         (0..n)
             .map(|i| {
                 let c = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform()) * 10.0;
@@ -1225,7 +1253,7 @@ mod tests {
 
     /// The floor, ceiling and three walls of a room around the random
     /// triangles' 10-unit cube: two triangles each, tagged from `first_tag`.
-    fn room_walls(first_tag: u32) -> Vec<(PrimGeometry, u32)> {
+    pub(super) fn room_walls(first_tag: u32) -> Vec<(PrimGeometry, u32)> {
         let (lo, hi) = (-1.0, 11.0);
         let quads = [
             [(lo, lo, lo), (hi, lo, lo), (hi, lo, hi), (lo, lo, hi)],

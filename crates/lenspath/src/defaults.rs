@@ -19,7 +19,8 @@ pub const INTEGRATOR: IntegratorKind = IntegratorKind::Path;
 pub const GUIDE_TRAINING_SPP: u32 = 15;
 /// Maximum path depth (scattering events; 1 is direct lighting only).
 pub const MAX_DEPTH: u32 = 16;
-/// Shadow rays per light at each non-specular hit.
+/// Shadow rays per area or environment light at each non-specular hit (a
+/// point, spot or directional light takes one: its samples would all be one ray).
 pub const LIGHT_SAMPLES: u32 = 1;
 /// Seed of the sample sequences.
 pub const SEED: u32 = 0;

@@ -269,6 +269,12 @@ impl Light {
         }
     }
 
+    /// True for lights at a point or direction (point, spot, directional):
+    /// every sample of one is the same ray.
+    pub fn is_delta(&self) -> bool {
+        !matches!(self, Light::Environment { .. })
+    }
+
     /// For a light seen along escaping rays (the environment), the density
     /// with which [`Light::sample`] picks a direction; what is seen is its
     /// emission.

@@ -19,7 +19,7 @@ pub struct SceneOptions {
     pub integrator: Option<IntegratorKind>,
     /// Maximum path depth.
     pub max_depth: Option<u32>,
-    /// Shadow rays per light per hit.
+    /// Shadow rays per area or environment light per hit.
     pub light_samples: Option<u32>,
     /// Seed of the sample sequences.
     pub seed: Option<u32>,

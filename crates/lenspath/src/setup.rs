@@ -49,7 +49,7 @@ pub struct RenderOverrides {
     pub integrator: Option<IntegratorKind>,
     /// Maximum path depth.
     pub max_depth: Option<u32>,
-    /// Shadow rays per light at each non-specular hit.
+    /// Shadow rays per area or environment light at each non-specular hit.
     pub light_samples: Option<u32>,
     /// Seed of the sample sequences.
     pub seed: Option<u32>,

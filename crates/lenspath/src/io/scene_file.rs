@@ -755,7 +755,7 @@ pub struct SceneSettingsFile {
     pub spp: u32,
     /// Maximum path depth.
     pub max_depth: u32,
-    /// Shadow rays per light per hit.
+    /// Shadow rays per area or environment light per hit.
     pub light_samples: u32,
     /// Seed of the sample sequences.
     pub seed: u32,
