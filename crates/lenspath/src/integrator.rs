@@ -776,7 +776,7 @@ impl UnblockedSample {
 /// The fewest shadow rays from one vertex traced as a packet; fewer go one
 /// by one. A packet shares the walk through the tree, which pays where the
 /// rays cross many nodes: the course's dragon setting (16 light samples)
-/// took 0.56–0.62× the time. In the Cornell box of spheres, whose tree is
+/// took 0.52–0.62× the time. In the Cornell box of spheres, whose tree is
 /// a root and its leaves, packets of four took 1.15× the time of single rays
 /// (16 spp, 4 light samples, three interleaved runs).
 const PACKET_MIN_RAYS: usize = 8;
