@@ -218,6 +218,7 @@ impl Light {
 
     /// Samples the light from point `p`.
     pub fn sample(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
+        let delta = self.is_delta();
         match self {
             Light::Point { position, .. } => {
                 let to_light = *position - p;
@@ -227,7 +228,7 @@ impl Light {
                     scale: 1.0 / dist2,
                     pdf: 1.0,
                     distance: dist2.sqrt(),
-                    delta: true,
+                    delta,
                 })
             }
             Light::Spot {
@@ -249,7 +250,7 @@ impl Light {
                     scale: cos_axis.powf(*exponent) / dist2,
                     pdf: 1.0,
                     distance: dist2.sqrt(),
-                    delta: true,
+                    delta,
                 })
             }
             Light::Directional { direction, .. } => Some(LightSample {
@@ -257,14 +258,14 @@ impl Light {
                 scale: 1.0,
                 pdf: 1.0,
                 distance: f32::INFINITY,
-                delta: true,
+                delta,
             }),
             Light::Environment { .. } => Some(LightSample {
                 wi: uniform_sphere(u.x, u.y),
                 scale: 1.0,
                 pdf: UNIFORM_SPHERE_PDF,
                 distance: f32::INFINITY,
-                delta: false,
+                delta,
             }),
         }
     }

@@ -345,9 +345,10 @@ impl CompiledScene {
     }
 
     /// Which of the rays from `origin` to `targets` (at most
-    /// [`SHADOW_PACKET`](crate::accel::SHADOW_PACKET)) are blocked within `0 < t < t_max`, `t` in units of
-    /// the distance to the target: bit `i` for `targets[i]`. The same answers
-    /// as [`CompiledScene::occluded`] on each ray, traced as one packet.
+    /// [`SHADOW_PACKET`](crate::accel::SHADOW_PACKET)) are blocked within
+    /// `0 < t < t_max`, `t` in units of the distance to the target: bit `i`
+    /// for `targets[i]`. The same answers as [`CompiledScene::occluded`] on
+    /// each ray, traced as one packet.
     #[inline]
     pub fn occluded_from(&self, origin: Vec3, targets: &[Vec3], t_max: f32) -> u32 {
         self.bvh.occluded_from(origin, targets, t_max)
