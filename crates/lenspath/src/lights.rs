@@ -58,6 +58,20 @@ pub enum AreaShape {
         /// Triangle choice proportional to area.
         by_area: Distribution1D,
     },
+    /// Two emissive triangles that make a parallelogram (the quad light of
+    /// most scenes), sampled as one: `corner + u·edge_u + v·edge_v` is
+    /// uniform by area with no choice of triangle, no division and no
+    /// branch, and keeps the stratification of `(u, v)`.
+    Parallelogram {
+        /// One corner.
+        corner: Vec3,
+        /// The edge from it along which `u` runs.
+        edge_u: Vec3,
+        /// The edge from it along which `v` runs.
+        edge_v: Vec3,
+        /// Unit normal of the front face.
+        normal: Vec3,
+    },
     /// Emissive sphere; light leaves the outside.
     Sphere {
         /// Centre.
@@ -86,6 +100,9 @@ impl AreaLight {
         let area: f32 = areas.iter().sum();
         if area <= 0.0 || !area.is_finite() {
             return None;
+        }
+        if let Some(shape) = parallelogram(&triangles, &crosses) {
+            return Some(AreaLight { shape, emission, area });
         }
         // Zero-area triangles are never chosen; their normal is left zero.
         let normals = crosses.iter().map(|n| n.normalize_or_zero()).collect();
@@ -122,6 +139,12 @@ impl AreaLight {
                 let [b0, b1, b2] = uniform_triangle(Vec2::new(ux, u.y));
                 (b0 * a + b1 * b + b2 * c, normals[i])
             }
+            AreaShape::Parallelogram {
+                corner,
+                edge_u,
+                edge_v,
+                normal,
+            } => (*corner + u.x * *edge_u + u.y * *edge_v, *normal),
             AreaShape::Sphere { center, radius } => {
                 let n = uniform_sphere(u.x, u.y);
                 (*center + *radius * n, n)
@@ -163,6 +186,40 @@ impl AreaLight {
         }
         distance * distance / (cos_light * self.area)
     }
+}
+
+/// The parallelogram two triangles make, when they make one: they share
+/// an edge, face the same way, and the corner each has off that edge is
+/// the other's mirror image through the edge's midpoint (to a millionth of
+/// the quad's size, so that sampling it is sampling the triangles).
+fn parallelogram(triangles: &[[Vec3; 3]], crosses: &[Vec3]) -> Option<AreaShape> {
+    let ([first, second], [n0, n1]) = (triangles, crosses) else {
+        return None;
+    };
+    let normal = n0.try_normalize()?;
+    if n1.try_normalize()?.dot(normal) < 1.0 - 1e-6 {
+        return None;
+    }
+    // The corner of `first` off the shared edge, and the edge.
+    for k in 0..3 {
+        let (apex, p, q) = (first[k], first[(k + 1) % 3], first[(k + 2) % 3]);
+        let shares = |v: Vec3| second.contains(&v);
+        if !(shares(p) && shares(q)) {
+            continue;
+        }
+        let opposite = second.iter().copied().find(|v| *v != p && *v != q)?;
+        let size = (p - apex).length().max((q - apex).length());
+        if (opposite - (p + q - apex)).length() > 1e-6 * size {
+            return None;
+        }
+        return Some(AreaShape::Parallelogram {
+            corner: apex,
+            edge_u: p - apex,
+            edge_v: q - apex,
+            normal,
+        });
+    }
+    None
 }
 
 /// A sampled direction toward a light and what arrives along it.
@@ -335,6 +392,44 @@ mod tests {
         let f_corner = (2.0 * x / s * (x / s).atan()) / (2.0 * std::f64::consts::PI);
         let expected = std::f64::consts::PI * 4.0 * f_corner; // E = π L F
         assert!((e - expected).abs() / expected < 0.01, "irradiance {e} vs {expected}");
+    }
+
+    /// Two triangles that make a parallelogram are sampled as one, on
+    /// the triangles, uniformly (the samples' mean is the centre, a quarter
+    /// of them in each quarter); two that do not (a kite) stay triangles.
+    #[test]
+    fn a_quad_of_two_triangles_is_sampled_as_a_parallelogram() {
+        let (a, b, c, d) = (
+            Vec3::new(0.0, 0.0, 1.0),
+            Vec3::new(2.0, 0.0, 1.0),
+            Vec3::new(3.0, 1.0, 1.0),
+            Vec3::new(1.0, 1.0, 1.0),
+        );
+        let quad = AreaLight::from_triangles(vec![[a, b, c], [a, c, d]], Spectrum::Constant(1.0)).unwrap();
+        assert!(matches!(quad.shape, AreaShape::Parallelogram { .. }));
+        assert!((quad.area - 2.0).abs() < 1e-6);
+        let mut rng = Rng::new(3);
+        let (n, mut sum, mut quarters) = (100_000, Vec3::ZERO, [0; 4]);
+        for _ in 0..n {
+            let (p, normal) = quad.sample_point(Vec2::new(rng.uniform(), rng.uniform()));
+            assert_eq!(normal, Vec3::Z);
+            // Inside: 0 ≤ y ≤ 1 and y ≤ x ≤ y + 2.
+            assert!(
+                p.y >= 0.0 && p.y <= 1.0 && p.x >= p.y - 1e-6 && p.x <= p.y + 2.0 + 1e-6,
+                "{p}"
+            );
+            sum += p;
+            quarters[usize::from(p.y > 0.5) * 2 + usize::from(p.x - p.y > 1.0)] += 1;
+        }
+        let mean = sum / n as f32;
+        assert!((mean - Vec3::new(1.5, 0.5, 1.0)).length() < 0.01, "{mean}");
+        assert!(
+            quarters.iter().all(|&q| (q as f32 / n as f32 - 0.25).abs() < 0.01),
+            "{quarters:?}"
+        );
+        let kite = Vec3::new(1.0, 2.0, 1.0);
+        let not_quad = AreaLight::from_triangles(vec![[a, b, c], [a, c, kite]], Spectrum::Constant(1.0)).unwrap();
+        assert!(matches!(not_quad.shape, AreaShape::Triangles { .. }));
     }
 
     /// A spot light: inverse-square on its axis, cos^e falloff inside the cone, dark outside.
