@@ -55,7 +55,8 @@ def main() -> int:
     references = ROOT / "target" / "bench-references"
     references.mkdir(parents=True, exist_ok=True)
     name = Path(args.scene).stem
-    reference = references / f"ab-{name}-{args.res}-{args.ref_spp}spp-{'_'.join(args.extra)}.exr"
+    extra = re.sub(r"[^A-Za-z0-9.=-]+", "_", "_".join(args.extra))  # a file name, whatever the arguments
+    reference = references / f"ab-{name}-{args.res}-{args.ref_spp}spp-{extra}.exr"
     if not reference.exists():
         seconds = render(args.old, args.scene, args.res, args.ref_spp, 1_000_003, args.extra, reference)
         print(f"reference: {args.ref_spp} spp in {seconds:.0f} s", flush=True)
