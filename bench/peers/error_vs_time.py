@@ -4,12 +4,13 @@ feels (how far from converged the image is after the time they waited).
 
     python3 bench/peers/error_vs_time.py [--scene cornell-spheres|cornell-dragon] [--res 480 360]
                                          [--max-depth 16] [--budgets 2 8 30] [--ref-spp 8192]
-                                         [--json F] [--plot F.svg]
+                                         [--runs 1] [--json F] [--plot F.svg]
 
 The scene and both renderers' settings are render_vs_mitsuba.py's (same numbers, pinhole,
 all threads, box filter; Mitsuba's `path` integrator in `llvm_ad_rgb`, or `scalar_rgb` where
 its JIT cannot run). Each renderer renders at 1, 2, 4, ... samples per pixel until a render
-takes longer than the largest budget; each render is timed from scene construction to the
+takes longer than the largest budget (`--runs` renders at each count, other seeds: the
+median time and the mean error); each render is timed from scene construction to the
 finished image (Mitsuba's JIT kernels are compiled by an untimed render at the same sample
 count first), and its mean squared error is taken over every pixel and channel against a
 converged reference: the mean of the two renderers' own `--ref-spp` renders (other seeds), so
@@ -54,8 +55,9 @@ def reference(job: Job, variant: str, ref_spp: int):
     return image
 
 
-def sweep(render, job: Job, reference, budget_s: float, warm_up: bool) -> list[tuple[int, float, float]]:
-    """(spp, seconds, MSE) at 1, 2, 4, ... spp until a render takes longer than `budget_s`."""
+def sweep(render, job: Job, reference, budget_s: float, warm_up: bool, runs: int) -> list[tuple[int, float, float]]:
+    """(spp, seconds, MSE) at 1, 2, 4, ... spp until a render takes longer than `budget_s`: the
+    median time and the mean MSE of `runs` renders (other seeds) at each sample count."""
     import numpy as np
 
     rows = []
@@ -64,8 +66,12 @@ def sweep(render, job: Job, reference, budget_s: float, warm_up: bool) -> list[t
         run = Job(job.scene, job.meshes, job.width, job.height, spp, job.max_depth)
         if warm_up:
             render(run, seed=spp + 7)
-        image, seconds = render(run, seed=spp)
-        mse = float(np.mean((image - reference) ** 2))
+        times, errors = [], []
+        for r in range(runs):
+            image, seconds = render(run, seed=spp + 100_000 * r)
+            times.append(seconds)
+            errors.append(float(np.mean((image - reference) ** 2)))
+        seconds, mse = float(np.median(times)), float(np.mean(errors))
         rows.append((spp, seconds, mse))
         print(f"    {spp:6d} spp {seconds:8.3f} s  MSE {mse:.3e}", flush=True)
         if seconds > budget_s:
@@ -91,6 +97,7 @@ def main() -> int:
     parser.add_argument("--max-depth", type=int, default=16)
     parser.add_argument("--budgets", type=float, nargs="+", default=[2.0, 8.0, 30.0])
     parser.add_argument("--ref-spp", type=int, default=8192)
+    parser.add_argument("--runs", type=int, default=1, help="renders at each sample count (median time, mean MSE)")
     parser.add_argument("--json", type=Path, help="also write the curves and ratios here")
     parser.add_argument("--plot", type=Path, help="draw the curves here (SVG)")
     args = parser.parse_args()
@@ -110,7 +117,7 @@ def main() -> int:
         (f"Mitsuba {variant}", lambda j, seed: render_mitsuba(variant, j, seed=seed), True),
     ]:
         print(f"  {name}", flush=True)
-        curves[name] = sweep(render, job, ref, longest, warm_up)
+        curves[name] = sweep(render, job, ref, longest, warm_up, args.runs)
     ratios = {}
     mitsuba = curves[f"Mitsuba {variant}"]
     print("  budget   lenspath / Mitsuba MSE   (independent sampler)")

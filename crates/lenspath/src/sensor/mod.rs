@@ -349,7 +349,8 @@ impl SensorSettings {
             f64::INFINITY
         };
         let exposure_time_s = wanted_s.min(auto.max_exposure_time_s);
-        let iso = (self.unity_gain_iso * wanted_s / exposure_time_s).clamp(self.unity_gain_iso, auto.max_iso);
+        // The ratio first: at the base ISO it is exactly 1 (ISO × time / time is not).
+        let iso = (self.unity_gain_iso * (wanted_s / exposure_time_s)).clamp(self.unity_gain_iso, auto.max_iso);
         SensorSettings {
             exposure_time_s,
             iso,

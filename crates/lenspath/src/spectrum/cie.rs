@@ -46,11 +46,8 @@ pub struct CieTables {
     /// D65 at the same wavelengths, scaled so its luminance is 1:
     /// ∫ D65 ȳ dλ / ∫ ȳ dλ = 1.
     d65: Vec<f32>,
-    /// The wavelength sampler's cells of equal probability: the edges, nm
-    /// ([`SAMPLING_CELLS`] + 1, from 360 to 830), and the density, per nm,
-    /// within each cell (see [`CieTables::sample_wavelength`]).
-    sampling_edges_nm: Vec<f32>,
-    sampling_pdf: Vec<f32>,
+    /// The wavelength sampler's table (see [`CieTables::sample_wavelength`]).
+    wavelength_cells: WavelengthCells,
     /// ∫ ȳ(λ) dλ over 360–830 nm (pbrt's `CIE_Y_integral`, 106.857).
     pub y_integral: f32,
     /// CIE XYZ of the normalised D65: the white point, Y = 1.
@@ -69,33 +66,61 @@ pub fn tables() -> &'static CieTables {
 /// Cells of equal probability in [`CieTables::sample_wavelength`]'s table.
 pub const SAMPLING_CELLS: usize = 1024;
 
-/// The wavelength sampler's table from the matching functions as linear
-/// sRGB on the 1 nm grid: the density ∝ ‖(r̄, ḡ, b̄)‖ plus the floor,
-/// constant per 1 nm bin, cut into [`SAMPLING_CELLS`] cells of equal
-/// probability; their edges, nm, and the density within each.
-fn sampling_cells(rgb_bar: &[Vec3]) -> (Vec<f32>, Vec<f32>) {
-    let norm: Vec<f64> = rgb_bar.iter().map(|c| f64::from(c.length())).collect();
-    let floor = 1e-3 * norm.iter().copied().fold(0.0, f64::max);
-    let bins: Vec<f64> = norm.windows(2).map(|w| 0.5 * (w[0] + w[1]) + floor).collect();
-    let total: f64 = bins.iter().sum();
-    // The CDF at the 1 nm bins' edges, then inverted at k / cells.
-    let mut cdf = vec![0.0f64];
-    for b in &bins {
-        cdf.push(cdf[cdf.len() - 1] + b / total);
+/// A density over 360–830 nm tabulated for drawing by inversion: cells of
+/// equal probability, the density constant within each.
+pub(crate) struct WavelengthCells {
+    /// Cell edges, nm ([`SAMPLING_CELLS`] + 1, from 360 to 830).
+    edges_nm: Vec<f32>,
+    /// The density, per nm, within each cell.
+    pdf: Vec<f32>,
+}
+
+impl WavelengthCells {
+    /// The density ∝ `weights` (one per nm of the tables' grid, linear
+    /// between) plus a floor of 1/1000 of their peak, so that every
+    /// wavelength of 360–830 nm can be drawn.
+    pub(crate) fn new(weights: &[f64]) -> Self {
+        let floor = 1e-3 * weights.iter().copied().fold(0.0, f64::max);
+        let bins: Vec<f64> = weights.windows(2).map(|w| 0.5 * (w[0] + w[1]) + floor).collect();
+        let total: f64 = bins.iter().sum();
+        // The CDF at the 1 nm bins' edges, then inverted at k / cells.
+        let mut cdf = vec![0.0f64];
+        for b in &bins {
+            cdf.push(cdf[cdf.len() - 1] + b / total);
+        }
+        let edges_nm: Vec<f32> = (0..=SAMPLING_CELLS)
+            .map(|k| {
+                let c = k as f64 / SAMPLING_CELLS as f64;
+                let i = cdf.partition_point(|&x| x <= c).clamp(1, bins.len()) - 1;
+                let t = ((c - cdf[i]) / (cdf[i + 1] - cdf[i])).clamp(0.0, 1.0);
+                (f64::from(LAMBDA_MIN_NM) + i as f64 + t) as f32
+            })
+            .collect();
+        let pdf = edges_nm
+            .windows(2)
+            .map(|e| 1.0 / (SAMPLING_CELLS as f32 * (e[1] - e[0])))
+            .collect();
+        WavelengthCells { edges_nm, pdf }
     }
-    let edges: Vec<f32> = (0..=SAMPLING_CELLS)
-        .map(|k| {
-            let c = k as f64 / SAMPLING_CELLS as f64;
-            let i = cdf.partition_point(|&x| x <= c).clamp(1, bins.len()) - 1;
-            let t = ((c - cdf[i]) / (cdf[i + 1] - cdf[i])).clamp(0.0, 1.0);
-            (f64::from(LAMBDA_MIN_NM) + i as f64 + t) as f32
-        })
-        .collect();
-    let pdf = edges
-        .windows(2)
-        .map(|e| 1.0 / (SAMPLING_CELLS as f32 * (e[1] - e[0])))
-        .collect();
-    (edges, pdf)
+
+    /// A wavelength, nm, for `u` in [0, 1), and its density per nm: a
+    /// lookup and a lerp.
+    #[inline(always)]
+    pub(crate) fn sample(&self, u: f32) -> (f32, f32) {
+        let x = u * SAMPLING_CELLS as f32;
+        let cell = (x as u32 as usize).min(SAMPLING_CELLS - 1);
+        let (a, b) = (self.edges_nm[cell], self.edges_nm[cell + 1]);
+        (a + (x - cell as f32) * (b - a), self.pdf[cell])
+    }
+
+    /// The density, per nm, of `lambda_nm` (zero outside 360–830 nm).
+    fn pdf(&self, lambda_nm: f32) -> f32 {
+        if !(LAMBDA_MIN_NM..=LAMBDA_MAX_NM).contains(&lambda_nm) {
+            return 0.0;
+        }
+        let cell = self.edges_nm.partition_point(|&e| e <= lambda_nm);
+        self.pdf[cell.clamp(1, SAMPLING_CELLS) - 1]
+    }
 }
 
 /// Rows of numbers of a CSV with one header line.
@@ -137,12 +162,13 @@ impl CieTables {
             .iter()
             .map(|&bar| xyz_to_rgb * bar / y_integral as f32)
             .collect();
-        let (sampling_edges_nm, sampling_pdf) = sampling_cells(&rgb_bar);
+        // The density of `sample_wavelength` (its doc comment says why this one).
+        let rgb_bar_norm_sqrt: Vec<f64> = rgb_bar.iter().map(|c| f64::from(c.length()).sqrt()).collect();
+        let wavelength_cells = WavelengthCells::new(&rgb_bar_norm_sqrt);
         CieTables {
             xyz_bar,
             rgb_bar,
-            sampling_edges_nm,
-            sampling_pdf,
+            wavelength_cells,
             d65,
             y_integral: y_integral as f32,
             white_xyz: white.as_vec3(),
@@ -151,38 +177,37 @@ impl CieTables {
         }
     }
 
-    /// A wavelength, nm, for `u` in [0, 1), drawn with density ∝ ‖(r̄, ḡ, b̄)(λ)‖
-    /// (the matching functions as linear sRGB), and that density per nm.
+    /// A wavelength, nm, for `u` in [0, 1), drawn with density ∝
+    /// √‖(r̄, ḡ, b̄)(λ)‖ (the square root of the length of the matching
+    /// functions as linear sRGB), and that density per nm.
     ///
-    /// The film estimates each of R, G, B from the same wavelengths (the
-    /// mean of L(λ) r̄(λ) / p(λ), …), and the density that minimises the sum
-    /// of the three variances for a flat spectrum is proportional to the
-    /// Euclidean norm of the three weights (the vector-valued case of
-    /// importance sampling; Veach 1997, §2.5). pbrt-v4's luminance-shaped
-    /// density (∝ 1 / cosh²(0.0072 (λ − 538))) samples the blue and deep
-    /// red that R and B need too rarely: BENCHMARKS.md measures the colour
-    /// noise of both. A floor of 1/1000 of the peak keeps every wavelength
-    /// of 360–830 nm possible (a dispersive path carries what it is given).
+    /// The film estimates each of R, G, B from a sample's four wavelengths,
+    /// `u` and its rotations by ¼ ([`super::SampledWavelengths::sample_visible`]).
+    /// For one wavelength alone, the density that minimises the sum of the
+    /// three variances for a flat spectrum is ∝ ‖(r̄, ḡ, b̄)‖ (the
+    /// vector-valued case of importance sampling; Veach 1997, §2.5); the four
+    /// rotations already spread the wavelengths over the range, and for them
+    /// a flatter density, visiting the blue and red ends more, leaves less:
+    /// the square root (the best of the powers 0.3–1 tried) gives a quarter
+    /// of the norm's colour variance for D65 white and a third over random
+    /// smooth reflectances under D65 (BENCHMARKS.md, which also measures the
+    /// renders). pbrt-v4's luminance-shaped density (∝ 1 / cosh²(0.0072
+    /// (λ − 538))) is further off still. The floor of [`WavelengthCells`]
+    /// keeps every wavelength of 360–830 nm possible (a dispersive path
+    /// carries what it is given).
     ///
     /// The inverse CDF is tabulated at [`SAMPLING_CELLS`] cells of equal
     /// probability, so drawing is a lookup and a lerp (no search), and the
     /// density is exactly constant within each cell: 1 / (cells × width).
     #[inline(always)]
     pub fn sample_wavelength(&self, u: f32) -> (f32, f32) {
-        let x = u * SAMPLING_CELLS as f32;
-        let cell = (x as u32 as usize).min(SAMPLING_CELLS - 1);
-        let (a, b) = (self.sampling_edges_nm[cell], self.sampling_edges_nm[cell + 1]);
-        (a + (x - cell as f32) * (b - a), self.sampling_pdf[cell])
+        self.wavelength_cells.sample(u)
     }
 
     /// The density, per nm, [`CieTables::sample_wavelength`] draws
     /// `lambda_nm` with (zero outside 360–830 nm).
     pub fn wavelength_pdf(&self, lambda_nm: f32) -> f32 {
-        if !(LAMBDA_MIN_NM..=LAMBDA_MAX_NM).contains(&lambda_nm) {
-            return 0.0;
-        }
-        let cell = self.sampling_edges_nm.partition_point(|&e| e <= lambda_nm);
-        self.sampling_pdf[cell.clamp(1, SAMPLING_CELLS) - 1]
+        self.wavelength_cells.pdf(lambda_nm)
     }
 
     /// Index and fraction of `lambda_nm` on the 1 nm grid, or `None` outside it.

@@ -484,8 +484,9 @@ mod tests {
 
     /// The density samples where R and B need it, not only where luminance
     /// does: the colour noise of D65's sRGB estimate (four hero-rotated
-    /// wavelengths, u stratified) is under half what pbrt-v4's
-    /// luminance-shaped density gives, and both estimates are unbiased.
+    /// wavelengths, u stratified) is under 0.3× what the density ∝
+    /// ‖(r̄, ḡ, b̄)‖ gives (0.22× measured), which is itself under half of
+    /// pbrt-v4's luminance-shaped density's; all three are unbiased.
     #[test]
     fn wavelength_sampling_lowers_colour_noise() {
         let tables = cie::tables();
@@ -494,6 +495,12 @@ mod tests {
             let t = 0.856_910_6 - 1.827_502 * u;
             (538.0 - 138.888_89 * t.atanh(), 0.003_939_804 * (1.0 - t * t))
         };
+        // The density ∝ ‖(r̄, ḡ, b̄)‖ itself, optimal for one wavelength alone.
+        let norm_weights: Vec<f64> = (0..cie::SAMPLES)
+            .map(|i| f64::from(tables.rgb_bar(LAMBDA_MIN_NM + i as f32).length()))
+            .collect();
+        let norm_cells = cie::WavelengthCells::new(&norm_weights);
+        let norm = |u: f32| norm_cells.sample(u);
         let ours = |u: f32| tables.sample_wavelength(u);
         let variance = |sample: &dyn Fn(f32) -> (f32, f32)| {
             let n = 20_000;
@@ -512,8 +519,12 @@ mod tests {
             assert!((mean - Vec3::ONE).abs().max_element() < 2e-3, "D65 is white: {mean}");
             estimates.iter().map(|e| (*e - mean).length_squared()).sum::<f32>() / n as f32
         };
-        let (ours, pbrt) = (variance(&ours), variance(&pbrt));
-        assert!(ours < 0.5 * pbrt, "variance {ours} against pbrt's density's {pbrt}");
+        let (ours, norm, pbrt) = (variance(&ours), variance(&norm), variance(&pbrt));
+        assert!(ours < 0.3 * norm, "variance {ours} against the norm's density's {norm}");
+        assert!(
+            norm < 0.5 * pbrt,
+            "variance {norm} of the norm's density against pbrt's {pbrt}"
+        );
     }
 
     /// Terminating the secondaries leaves an estimate with the same mean: the
