@@ -178,6 +178,7 @@ const SOBOL_REV_VECTORS: [[u32; 4]; 16] = [
 /// four dimensions is two lookups instead of a loop over up to 16 bits.
 static SOBOL_BYTE_SUMS: [[[u32; 4]; 256]; 2] = sobol_byte_sums();
 
+/// [`SOBOL_BYTE_SUMS`], computed by the compiler.
 const fn sobol_byte_sums() -> [[[u32; 4]; 256]; 2] {
     let mut sums = [[[0u32; 4]; 256]; 2];
     let mut byte = 0;
