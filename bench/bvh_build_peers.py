@@ -1,6 +1,9 @@
 #!/usr/bin/env python3
 """BVH build speed of lenspath against tinybvh's single-threaded builders, on the
-same triangles, interleaved round by round so machine drift hits both alike.
+same triangles, interleaved round by round so machine drift hits both alike:
+its binary-tree builders (`Build`, `BuildAVX`) and its build of the 8-wide CPU
+layout (`BVH8_CPU::Build`, BuildAVX then a conversion), the kind of tree
+lenspath's build returns.
 
 tinybvh (https://github.com/jbikker/tinybvh) is taken from the tinybvh-rs crate on
 crates.io, which vendors tiny_bvh.h; the peer program is bench/peers/tinybvh_build.cpp

@@ -16,8 +16,10 @@ pub fn within_scene_range(p: Vec3) -> bool {
 /// A linear RGB radiometric quantity (radiance, reflectance, power...).
 pub type Rgb = Vec3;
 
-/// An axis-aligned bounding box. Empty boxes have `min > max`.
+/// An axis-aligned bounding box. Empty boxes have `min > max`. `repr(C)`:
+/// the BVH build loads one as 32 bytes, min then max.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
 pub struct Bounds3 {
     /// Lower corner.
     pub min: Vec3A,
