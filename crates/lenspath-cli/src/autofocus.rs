@@ -9,13 +9,13 @@ use clap::Args;
 use lenspath::accel::BvhSettings;
 use lenspath::autofocus::plot::{focus_curve_svg, Series};
 use lenspath::autofocus::{AutofocusResult, Focuser, Strategy};
-use lenspath::camera::{LensFocus, RealisticCamera, RealisticCameraSettings};
+use lenspath::camera::{LensFocus, RealisticCameraSettings};
 use lenspath::defaults;
 use lenspath::film::NormalizedRect;
-use lenspath::io::image::{check_output_path, write_image};
+use lenspath::io::image::{check_output_path, write_image_with_header};
 use lenspath::io::{check_writable, write_text};
 use lenspath::render::{render, RenderSettings};
-use lenspath::setup::{resolve_autofocus, AutofocusOverrides};
+use lenspath::setup::{resolve_autofocus, AutofocusOverrides, CameraSettings, RenderSetup};
 use lenspath::{Error, Result};
 use serde_json::json;
 
@@ -113,7 +113,7 @@ pub fn run(args: AutofocusArgs) -> Result<Outcome> {
     if let Some(path) = &args.plot {
         check_writable(path)?;
     }
-    let (_, scene, options) = args.scene.load()?;
+    let (scene_name, scene, options) = args.scene.load()?;
     let view = scene
         .view
         .ok_or_else(|| Error::InvalidArgument("the scene has no camera".into()))?;
@@ -183,17 +183,27 @@ pub fn run(args: AutofocusArgs) -> Result<Outcome> {
             threads: args.threads,
             ..Default::default()
         };
-        let camera = RealisticCamera::new(
-            view.pose,
-            width,
-            height,
-            &RealisticCameraSettings {
+        // As `lenspath render` would set it up, so the EXR carries the same
+        // header (lens, f-number, the sensor position found, the settings).
+        let setup = RenderSetup {
+            settings,
+            camera: CameraSettings::Realistic(RealisticCameraSettings {
                 focus: LensFocus::SensorPositionMm(result.sensor_z_mm),
                 ..lens
-            },
+            }),
+            pose: view.pose,
+            sensor: None,
+        };
+        let camera = setup.build_camera()?;
+        let output = render(
+            &compiled,
+            camera.as_ref(),
+            &setup.settings,
+            &|_, _| {},
+            &AtomicBool::new(false),
         )?;
-        let output = render(&compiled, &camera, &settings, &|_, _| {}, &AtomicBool::new(false))?;
-        write_image(path, &output.image, 0.0)?;
+        let header = setup.image_header(&scene_name, None)?;
+        write_image_with_header(path, &output.image, 0.0, &header)?;
         eprintln!("rendered {}x{} focused there -> {}", width, height, path.display());
     }
     Ok(Outcome::Done)

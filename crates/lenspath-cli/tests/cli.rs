@@ -54,6 +54,39 @@ fn renders_png_and_exr_with_a_summary_line() {
     assert_eq!(names.len(), 2, "{names:?}");
 }
 
+/// `autofocus --render` writes the header `render` would: the lens, its
+/// f-number and the sensor position autofocus found.
+#[test]
+fn an_autofocus_render_carries_the_render_header() {
+    use lenspath::io::exr::HeaderValue;
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("focused.exr");
+    let o = lenspath(&[
+        "autofocus",
+        "--patch",
+        "0.4,0.6,0.2,0.2",
+        "--res",
+        "48x36",
+        "--fstop",
+        "4",
+        "--json",
+        "--render",
+        out.to_str().unwrap(),
+        "--render-spp",
+        "1",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let found: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let sensor_mm = found["sensor_position_mm"].as_f64().unwrap() as f32;
+    let (image, header) = lenspath::io::image::read_exr_with_header(&out).unwrap();
+    assert_eq!((image.width, image.height), (48, 36));
+    let a = &header.attributes;
+    assert_eq!(a.get("lenspath/sensorDepthMm"), Some(&HeaderValue::Float(sensor_mm)));
+    assert_eq!(a.get("aperture"), Some(&HeaderValue::Float(4.0)));
+    assert_eq!(a.get("lenspath/lens"), Some(&HeaderValue::Text("dgauss50".into())));
+    assert_eq!(a.get("lenspath/camera"), Some(&HeaderValue::Text("realistic".into())));
+}
+
 #[test]
 fn bad_input_gives_one_error_line_and_exit_code_2() {
     let dir = tempfile::tempdir().unwrap();
