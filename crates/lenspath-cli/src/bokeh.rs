@@ -9,7 +9,8 @@ use lenspath::bokeh::{
     lift_highlights, rgb_planes, CircleOfConfusion, Edges, Kernel, KernelSize, Method, MAX_KERNEL_SIDE_PX,
 };
 use lenspath::camera::{Aperture, ApertureShape};
-use lenspath::io::image::{check_output_path, read_exr, read_gray, read_image, write_image};
+use lenspath::io::exr::HeaderValue;
+use lenspath::io::image::{check_output_path, read_exr, read_gray, read_image, write_image_with_header, ImageHeader};
 use lenspath::lens::{LensPrescription, LensSystem};
 use lenspath::{Error, Result};
 
@@ -202,7 +203,7 @@ pub fn run(args: BokehArgs) -> Result<Outcome> {
                 "--size is for a uniform blur; with depths each pixel's blur size comes from the lens".into(),
             ));
         }
-        return run_depth_blur(&args, input.image, &coc);
+        return run_depth_blur(&args, input.image, &blurred_header(input.header, &args), &coc);
     }
     let kernel = load_kernel(&args.mask, size)?;
     let method = match args.method {
@@ -222,7 +223,7 @@ pub fn run(args: BokehArgs) -> Result<Outcome> {
     let blurred = convolve_planes(&planes, width, height, &kernel, method, edges);
     let seconds = start.elapsed().as_secs_f64();
     interleave_planes(&blurred, &mut output.rgb);
-    write_image(&args.out, &output, 0.0)?;
+    write_image_with_header(&args.out, &output, 0.0, &blurred_header(input.header, &args))?;
     println!(
         "blurred {width}x{height} with a {}x{} kernel by {} in {:.1} ms -> {}",
         kernel.width,
@@ -239,7 +240,12 @@ pub fn run(args: BokehArgs) -> Result<Outcome> {
 }
 
 /// Depth-aware blur of `image` and the report line.
-fn run_depth_blur(args: &BokehArgs, mut image: lenspath::film::Image, coc: &CircleOfConfusion) -> Result<Outcome> {
+fn run_depth_blur(
+    args: &BokehArgs,
+    mut image: lenspath::film::Image,
+    header: &ImageHeader,
+    coc: &CircleOfConfusion,
+) -> Result<Outcome> {
     let depth = match &args.depth.depth {
         Some(path) => {
             let map = read_exr(path)?;
@@ -278,13 +284,22 @@ fn run_depth_blur(args: &BokehArgs, mut image: lenspath::film::Image, coc: &Circ
         .map(|&z| coc.diameter_px(f64::from(z)).abs())
         .fold(0.0, f64::max);
     image.rgb = blurred;
-    write_image(&args.out, &image, 0.0)?;
+    write_image_with_header(&args.out, &image, 0.0, header)?;
     println!(
         "blurred {width}x{height} by depth (circles of confusion up to {largest:.1} px) in {:.1} ms -> {}",
         seconds * 1e3,
         args.out.display()
     );
     Ok(Outcome::Done)
+}
+
+/// The input's header (an EXR's: camera, lens, settings), carried over to the
+/// blurred image with the blur's mask under `lenspath/bokehMask`.
+fn blurred_header(mut header: ImageHeader, args: &BokehArgs) -> ImageHeader {
+    header
+        .attributes
+        .insert("lenspath/bokehMask".into(), HeaderValue::Text(args.mask.clone()));
+    header
 }
 
 /// The shape of `--mask`: an image file, or else a named shape.

@@ -87,6 +87,42 @@ fn an_autofocus_render_carries_the_render_header() {
     assert_eq!(a.get("lenspath/camera"), Some(&HeaderValue::Text("realistic".into())));
 }
 
+/// `bokeh` carries an EXR's header over to the blurred image (the camera,
+/// the scene, the settings) and names the blur's mask in it.
+#[test]
+fn a_blurred_exr_keeps_its_header() {
+    use lenspath::io::exr::HeaderValue;
+    let dir = tempfile::tempdir().unwrap();
+    let (sharp, blurred) = (dir.path().join("sharp.exr"), dir.path().join("blurred.exr"));
+    let o = lenspath(&[
+        "render",
+        "--res",
+        "32x24",
+        "--spp",
+        "1",
+        "--out",
+        sharp.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = lenspath(&[
+        "bokeh",
+        sharp.to_str().unwrap(),
+        "--mask",
+        "blades:6",
+        "--size",
+        "5",
+        "--out",
+        blurred.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (_, before) = lenspath::io::image::read_exr_with_header(&sharp).unwrap();
+    let (_, after) = lenspath::io::image::read_exr_with_header(&blurred).unwrap();
+    assert!(before.attributes.contains_key("worldToCamera"));
+    let mut expected = before.attributes.clone();
+    expected.insert("lenspath/bokehMask".into(), HeaderValue::Text("blades:6".into()));
+    assert_eq!(after.attributes, expected);
+}
+
 #[test]
 fn bad_input_gives_one_error_line_and_exit_code_2() {
     let dir = tempfile::tempdir().unwrap();

@@ -68,14 +68,19 @@ pub struct ReadImage {
     /// Whether the file held display-referred 8- or 16-bit sRGB values (PNG,
     /// JPEG) rather than linear floats (EXR): its highlights are clipped at 1.
     pub display_referred: bool,
+    /// An EXR's header (empty for PNG and JPEG): what a tool that writes
+    /// the processed image carries over.
+    pub header: ImageHeader,
 }
 
 /// Reads a PNG, JPEG or EXR image as linear RGB (see [`ReadImage`]).
 pub fn read_image(path: &Path) -> Result<ReadImage> {
     if is_exr(path) {
+        let (image, header) = read_exr_with_header(path)?;
         return Ok(ReadImage {
-            image: read_exr(path)?,
+            image,
             display_referred: false,
+            header,
         });
     }
     let decoded = decode(path)?.to_rgb32f();
@@ -91,6 +96,7 @@ pub fn read_image(path: &Path) -> Result<ReadImage> {
             spp_requested: 0,
         },
         display_referred: true,
+        header: ImageHeader::default(),
     })
 }
 
