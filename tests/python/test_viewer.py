@@ -289,11 +289,17 @@ def test_saved_settings_render_the_saved_image_bit_for_bit(chromium, viewer: Vie
     # (Compared as booleans: pytest's diff of two differing images would take minutes.)
     same_png = (tmp_path / "viewer.png").read_bytes() == (tmp_path / "cli.png").read_bytes()
     assert same_png, "the PNG differs"
-    # The EXR's channels bit for bit; its header is the CLI's alone (it names the scene file).
+    # The EXR's channels bit for bit, and the header's camera and settings (not the scene's
+    # name or the comments: the CLI names the scene file).
     ours, theirs = lenspath.read_exr(tmp_path / "viewer.exr"), lenspath.read_exr(tmp_path / "cli.exr")
     assert sorted(ours["channels"]) == sorted(theirs["channels"]) == ["B", "G", "R", "Z"]
     for name, values in ours["channels"].items():
         assert np.array_equal(values, theirs["channels"][name]), f"the EXR's {name} differs"
+    same = ["worldToCamera", "aperture", "lenspath/camera", "lenspath/lens", "lenspath/integrator"]
+    same += ["lenspath/maxDepth", "lenspath/lightSamples", "lenspath/sampler", "lenspath/seed"]
+    for name in same:
+        assert name in ours["attributes"], f"the viewer's EXR has no {name}"
+        assert np.array_equal(ours["attributes"][name], theirs["attributes"][name]), name
 
 
 def test_orbit_zoom_and_pan_move_the_camera(chromium, viewer: Viewer) -> None:

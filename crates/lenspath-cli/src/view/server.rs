@@ -26,8 +26,9 @@ use axum::middleware::{self, Next};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
 use axum::{Json, Router};
-use lenspath::io::image::{encode_image, ImageFormat};
+use lenspath::io::image::{encode_image, ImageFormat, ImageHeader};
 use lenspath::render::{render_depth, RenderSettings};
+use lenspath::setup::{CameraSettings, RenderSetup};
 use lenspath::Error;
 use serde_json::{json, Value};
 use tokio::sync::broadcast::error::RecvError;
@@ -216,7 +217,7 @@ fn encode(session: &Session, frame: &Frame, what: Download) -> lenspath::Result<
     let stem = format!("lenspath-view-{}spp", frame.image.spp_min);
     Ok(match what {
         Download::Png => (
-            encode_image(&frame.image, ImageFormat::Png, 0.0)?,
+            encode_image(&frame.image, ImageFormat::Png, 0.0, &ImageHeader::default())?,
             "image/png",
             format!("{stem}.png"),
         ),
@@ -228,8 +229,19 @@ fn encode(session: &Session, frame: &Frame, what: Download) -> lenspath::Result<
                 ..frame.view.render
             };
             image.depth = render_depth(&session.scene, &frame.view.camera, &settings)?;
+            // The header `lenspath render` writes for the same render.
+            let setup = RenderSetup {
+                settings: RenderSettings {
+                    spp: frame.image.spp_min,
+                    ..frame.view.render
+                },
+                camera: CameraSettings::Realistic(frame.view.lens_settings.clone()),
+                pose: frame.view.pose,
+                sensor: None,
+            };
+            let header = setup.image_header(&session.scene_name, None)?;
             (
-                encode_image(&image, ImageFormat::Exr, 0.0)?,
+                encode_image(&image, ImageFormat::Exr, 0.0, &header)?,
                 "image/x-exr",
                 format!("{stem}.exr"),
             )

@@ -161,11 +161,12 @@ pub fn write_image_with_header(path: &Path, image: &Image, exposure: f32, header
     write_atomically(path, |tmp| std::fs::write(tmp, &bytes).map_err(|e| io_error(tmp, e)))
 }
 
-/// The bytes of `image` as a `format` file (what [`write_image`] writes).
-pub fn encode_image(image: &Image, format: ImageFormat, exposure: f32) -> Result<Vec<u8>> {
+/// The bytes of `image` as a `format` file (what [`write_image_with_header`]
+/// writes; a PNG ignores `header`).
+pub fn encode_image(image: &Image, format: ImageFormat, exposure: f32, header: &ImageHeader) -> Result<Vec<u8>> {
     match format {
         ImageFormat::Png => encode_8bit(image, exposure, ::image::ImageFormat::Png),
-        ImageFormat::Exr => encode_exr(&exr_of_image(image, &ImageHeader::default())),
+        ImageFormat::Exr => encode_exr(&exr_of_image(image, header)),
     }
 }
 
