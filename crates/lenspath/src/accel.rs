@@ -424,10 +424,6 @@ impl<T: Copy> Bvh<T> {
         let root_centroids = bounds.iter().fold(Bounds3::EMPTY, |b, p| b.grow(p.centroid()));
         let root_area = root_bounds.surface_area().max(f32::MIN_POSITIVE);
         let mut bin_grids: Box<[[[Bin; 3]; 256]; 2]> = Box::new([[[EMPTY_BIN; 3]; 256]; 2]);
-        #[cfg(target_arch = "x86_64")]
-        let avx = std::is_x86_feature_detected!("avx");
-        #[cfg(not(target_arch = "x86_64"))]
-        let avx = false;
         let mut right_area = vec![[0f32; 3]; bins];
         let mut right_count = vec![[0u32; 3]; bins];
         let mut stack = Vec::with_capacity(128);
@@ -515,7 +511,6 @@ impl<T: Copy> Bvh<T> {
                     cmin,
                     scale,
                     last: Vec3A::splat(last),
-                    avx,
                 };
                 if axes.len() == 3 {
                     // Even and odd primitives go to separate grids, merged
@@ -982,8 +977,6 @@ struct Binner {
     cmin: Vec3A,
     scale: Vec3A,
     last: Vec3A,
-    /// Whether to bin with AVX (the same results, one instruction a box).
-    avx: bool,
 }
 
 impl Binner {
@@ -1000,13 +993,19 @@ impl Binner {
         bin.count += 1;
     }
 
-    /// Bins `prims` along all three axes, even ones into `grid`, odd ones into `odd_grid`.
+    /// Bins `prims` along all three axes, even ones into `grid`, odd ones
+    /// into `odd_grid`: with AVX where the CPU has it (the same bins).
     fn bin_all_axes(&self, grid: &mut [[Bin; 3]; 256], odd_grid: &mut [[Bin; 3]; 256], prims: &[Bounds3]) {
         #[cfg(target_arch = "x86_64")]
-        if self.avx {
-            // SAFETY: `avx` is set only where the CPU has AVX.
+        if cpu_has_avx() {
+            // SAFETY: the CPU has the feature the function is compiled for.
             return unsafe { self.bin_all_axes_avx(grid, odd_grid, prims) };
         }
+        self.bin_all_axes_portable(grid, odd_grid, prims);
+    }
+
+    /// [`Binner::bin_all_axes`] without SIMD beyond the baseline.
+    fn bin_all_axes_portable(&self, grid: &mut [[Bin; 3]; 256], odd_grid: &mut [[Bin; 3]; 256], prims: &[Bounds3]) {
         let mut pairs = prims.chunks_exact(2);
         for pair in &mut pairs {
             let (k0, k1) = (self.indices(&pair[0]), self.indices(&pair[1]));
@@ -1145,6 +1144,12 @@ fn bin_indices(v: Vec3A) -> [u32; 3] {
     {
         [v.x as u32, v.y as u32, v.z as u32]
     }
+}
+
+/// Whether this CPU runs the AVX binning of the BVH build.
+#[cfg(target_arch = "x86_64")]
+fn cpu_has_avx() -> bool {
+    std::is_x86_feature_detected!("avx")
 }
 
 /// Whether this CPU runs the AVX2 traversal (it needs AVX2 and FMA).
@@ -1458,7 +1463,7 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn avx_binning_matches_the_portable_one_bit_for_bit() {
-        if !std::is_x86_feature_detected!("avx") {
+        if !cpu_has_avx() {
             eprintln!("skipped: this CPU has no AVX");
             return;
         }
@@ -1470,11 +1475,10 @@ mod tests {
         prims[8].max.y = -0.0;
         let all = prims.iter().fold(Bounds3::EMPTY, |b, p| b.union(*p));
         let bins = 8;
-        let binner = |avx| Binner {
+        let binner = Binner {
             cmin: all.min,
             scale: Vec3A::splat(bins as f32 * (1.0 - 1e-6)) / all.diagonal(),
             last: Vec3A::splat((bins - 1) as f32),
-            avx,
         };
         let bits = |bin: &Bin| {
             let b = bin.bounds();
@@ -1485,10 +1489,11 @@ mod tests {
             )
         };
         let mut grids = [(); 2].map(|_| Box::new([[[EMPTY_BIN; 3]; 256]; 2]));
-        for (avx, grid) in [false, true].into_iter().zip(&mut grids) {
-            let [even, odd] = &mut **grid;
-            binner(avx).bin_all_axes(even, odd, &prims);
-        }
+        let [even, odd] = &mut *grids[0];
+        binner.bin_all_axes_portable(even, odd, &prims);
+        let [even, odd] = &mut *grids[1];
+        // SAFETY: the CPU has AVX (checked above).
+        unsafe { binner.bin_all_axes_avx(even, odd, &prims) };
         for (g, (portable, avx)) in grids[0].iter().zip(grids[1].iter()).enumerate() {
             for (k, (p, a)) in portable.iter().zip(avx.iter()).enumerate().take(bins) {
                 for axis in 0..3 {

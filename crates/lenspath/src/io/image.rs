@@ -153,11 +153,7 @@ pub fn write_image(path: &Path, image: &Image, exposure: f32) -> Result<()> {
 
 /// [`write_image`], an EXR carrying `header` (a PNG ignores it).
 pub fn write_image_with_header(path: &Path, image: &Image, exposure: f32, header: &ImageHeader) -> Result<()> {
-    let format = ImageFormat::from_path(path)?;
-    let bytes = match format {
-        ImageFormat::Png => encode_8bit(image, exposure, ::image::ImageFormat::Png)?,
-        ImageFormat::Exr => encode_exr(&exr_of_image(image, header))?,
-    };
+    let bytes = encode_image(image, ImageFormat::from_path(path)?, exposure, header)?;
     write_atomically(path, |tmp| std::fs::write(tmp, &bytes).map_err(|e| io_error(tmp, e)))
 }
 
