@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
-"""BVH build speed of lenspath against tinybvh's single-threaded builders, on the
-same triangles, interleaved round by round so machine drift hits both alike:
-its binary-tree builders (`Build`, `BuildAVX`) and its build of the 8-wide CPU
-layout (`BVH8_CPU::Build`, BuildAVX then a conversion), the kind of tree
-lenspath's build returns.
+"""BVH build speed of lenspath against tinybvh's builders, on the same triangles,
+interleaved round by round so machine drift hits both alike: its binary-tree
+builders (`Build`, `BuildAVX`) and its build of the 8-wide CPU layout
+(`BVH8_CPU::Build`, BuildAVX then a conversion), the kind of tree lenspath's
+build returns. Twice: on one thread (tinybvh's single-threaded builds), and on
+every core (tinybvh's threaded builds, lenspath's parallel one).
 
 tinybvh (https://github.com/jbikker/tinybvh) is taken from the tinybvh-rs crate on
 crates.io, which vendors tiny_bvh.h; the peer program is bench/peers/tinybvh_build.cpp
@@ -14,6 +15,7 @@ access to crates.io the first time.
 """
 
 import argparse
+import itertools
 import json
 import pathlib
 import statistics
@@ -54,28 +56,32 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         work = pathlib.Path(tmp)
         header = tiny_bvh_header(work)
-        peer = work / "tinybvh_build"
-        subprocess.run(
-            [
-                "g++",
-                "-O3",
-                "-march=native",
-                "-std=c++17",
-                f"-I{header.parent}",
-                str(ROOT / "bench" / "peers" / "tinybvh_build.cpp"),
-                "-o",
-                str(peer),
-                "-lpthread",
-            ],
-            check=True,
-        )
+        # The peer twice: single-threaded, and with tinybvh's threaded builds.
+        peers = {"1 thread": work / "tinybvh_build", "all cores": work / "tinybvh_build_threaded"}
+        for peer, define in zip(peers.values(), ([], ["-DPEER_THREADED"]), strict=True):
+            subprocess.run(
+                [
+                    "g++",
+                    "-O3",
+                    "-march=native",
+                    "-std=c++17",
+                    *define,
+                    f"-I{header.parent}",
+                    str(ROOT / "bench" / "peers" / "tinybvh_build.cpp"),
+                    "-o",
+                    str(peer),
+                    "-lpthread",
+                ],
+                check=True,
+            )
         meshes = {"torus knot 1M": ["--procedural", "1000000"]}
         dragon = ROOT.parent / "shared" / "meshes" / "dragon_100k.ply"
         if dragon.exists():
             meshes["dragon 100k"] = [str(dragon)]
         else:
             print(f"skipping the dragon: {dragon} not found")
-        for mesh_name, source in meshes.items():
+        for (setting, peer), (mesh_name, source) in itertools.product(peers.items(), meshes.items()):
+            threads = ["--threads", "1"] if setting == "1 thread" else []
             ply = work / "mesh.ply"
             # Costs 1:8 (lenspath's default, pbrt's) and 1:1 (tinybvh's default).
             for intersection_cost in (8, 1):
@@ -91,8 +97,7 @@ def main() -> None:
                                 *source,
                                 "--rays",
                                 "1000",
-                                "--threads",
-                                "1",
+                                *threads,
                                 "--json",
                                 "--intersection-cost",
                                 str(intersection_cost),
@@ -114,7 +119,10 @@ def main() -> None:
                         times.setdefault(theirs["builder"], []).append(theirs["build_ms_min"])
                         nodes[theirs["builder"]] = theirs["nodes"]
                 triangles = ours["triangles"]
-                print(f"\n{mesh_name}, {triangles} triangles, costs 1:{intersection_cost}, {args.rounds} rounds")
+                print(
+                    f"\n{mesh_name}, {triangles} triangles, costs 1:{intersection_cost}, {setting} "
+                    f"({ours['threads']} for lenspath), {args.rounds} rounds"
+                )
                 reference = statistics.median(times["lenspath"])
                 for builder, ms in times.items():
                     median = statistics.median(ms)

@@ -1,9 +1,12 @@
-// Peer for `lenspath bench bvh`: times tinybvh's single-threaded SAH builders
-// (BVH::Build, the scalar reference, and BVH::BuildAVX) on the same triangles,
-// and its build of the 8-wide CPU layout (BVH8_CPU::Build).
+// Peer for `lenspath bench bvh`: times tinybvh's SAH builders (BVH::Build, the
+// scalar reference, and BVH::BuildAVX) on the same triangles, and its build of
+// the 8-wide CPU layout (BVH8_CPU::Build). Single-threaded unless compiled with
+// -DPEER_THREADED (tinybvh's own threaded builds, on every core).
 // Reads the binary PLY written by `lenspath bench bvh --save-mesh`.
 // Usage: tinybvh_build MESH.ply C_INT ROUNDS  -> one JSON line per builder.
+#ifndef PEER_THREADED
 #define NO_THREADED_BUILDS
+#endif
 #define TINYBVH_IMPLEMENTATION
 #include "tiny_bvh.h"
 

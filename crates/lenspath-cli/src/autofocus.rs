@@ -60,7 +60,7 @@ pub struct AutofocusArgs {
     /// Seed of the patch renders.
     #[arg(long, default_value_t = defaults::AUTOFOCUS_SEED)]
     seed: u32,
-    /// Worker threads (default: all cores).
+    /// Worker threads, for the BVH build and the rendering (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
     /// Print one JSON object instead of text.
@@ -119,7 +119,8 @@ pub fn run(args: AutofocusArgs) -> Result<Outcome> {
         .ok_or_else(|| Error::InvalidArgument("the scene has no camera".into()))?;
     let patch = args.patch;
     let search = resolve_autofocus(&options, &view, patch, &overrides(&args)?)?;
-    let compiled = scene.compile(&BvhSettings::default())?;
+    // The BVH is built on the worker threads asked for (the same tree on any number).
+    let compiled = lenspath::parallel::worker_pool(args.threads)?.install(|| scene.compile(&BvhSettings::default()))?;
     let (width, height) = (search.settings.width, search.settings.height);
     let lens = search.settings.camera.clone();
     let strategy = search.strategy;

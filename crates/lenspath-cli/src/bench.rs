@@ -29,7 +29,7 @@ pub struct BvhArgs {
     /// Rays per traversal measurement.
     #[arg(long, default_value_t = 1_000_000)]
     rays: usize,
-    /// Threads for the traversal measurements (default: all cores).
+    /// Threads for the build and the traversal measurements (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
     /// SAH bins per axis.
@@ -136,11 +136,12 @@ pub fn run_bvh(args: BvhArgs) -> Result<Outcome> {
         intersection_cost: args.intersection_cost,
         ..Default::default()
     };
-    let bvh = Bvh::build(prims, &settings);
+    // Built on the threads the rays are traced on.
+    let pool = lenspath::parallel::worker_pool(args.threads)?;
+    let bvh = pool.install(|| Bvh::build(prims, &settings));
     let stats = *bvh.stats();
     let bounds = bvh.bounds();
     let (lo, hi) = (Vec3::from(bounds.min), Vec3::from(bounds.max));
-    let pool = lenspath::parallel::worker_pool(args.threads)?;
     let coherent = coherent_rays(lo, hi, args.rays);
     let incoherent = incoherent_rays(lo, hi, args.rays);
     let (coherent_mrays, coherent_hits) = trace(&bvh, &coherent, &pool);

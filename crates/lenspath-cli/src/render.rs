@@ -61,7 +61,7 @@ pub struct RenderArgs {
     /// Image size, WIDTHxHEIGHT.
     #[arg(long, value_parser = parse_resolution)]
     res: Option<Resolution>,
-    /// Worker threads (default: all cores).
+    /// Worker threads, for the BVH build and the rendering (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
     /// Seed of the sample sequences; the same seed gives the same image.
@@ -308,7 +308,8 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
     }
     // Hashed only for checkpoints: a million triangles take a tenth of a second.
     let scene_hash = checkpoint_path.is_some().then(|| scene_hasher(&scene));
-    let compiled = scene.compile(&BvhSettings::default())?;
+    // The BVH is built on the worker threads asked for (the same tree on any number).
+    let compiled = lenspath::parallel::worker_pool(args.threads)?.install(|| scene.compile(&BvhSettings::default()))?;
     if let Some(patch) = args.autofocus {
         let search = autofocus_before_render(&setup, patch)?;
         let scene_unit_m = search.settings.camera.scene_unit_m;

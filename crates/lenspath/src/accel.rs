@@ -1,24 +1,21 @@
-//! The bounding volume hierarchy: binned SAH construction without recursion
-//! into a flattened depth-first binary tree, that tree collapsed to 8
-//! children a node with leaves of up to 8 primitives in packs of four
-//! triangles, and closest-hit / any-hit traversal of the wide tree (one SIMD
-//! slab test for eight boxes, AVX2 where the CPU has it, one SIMD watertight
-//! test for four triangles), checked against the binary tree's.
-//!
-//! Construction follows Wald, "On fast Construction of SAH-based Bounding
-//! Volume Hierarchies" (2007) and pbrt-v4 `BVHAggregate`: primitives are
-//! binned by centroid along all three axes and the split minimising
-//! `C_trav + C_isect · (SA(L)·N(L) + SA(R)·N(R)) / SA(P)` is taken.
+//! The bounding volume hierarchy: a binned SAH binary tree (built in
+//! parallel, see [`build`]) collapsed to 8 children a node with leaves of up
+//! to 8 primitives in packs of four triangles, and closest-hit / any-hit
+//! traversal of the wide tree (one SIMD slab test for eight boxes, AVX2
+//! where the CPU has it, one SIMD watertight test for four triangles),
+//! checked against the binary tree's.
 
 use std::mem::MaybeUninit;
 use std::time::Instant;
 
 use glam::{Vec3, Vec3A, Vec4};
+use rayon::prelude::*;
 
 use crate::math::Bounds3;
 use crate::ray::Ray;
 use crate::shapes::{intersect_sphere, intersect_triangle, intersect_triangles4, triangle_bounds, TriangleRay};
 
+mod build;
 mod packet;
 pub use packet::SHADOW_PACKET;
 
@@ -119,29 +116,6 @@ pub struct Hit {
     pub b2: f32,
 }
 
-/// A flattened node: 32 bytes. Interior nodes have their first child right
-/// after them and store the second child's index in `offset`; leaves store
-/// their first primitive in `offset` and a non-zero `count`.
-#[derive(Clone, Copy, Debug)]
-#[repr(C, align(32))]
-struct Node {
-    min: [f32; 3],
-    offset: u32,
-    max: [f32; 3],
-    count: u16,
-    axis: u16,
-}
-
-impl Node {
-    /// Its box.
-    fn bounds(&self) -> Bounds3 {
-        Bounds3 {
-            min: Vec3A::from_array(self.min),
-            max: Vec3A::from_array(self.max),
-        }
-    }
-}
-
 /// A node of the wide tree: its children's boxes side by side (one SIMD
 /// lane each, as Embree and tinybvh lay them out), so one slab test meets all
 /// eight; 256 bytes, on four cache lines. A child is a leaf when its `count`
@@ -192,23 +166,6 @@ const QUADS: usize = WIDTH / 4;
 /// Primitives in one [`TrianglePack`].
 const PACK: usize = 4;
 
-/// The largest subtree the collapse turns into one wide leaf (two packs).
-/// Measured on the dragon, Lucy and the 1 M knot (one thread, interleaved
-/// rounds): against four, incoherent rays +8 to +26% and coherent ones
-/// −3 to +8%; against twelve, or a SAH choice between a subtree and its
-/// packs, faster on all three.
-const WIDE_LEAF_PRIMITIVES: usize = 2 * PACK;
-
-/// ... when its box has at most this fraction of the root box's surface
-/// area. Deep in a mesh's tree (where such subtrees have 10⁻⁴ of it) a
-/// leaf's packs save the box tests of its last levels; but a few large
-/// primitives near the root, such as the walls of a room, are better in
-/// their own boxes, which only the rays that hit them enter (a flat box
-/// around an axis-aligned quad is the quad). Measured on cornell-spheres
-/// (callgrind, 160×120, 8 spp): 1.12 G instructions without the area bound,
-/// 0.92 G with it; the dragon's tree is unchanged.
-const WIDE_LEAF_MAX_AREA_FRACTION: f32 = 0.01;
-
 /// A BVH over triangles and spheres, with `T` the caller's per-primitive tag
 /// (for the scene: which shape a primitive came from).
 #[derive(Clone, Debug)]
@@ -216,7 +173,7 @@ pub struct Bvh<T> {
     /// The binary tree the build makes, kept in tests as the reference
     /// traversal's.
     #[cfg(test)]
-    nodes: Vec<Node>,
+    nodes: Vec<build::Node>,
     /// Bounds of everything in the tree.
     bounds: Bounds3,
     /// The same tree collapsed to [`WIDTH`] children a node: what rays traverse.
@@ -229,51 +186,6 @@ pub struct Bvh<T> {
     stats: BuildStats,
 }
 
-/// A build task: a primitive range and the node it becomes.
-struct Task {
-    start: usize,
-    end: usize,
-    bounds: Bounds3,
-    centroid_bounds: Bounds3,
-    /// Node whose `offset` must point at this task's node (right children).
-    patch_parent: Option<usize>,
-    depth: usize,
-}
-
-/// A SAH bin: the box of its primitives, kept as (−min, max) so that growing
-/// it is one `max` over eight lanes (as tinybvh's `BuildAVX` bins), and
-/// their count.
-#[derive(Clone, Copy)]
-#[repr(C, align(32))]
-struct Bin {
-    neg_min: Vec3A,
-    max: Vec3A,
-    count: u32,
-}
-
-const EMPTY_BIN: Bin = Bin {
-    neg_min: Vec3A::NEG_INFINITY,
-    max: Vec3A::NEG_INFINITY,
-    count: 0,
-};
-
-impl Bin {
-    /// Its box.
-    fn bounds(&self) -> Bounds3 {
-        Bounds3 {
-            min: -self.neg_min,
-            max: self.max,
-        }
-    }
-
-    /// Takes in the primitives of `other`.
-    fn merge(&mut self, other: &Bin) {
-        self.neg_min = self.neg_min.max(other.neg_min);
-        self.max = self.max.max(other.max);
-        self.count += other.count;
-    }
-}
-
 /// 1 + 2γ₃ (pbrt-v4): widens the far slab distance so rounding never
 /// culls a box the ray touches, e.g. the flat box of an axis-aligned quad.
 const SLAB_SAFETY: f32 = 1.0 + 2.0 * 3.0 * f32::EPSILON * 0.5 / (1.0 - 3.0 * f32::EPSILON * 0.5);
@@ -282,8 +194,6 @@ const SLAB_SAFETY: f32 = 1.0 + 2.0 * 3.0 * f32::EPSILON * 0.5 / (1.0 - 3.0 * f32
 struct TraversalRay {
     origin: Vec3A,
     inv_dir: Vec3A,
-    #[cfg(test)]
-    dir_is_neg: [bool; 3],
     tri: TriangleRay,
 }
 
@@ -295,8 +205,6 @@ impl TraversalRay {
         TraversalRay {
             origin: Vec3A::from(ray.origin),
             inv_dir: d.recip(),
-            #[cfg(test)]
-            dir_is_neg: [d.x < 0.0, d.y < 0.0, d.z < 0.0],
             tri: TriangleRay::new(ray),
         }
     }
@@ -391,7 +299,7 @@ impl TraversalRay {
 
     #[cfg(test)]
     #[inline(always)]
-    fn hits_box(&self, node: &Node, t_max: f32) -> bool {
+    fn hits_box(&self, node: &build::Node, t_max: f32) -> bool {
         let t0 = (Vec3A::from_array(node.min) - self.origin) * self.inv_dir;
         let t1 = (Vec3A::from_array(node.max) - self.origin) * self.inv_dir;
         let t_near = t0.min(t1).max_element().max(0.0);
@@ -400,8 +308,9 @@ impl TraversalRay {
     }
 }
 
-impl<T: Copy> Bvh<T> {
-    /// Builds the hierarchy over `prims` (geometry with its tag).
+impl<T: Copy + Send + Sync> Bvh<T> {
+    /// Builds the hierarchy over `prims` (geometry with its tag), in the
+    /// current rayon pool. The tree is the same for any number of threads.
     pub fn build(prims: Vec<(PrimGeometry, T)>, settings: &BvhSettings) -> Bvh<T> {
         let started = Instant::now();
         // Leaf sizes are stored in 16 bits; the SAH never wants huge leaves anyway.
@@ -410,235 +319,12 @@ impl<T: Copy> Bvh<T> {
             max_sah_depth: settings.max_sah_depth.min(32),
             ..*settings
         };
-        let bins = settings.bins.clamp(2, 256);
         let n = prims.len();
-        let mut bounds: Vec<Bounds3> = prims.iter().map(|(g, _)| g.bounds()).collect();
-        let mut order: Vec<u32> = (0..n as u32).collect();
-        let mut nodes: Vec<Node> = Vec::with_capacity(2 * n.max(1) - 1);
-        let mut stats = BuildStats {
-            primitives: n,
-            ..Default::default()
-        };
-
-        let root_bounds = bounds.iter().fold(Bounds3::EMPTY, |b, p| b.union(*p));
-        let root_centroids = bounds.iter().fold(Bounds3::EMPTY, |b, p| b.grow(p.centroid()));
-        let root_area = root_bounds.surface_area().max(f32::MIN_POSITIVE);
-        let mut bin_grids: Box<[[[Bin; 3]; 256]; 2]> = Box::new([[[EMPTY_BIN; 3]; 256]; 2]);
-        let mut right_area = vec![[0f32; 3]; bins];
-        let mut right_count = vec![[0u32; 3]; bins];
-        let mut stack = Vec::with_capacity(128);
-        if n > 0 {
-            stack.push(Task {
-                start: 0,
-                end: n,
-                bounds: root_bounds,
-                centroid_bounds: root_centroids,
-                patch_parent: None,
-                depth: 0,
-            });
-        }
-
-        while let Some(task) = stack.pop() {
-            let index = nodes.len();
-            if let Some(parent) = task.patch_parent {
-                nodes[parent].offset = index as u32;
-            }
-            let count = task.end - task.start;
-            let node_area = task.bounds.surface_area();
-            let parent_area = node_area.max(f32::MIN_POSITIVE);
-            let area_fraction = node_area / root_area;
-            let leaf_cost = settings.intersection_cost * count as f32;
-            stats.max_depth = stats.max_depth.max(task.depth);
-            let push_leaf = |nodes: &mut Vec<Node>, stats: &mut BuildStats| {
-                nodes.push(make_node(&task.bounds, task.start as u32, count as u16, 0));
-                stats.leaves += 1;
-                stats.sah_cost += leaf_cost * area_fraction;
-            };
-
-            // Degenerate: one primitive, or all centroids in one point.
-            let extent = task.centroid_bounds.diagonal();
-            if count == 1 || (extent.max_element() <= 0.0 && count <= settings.max_leaf_size) {
-                push_leaf(&mut nodes, &mut stats);
-                continue;
-            }
-
-            // Two primitives: the only split is one per side; no binning needed.
-            if count == 2 {
-                let (a, b) = (bounds[task.start], bounds[task.start + 1]);
-                let split_cost = settings.traversal_cost
-                    + settings.intersection_cost * (a.surface_area() + b.surface_area()) / parent_area;
-                if count <= settings.max_leaf_size && leaf_cost <= split_cost {
-                    push_leaf(&mut nodes, &mut stats);
-                    continue;
-                }
-                let axis = (a.centroid() - b.centroid()).abs().max_position();
-                nodes.push(make_node(&task.bounds, index as u32 + 2, 0, axis as u16));
-                stats.sah_cost += settings.traversal_cost * area_fraction;
-                for (offset, child) in [a, b].iter().enumerate() {
-                    nodes.push(make_node(child, (task.start + offset) as u32, 1, 0));
-                    stats.leaves += 1;
-                    stats.sah_cost += settings.intersection_cost * child.surface_area() / root_area;
-                }
-                stats.max_depth = stats.max_depth.max(task.depth + 1);
-                continue;
-            }
-
-            // Deep in the tree, halving the range bounds the depth (`max_sah_depth`).
-            let sah_allowed = task.depth < settings.max_sah_depth;
-
-            // Bin the centroids: along all three axes, or only the longest one in
-            // small nodes. Small nodes also use fewer bins, so the sweep costs
-            // no more than the binning.
-            let node_bins = bins.min(count.max(4));
-            let cmin = task.centroid_bounds.min;
-            let scale = Vec3A::select(
-                extent.cmpgt(Vec3A::ZERO),
-                Vec3A::splat(node_bins as f32 * (1.0 - 1e-6)) / extent,
-                Vec3A::ZERO,
-            );
-            let mut split: Option<(usize, usize, f32)> = None;
-            let axes = if count < settings.all_axes_min_primitives {
-                let a = task.centroid_bounds.max_extent_axis();
-                a..a + 1
-            } else {
-                0..3
-            };
-            if extent.max_element() > 0.0 && sah_allowed {
-                let [grid, odd_grid] = &mut *bin_grids;
-                let prims = &bounds[task.start..task.end];
-                let last = (node_bins - 1) as f32;
-                let binner = Binner {
-                    cmin,
-                    scale,
-                    last: Vec3A::splat(last),
-                };
-                if axes.len() == 3 {
-                    // Even and odd primitives go to separate grids, merged
-                    // after: consecutive primitives in one bin then do not wait
-                    // on each other's stores.
-                    reset(grid, node_bins, 0..3);
-                    reset(odd_grid, node_bins, 0..3);
-                    binner.bin_all_axes(grid, odd_grid, prims);
-                    for (bin, odd) in grid[..node_bins].iter_mut().zip(&odd_grid[..node_bins]) {
-                        for axis in 0..3 {
-                            bin[axis].merge(&odd[axis]);
-                        }
-                    }
-                } else {
-                    reset(grid, node_bins, axes.clone());
-                    match axes.start {
-                        0 => binner.bin_one_axis::<0>(grid, prims),
-                        1 => binner.bin_one_axis::<1>(grid, prims),
-                        _ => binner.bin_one_axis::<2>(grid, prims),
-                    }
-                }
-                let bin_grid = &*grid;
-                // Sweep from the right to know the right side of every plane...
-                // An empty bin adds no new plane, so only non-empty bins cost work.
-                let mut acc = [Bounds3::EMPTY; 3];
-                let mut acc_area = [0f32; 3];
-                let mut acc_count = [0u32; 3];
-                for i in (1..node_bins).rev() {
-                    for axis in axes.clone() {
-                        let bin = &bin_grid[i][axis];
-                        if bin.count > 0 {
-                            acc[axis] = acc[axis].union(bin.bounds());
-                            acc_area[axis] = acc[axis].surface_area();
-                            acc_count[axis] += bin.count;
-                        }
-                        right_area[i][axis] = acc_area[axis];
-                        right_count[i][axis] = acc_count[axis];
-                    }
-                }
-                // ...then from the left, evaluating the SAH at each distinct plane.
-                let mut left = [Bounds3::EMPTY; 3];
-                let mut left_count = [0u32; 3];
-                for i in 1..node_bins {
-                    for axis in axes.clone() {
-                        let bin = &bin_grid[i - 1][axis];
-                        if bin.count == 0 {
-                            continue;
-                        }
-                        left[axis] = left[axis].union(bin.bounds());
-                        left_count[axis] += bin.count;
-                        if right_count[i][axis] == 0 {
-                            continue;
-                        }
-                        let cost = settings.traversal_cost
-                            + settings.intersection_cost
-                                * (left[axis].surface_area() * left_count[axis] as f32
-                                    + right_area[i][axis] * right_count[i][axis] as f32)
-                                / parent_area;
-                        if split.is_none_or(|(_, _, c)| cost < c) {
-                            split = Some((axis, i, cost));
-                        }
-                    }
-                }
-            }
-
-            let split_cost = split.map_or(f32::INFINITY, |s| s.2);
-            if count <= settings.max_leaf_size && leaf_cost <= split_cost {
-                push_leaf(&mut nodes, &mut stats);
-                continue;
-            }
-
-            // Partition the range with the binning's own arithmetic, so every
-            // primitive lands on the side its bin is on; the children's
-            // bounds come from the bins, their centroid bounds from this pass.
-            let (axis, mid, left_bounds, right_bounds, left_cb, right_cb) = match split {
-                Some((axis, plane, _)) => {
-                    let part = Partition {
-                        axis_min: cmin[axis],
-                        axis_scale: scale[axis],
-                        plane: plane as f32,
-                    };
-                    let range = task.start..task.end;
-                    let (i, lcb, rcb) = match axis {
-                        0 => part.run::<0>(&mut bounds, &mut order, range),
-                        1 => part.run::<1>(&mut bounds, &mut order, range),
-                        _ => part.run::<2>(&mut bounds, &mut order, range),
-                    };
-                    let bin_grid = &bin_grids[0];
-                    let fold = |range: std::ops::Range<usize>| {
-                        bin_grid[range]
-                            .iter()
-                            .fold(Bounds3::EMPTY, |b, bin| b.union(bin[axis].bounds()))
-                    };
-                    (axis, i, fold(0..plane), fold(plane..node_bins), lcb, rcb)
-                }
-                None => {
-                    // All centroids coincide, or the tree is deep: split the range in the middle.
-                    let mid = task.start + count / 2;
-                    let fold = |r: &[Bounds3]| r.iter().fold(Bounds3::EMPTY, |b, p| b.union(*p));
-                    let c = task.centroid_bounds;
-                    let (l, r) = (fold(&bounds[task.start..mid]), fold(&bounds[mid..task.end]));
-                    (task.bounds.max_extent_axis(), mid, l, r, c, c)
-                }
-            };
-            nodes.push(make_node(&task.bounds, 0, 0, axis as u16));
-            stats.sah_cost += settings.traversal_cost * area_fraction;
-            stack.push(Task {
-                start: mid,
-                end: task.end,
-                bounds: right_bounds,
-                centroid_bounds: right_cb,
-                patch_parent: Some(index),
-                depth: task.depth + 1,
-            });
-            stack.push(Task {
-                start: task.start,
-                end: mid,
-                bounds: left_bounds,
-                centroid_bounds: left_cb,
-                patch_parent: None,
-                depth: task.depth + 1,
-            });
-        }
-
-        // Store geometry and tags in traversal order.
-        let tags: Vec<T> = order.iter().map(|&i| prims[i as usize].1).collect();
-        stats.nodes = nodes.len();
-        let (wide, packs) = collapse(&nodes, &prims, &order);
+        let bounds: Vec<Bounds3> = prims.par_iter().map(|(g, _)| g.bounds()).collect();
+        let tree = build::binary_tree(bounds, settings);
+        // Tags in traversal order; the geometry goes into the wide leaves' packs.
+        let tags: Vec<T> = tree.order.par_iter().map(|&i| prims[i as usize].1).collect();
+        let (wide, packs) = build::collapse(&tree.nodes, &prims, &tree.order);
         let mut slots = vec![0u32; n];
         for (index, pack) in packs.iter().enumerate() {
             for lane in 0..PACK as u32 {
@@ -647,15 +333,23 @@ impl<T: Copy> Bvh<T> {
                 }
             }
         }
-        stats.build_ms = started.elapsed().as_secs_f64() * 1e3;
-        stats.memory_bytes = size_of_val(wide.as_slice())
+        let memory_bytes = size_of_val(wide.as_slice())
             + size_of_val(packs.as_slice())
             + size_of_val(slots.as_slice())
             + size_of_val(tags.as_slice());
+        let stats = BuildStats {
+            primitives: n,
+            nodes: tree.stats.nodes,
+            leaves: tree.stats.leaves,
+            max_depth: tree.stats.max_depth,
+            sah_cost: tree.stats.sah_cost,
+            build_ms: started.elapsed().as_secs_f64() * 1e3,
+            memory_bytes,
+        };
         Bvh {
-            bounds: nodes.first().map_or(Bounds3::EMPTY, Node::bounds),
+            bounds: tree.nodes.first().map_or(Bounds3::EMPTY, build::Node::bounds),
             #[cfg(test)]
-            nodes,
+            nodes: tree.nodes,
             wide,
             packs,
             slots,
@@ -663,7 +357,9 @@ impl<T: Copy> Bvh<T> {
             stats,
         }
     }
+}
 
+impl<T: Copy> Bvh<T> {
     /// Build statistics.
     pub fn stats(&self) -> &BuildStats {
         &self.stats
@@ -839,10 +535,9 @@ impl<T: Copy> Bvh<T> {
         loop {
             let node = &self.nodes[current];
             if tr.hits_box(node, t_max) {
-                if node.count > 0 {
-                    let first = node.offset as usize;
-                    for prim in first..first + node.count as usize {
-                        if let Some(hit) = intersect_prim(&tr, ray, self.primitive(prim as u32), prim as u32, t_max) {
+                if node.is_leaf() {
+                    for prim in node.primitives() {
+                        if let Some(hit) = intersect_prim(&tr, ray, self.primitive(prim), prim, t_max) {
                             if ANY {
                                 return Some(hit);
                             }
@@ -851,15 +546,10 @@ impl<T: Copy> Bvh<T> {
                         }
                     }
                 } else {
-                    // Near child first: the one on the side the ray comes from.
-                    if tr.dir_is_neg[node.axis as usize] {
-                        stack[sp] = current as u32 + 1;
-                        current = node.offset as usize;
-                    } else {
-                        stack[sp] = node.offset;
-                        current += 1;
-                    }
+                    // Left child first, the right one later.
+                    stack[sp] = build::right_child(&self.nodes, current) as u32;
                     sp += 1;
+                    current += 1;
                     continue;
                 }
             }
@@ -962,196 +652,6 @@ impl TrianglePack {
     }
 }
 
-/// Clears the bins of `axes` in the first `n` bins.
-fn reset(grid: &mut [[Bin; 3]; 256], n: usize, axes: std::ops::Range<usize>) {
-    for bin in &mut grid[..n] {
-        for axis in axes.clone() {
-            bin[axis] = EMPTY_BIN;
-        }
-    }
-}
-
-/// Maps centroids to bins. Axis loops are unrolled and bins are indexed
-/// `& 255` into fixed arrays, so the hot loops carry no bounds checks.
-struct Binner {
-    cmin: Vec3A,
-    scale: Vec3A,
-    last: Vec3A,
-}
-
-impl Binner {
-    #[inline(always)]
-    fn indices(&self, b: &Bounds3) -> [u32; 3] {
-        bin_indices(((b.centroid() - self.cmin) * self.scale).min(self.last))
-    }
-
-    #[inline(always)]
-    fn add<const A: usize>(grid: &mut [[Bin; 3]; 256], k: u32, b: &Bounds3) {
-        let bin = &mut grid[(k & 255) as usize][A];
-        bin.neg_min = bin.neg_min.max(-b.min);
-        bin.max = bin.max.max(b.max);
-        bin.count += 1;
-    }
-
-    /// Bins `prims` along all three axes, even ones into `grid`, odd ones
-    /// into `odd_grid`: with AVX where the CPU has it (the same bins).
-    fn bin_all_axes(&self, grid: &mut [[Bin; 3]; 256], odd_grid: &mut [[Bin; 3]; 256], prims: &[Bounds3]) {
-        #[cfg(target_arch = "x86_64")]
-        if cpu_has_avx() {
-            // SAFETY: the CPU has the feature the function is compiled for.
-            return unsafe { self.bin_all_axes_avx(grid, odd_grid, prims) };
-        }
-        self.bin_all_axes_portable(grid, odd_grid, prims);
-    }
-
-    /// [`Binner::bin_all_axes`] without SIMD beyond the baseline.
-    fn bin_all_axes_portable(&self, grid: &mut [[Bin; 3]; 256], odd_grid: &mut [[Bin; 3]; 256], prims: &[Bounds3]) {
-        let mut pairs = prims.chunks_exact(2);
-        for pair in &mut pairs {
-            let (k0, k1) = (self.indices(&pair[0]), self.indices(&pair[1]));
-            Self::add::<0>(grid, k0[0], &pair[0]);
-            Self::add::<0>(odd_grid, k1[0], &pair[1]);
-            Self::add::<1>(grid, k0[1], &pair[0]);
-            Self::add::<1>(odd_grid, k1[1], &pair[1]);
-            Self::add::<2>(grid, k0[2], &pair[0]);
-            Self::add::<2>(odd_grid, k1[2], &pair[1]);
-        }
-        if let [b] = pairs.remainder() {
-            let k = self.indices(b);
-            Self::add::<0>(grid, k[0], b);
-            Self::add::<1>(grid, k[1], b);
-            Self::add::<2>(grid, k[2], b);
-        }
-    }
-
-    /// [`Binner::bin_all_axes`] with each box grown by one 8-lane `max`.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    fn bin_all_axes_avx(&self, grid: &mut [[Bin; 3]; 256], odd_grid: &mut [[Bin; 3]; 256], prims: &[Bounds3]) {
-        use std::arch::x86_64::{__m256, _mm256_castsi256_ps, _mm256_loadu_ps, _mm256_max_ps, _mm256_setr_epi32};
-        use std::arch::x86_64::{_mm256_store_ps, _mm256_xor_ps};
-        // Flips the sign of the min corner's four lanes: (min, max) → (−min, max).
-        let flip = _mm256_castsi256_ps(_mm256_setr_epi32(i32::MIN, i32::MIN, i32::MIN, i32::MIN, 0, 0, 0, 0));
-        let load = |b: &Bounds3| {
-            // SAFETY: `Bounds3` is `repr(C)`: 32 bytes, min then max.
-            _mm256_xor_ps(unsafe { _mm256_loadu_ps((b as *const Bounds3).cast()) }, flip)
-        };
-        let add = |grid: &mut [[Bin; 3]; 256], axis: usize, k: u32, f: __m256| {
-            let bin = &mut grid[(k & 255) as usize][axis];
-            let lanes = (bin as *mut Bin).cast::<f32>();
-            // SAFETY: a `Bin` is `repr(C, align(32))` and opens with its 32
-            // bytes of (−min, max), the same `max_ps` as `Binner::add`'s.
-            unsafe { _mm256_store_ps(lanes, _mm256_max_ps(_mm256_loadu_ps(lanes), f)) };
-            bin.count += 1;
-        };
-        let mut pairs = prims.chunks_exact(2);
-        for pair in &mut pairs {
-            let (k0, k1) = (self.indices(&pair[0]), self.indices(&pair[1]));
-            let (f0, f1) = (load(&pair[0]), load(&pair[1]));
-            for axis in 0..3 {
-                add(grid, axis, k0[axis], f0);
-                add(odd_grid, axis, k1[axis], f1);
-            }
-        }
-        if let [b] = pairs.remainder() {
-            let f = load(b);
-            for (axis, k) in self.indices(b).into_iter().enumerate() {
-                add(grid, axis, k, f);
-            }
-        }
-    }
-
-    fn bin_one_axis<const A: usize>(&self, grid: &mut [[Bin; 3]; 256], prims: &[Bounds3]) {
-        for b in prims {
-            Self::add::<A>(grid, self.indices(b)[A], b);
-        }
-    }
-}
-
-/// Splits a primitive range at a bin plane with the binning's own arithmetic
-/// (the same IEEE operations per lane), so each primitive goes where its bin is.
-struct Partition {
-    axis_min: f32,
-    axis_scale: f32,
-    plane: f32,
-}
-
-impl Partition {
-    /// Partitions `range` in place; returns the split index and the centroid
-    /// bounds of both sides.
-    fn run<const A: usize>(
-        &self,
-        bounds: &mut [Bounds3],
-        order: &mut [u32],
-        range: std::ops::Range<usize>,
-    ) -> (usize, Bounds3, Bounds3) {
-        // Hoare's scheme: scan in from both ends and swap only pairs that are
-        // both on the wrong side (a quarter of a random range, where moving
-        // every right-side primitive to the end would swap half of it).
-        let (mut i, mut j) = (range.start, range.end);
-        let (mut lcb, mut rcb) = (Bounds3::EMPTY, Bounds3::EMPTY);
-        // The binning puts x in bin trunc(min(x, last)); for x ≥ 0 and an
-        // integer plane ≤ last that bin is left of the plane iff x < plane.
-        let left = |c: Vec3A| (c[A] - self.axis_min) * self.axis_scale < self.plane;
-        'scan: loop {
-            // The first primitive from the left that belongs right...
-            let right_centroid = loop {
-                if i == j {
-                    break 'scan;
-                }
-                let c = bounds[i].centroid();
-                if !left(c) {
-                    break c;
-                }
-                lcb = lcb.grow(c);
-                i += 1;
-            };
-            // ...and the first from the right that belongs left.
-            let left_centroid = loop {
-                j -= 1;
-                if j == i {
-                    rcb = rcb.grow(right_centroid);
-                    break 'scan;
-                }
-                let c = bounds[j].centroid();
-                if left(c) {
-                    break c;
-                }
-                rcb = rcb.grow(c);
-            };
-            bounds.swap(i, j);
-            order.swap(i, j);
-            lcb = lcb.grow(left_centroid);
-            rcb = rcb.grow(right_centroid);
-            i += 1;
-        }
-        (i, lcb, rcb)
-    }
-}
-
-/// Truncates three non-negative floats to bin indices in one conversion.
-#[inline(always)]
-fn bin_indices(v: Vec3A) -> [u32; 3] {
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::x86_64::{__m128, __m128i, _mm_cvttps_epi32};
-        // SAFETY: SSE2 is part of the x86_64 baseline; the casts reinterpret
-        // 16-byte SIMD values of the same size.
-        let k: [u32; 4] = unsafe { std::mem::transmute::<__m128i, [u32; 4]>(_mm_cvttps_epi32(__m128::from(v))) };
-        [k[0], k[1], k[2]]
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        [v.x as u32, v.y as u32, v.z as u32]
-    }
-}
-
-/// Whether this CPU runs the AVX binning of the BVH build.
-#[cfg(target_arch = "x86_64")]
-fn cpu_has_avx() -> bool {
-    std::is_x86_feature_detected!("avx")
-}
-
 /// Whether this CPU runs the AVX2 traversal (it needs AVX2 and FMA).
 #[cfg(target_arch = "x86_64")]
 fn cpu_has_avx2() -> bool {
@@ -1188,202 +688,6 @@ const PREFETCH_STRIDE: usize = 64;
 /// (at most 32 SAH levels plus halving, see `BvhSettings::max_sah_depth`).
 const WIDE_STACK: usize = (WIDTH - 1) * 64;
 
-/// The binary tree `nodes` (flattened depth first, see [`Node`]) as a wide
-/// tree: each wide node takes a binary node's children and keeps opening the
-/// interior one of largest surface area until it has [`WIDTH`] (Wald et al.
-/// 2008, "Getting rid of packets"; Embree's BVH4 and BVH8 collapse). A
-/// small subtree of at most [`WIDE_LEAF_PRIMITIVES`] primitives is not opened
-/// but becomes one leaf, its triangles tested [`PACK`] at a time in one SIMD
-/// step (Embree's `Triangle4` leaves): the last levels of box tests become
-/// one or two triangle tests. Returns the wide nodes and the leaves' packs of
-/// the primitives `prims[order[k]]` (traversal order `k`).
-fn collapse<T>(nodes: &[Node], prims: &[(PrimGeometry, T)], order: &[u32]) -> (Vec<WideNode>, Vec<TrianglePack>) {
-    if nodes.is_empty() {
-        return (Vec::new(), Vec::new());
-    }
-    let range = subtree_ranges(nodes);
-    let leaf = leaf_choice(nodes, &range);
-    let empty = WideNode {
-        min: [[Vec4::ZERO; QUADS]; 3],
-        max: [[Vec4::ZERO; QUADS]; 3],
-        child: [0; WIDTH],
-        count: [0; WIDTH],
-        lanes: 0,
-        leaves: 0,
-    };
-    let mut wide = vec![empty];
-    // Counted first, so that they fill one allocation on huge pages.
-    let mut packs = huge_vec(pack_count(nodes, &range, &leaf));
-    // A leaf root becomes one wide node with a single leaf lane.
-    let mut pending = vec![(0usize, if leaf[0] { None } else { Some(0usize) })];
-    while let Some((slot, binary)) = pending.pop() {
-        // Up to WIDTH children, on the stack (no allocation per node).
-        let mut children = [0; WIDTH];
-        let len = match binary {
-            None => 1,
-            Some(i) => {
-                children[..2].copy_from_slice(&[i + 1, nodes[i].offset as usize]);
-                2
-            }
-        };
-        let mut len = len;
-        while len < WIDTH {
-            let widest = children[..len]
-                .iter()
-                .enumerate()
-                .filter(|(_, &c)| !leaf[c])
-                .map(|(k, &c)| (k, c, nodes[c].bounds().surface_area()))
-                .max_by(|a, b| a.2.total_cmp(&b.2));
-            let Some((k, c, _)) = widest else { break };
-            children[k] = c + 1;
-            children[len] = nodes[c].offset as usize;
-            len += 1;
-        }
-        let mut node = empty;
-        for (lane, &c) in children[..len].iter().enumerate() {
-            let (lo, hi) = (nodes[c].min, nodes[c].max);
-            for axis in 0..3 {
-                node.min[axis][lane / 4][lane % 4] = lo[axis];
-                node.max[axis][lane / 4][lane % 4] = hi[axis];
-            }
-            node.lanes |= 1 << lane;
-            if leaf[c] {
-                let (first, end) = range[c];
-                node.child[lane] = packs.len() as u32;
-                node.count[lane] = (end - first) as u16;
-                node.leaves |= 1 << lane;
-                packs.extend(
-                    (first..end)
-                        .step_by(PACK)
-                        .map(|p| pack(prims, order, p, end.min(p + PACK as u32))),
-                );
-            } else {
-                node.child[lane] = wide.len() as u32;
-                wide.push(empty);
-                pending.push((node.child[lane] as usize, Some(c)));
-            }
-        }
-        wide[slot] = node;
-    }
-    (onto_huge_pages(wide), packs)
-}
-
-/// The packs [`collapse`] makes: those of every leaf it reaches, the
-/// subtrees [`leaf_choice`] picks that no picked subtree holds.
-fn pack_count(nodes: &[Node], range: &[(u32, u32)], leaf: &[bool]) -> usize {
-    let (mut packs, mut stack) = (0, vec![0]);
-    while let Some(i) = stack.pop() {
-        if leaf[i] {
-            packs += ((range[i].1 - range[i].0) as usize).div_ceil(PACK);
-        } else {
-            stack.extend([i + 1, nodes[i].offset as usize]);
-        }
-    }
-    packs
-}
-
-/// Each binary subtree's primitives, `first..end`.
-fn subtree_ranges(nodes: &[Node]) -> Vec<(u32, u32)> {
-    // Children follow their parents, and a left subtree's primitives come
-    // before the right one's.
-    let mut range = vec![(0u32, 0u32); nodes.len()];
-    for i in (0..nodes.len()).rev() {
-        let n = &nodes[i];
-        range[i] = if n.count > 0 {
-            (n.offset, n.offset + u32::from(n.count))
-        } else {
-            (range[i + 1].0, range[n.offset as usize].1)
-        };
-    }
-    range
-}
-
-/// Which binary nodes the collapse makes wide leaves: every binary leaf,
-/// and every subtree of at most [`WIDE_LEAF_PRIMITIVES`] primitives whose box
-/// is small (see [`WIDE_LEAF_MAX_AREA_FRACTION`]).
-fn leaf_choice(nodes: &[Node], range: &[(u32, u32)]) -> Vec<bool> {
-    let area = |n: &Node| n.bounds().surface_area();
-    let limit = WIDE_LEAF_MAX_AREA_FRACTION * area(&nodes[0]);
-    nodes
-        .iter()
-        .zip(range)
-        .map(|(n, &(first, end))| n.count > 0 || ((end - first) as usize <= WIDE_LEAF_PRIMITIVES && area(n) <= limit))
-        .collect()
-}
-
-/// Primitives `first..end` of the traversal order (at most [`PACK`]) as one pack.
-fn pack<T>(prims: &[(PrimGeometry, T)], order: &[u32], first: u32, end: u32) -> TrianglePack {
-    let mut pack = TrianglePack {
-        corners: [[Vec4::ZERO; 3]; 3],
-        first,
-        triangles: 0,
-        spheres: 0,
-    };
-    for (lane, &prim) in order[first as usize..end as usize].iter().enumerate() {
-        match &prims[prim as usize].0 {
-            PrimGeometry::Triangle(p) => {
-                for (k, corner) in p.iter().enumerate() {
-                    for axis in 0..3 {
-                        pack.corners[k][axis][lane] = corner[axis];
-                    }
-                }
-                pack.triangles |= 1 << lane;
-            }
-            PrimGeometry::Sphere { center, radius } => {
-                for axis in 0..3 {
-                    pack.corners[0][axis][lane] = center[axis];
-                }
-                pack.corners[1][0][lane] = *radius;
-                pack.spheres |= 1 << lane;
-            }
-        }
-    }
-    pack
-}
-
-/// An empty vector with room for `capacity` elements whose memory Linux may
-/// back with 2 MB pages (transparent huge pages on `madvise`, as Embree's
-/// allocator asks). For the arrays rays read at random (wide nodes and
-/// packs), where each 4 KB page would cost a TLB miss: incoherent rays
-/// through the 1 M knot +16% (median of 7 interleaved rounds). Not for the
-/// build's own arrays: written once, in order, their 2 MB pages cost more
-/// to get (the kernel compacts and clears them; 0.08–0.58 s of system time
-/// a 1 M build) than their fewer page faults save.
-fn huge_vec<T>(capacity: usize) -> Vec<T> {
-    let v: Vec<T> = Vec::with_capacity(capacity);
-    #[cfg(target_os = "linux")]
-    {
-        const PAGE: usize = 4096;
-        let bytes = capacity * size_of::<T>();
-        if bytes >= 2 << 20 {
-            // Advice is given for whole pages: here those of the allocation's
-            // mapping (a large allocation is a mapping of its own).
-            let start = v.as_ptr() as usize / PAGE * PAGE;
-            let end = (v.as_ptr() as usize + bytes).next_multiple_of(PAGE);
-            // SAFETY: advice only, on pages of this allocation's mapping.
-            unsafe { libc::madvise(start as *mut libc::c_void, end - start, libc::MADV_HUGEPAGE) };
-        }
-    }
-    v
-}
-
-/// `v` copied into a [`huge_vec`] of exactly its length.
-fn onto_huge_pages<T: Copy>(v: Vec<T>) -> Vec<T> {
-    let mut on_huge_pages = huge_vec(v.len());
-    on_huge_pages.extend_from_slice(&v);
-    on_huge_pages
-}
-
-fn make_node(b: &Bounds3, offset: u32, count: u16, axis: u16) -> Node {
-    Node {
-        min: b.min.to_array(),
-        offset,
-        max: b.max.to_array(),
-        count,
-        axis,
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1419,90 +723,6 @@ mod tests {
             .enumerate()
             .map(|(i, t)| (PrimGeometry::Triangle(t), first_tag + i as u32))
             .collect()
-    }
-
-    /// The collapse packs the small subtrees of a dense cluster into wide
-    /// leaves but opens those of a room's walls down to their own boxes.
-    #[test]
-    fn collapse_packs_small_subtrees_but_not_large_walls() {
-        let mut prims = random_triangles(3000, &mut Rng::new(3))
-            .into_iter()
-            .map(|(mut g, tag)| {
-                // Shrink the cluster to a tenth of the room.
-                if let PrimGeometry::Triangle(t) = &mut g {
-                    *t = t.map(|p| p * 0.1 + Vec3::splat(5.0));
-                }
-                (g, tag)
-            })
-            .collect::<Vec<_>>();
-        prims.extend(room_walls(20_000));
-        let bvh = Bvh::build(prims.clone(), &BvhSettings::default());
-        let range = subtree_ranges(&bvh.nodes);
-        let leaf = leaf_choice(&bvh.nodes, &range);
-        let is_wall = |i: usize| (range[i].0..range[i].1).all(|p| bvh.tag(p) >= 20_000);
-        let small = |i: usize| bvh.nodes[i].count == 0 && (range[i].1 - range[i].0) as usize <= WIDE_LEAF_PRIMITIVES;
-        let packed_cluster = (0..bvh.nodes.len())
-            .filter(|&i| small(i) && leaf[i] && !is_wall(i))
-            .count();
-        let opened_walls = (0..bvh.nodes.len())
-            .filter(|&i| small(i) && !leaf[i] && is_wall(i))
-            .count();
-        let packed_walls = (0..bvh.nodes.len())
-            .filter(|&i| small(i) && leaf[i] && is_wall(i))
-            .count();
-        assert!(packed_cluster > 100, "cluster subtrees packed: {packed_cluster}");
-        assert!(opened_walls > 0, "wall subtrees opened: {opened_walls}");
-        assert_eq!(packed_walls, 0, "a wall subtree was packed");
-        // The count that sizes the packs' allocation is the number made.
-        assert_eq!(pack_count(&bvh.nodes, &range, &leaf), bvh.packs.len());
-    }
-
-    /// The AVX binning fills the same bins as the portable one, bit for bit
-    /// (so the tree does not depend on the CPU), over a range with an odd
-    /// count and negative zeros among the coordinates.
-    #[cfg(target_arch = "x86_64")]
-    #[test]
-    fn avx_binning_matches_the_portable_one_bit_for_bit() {
-        if !cpu_has_avx() {
-            eprintln!("skipped: this CPU has no AVX");
-            return;
-        }
-        let mut prims: Vec<Bounds3> = random_triangles(1001, &mut Rng::new(5))
-            .iter()
-            .map(|(g, _)| g.bounds())
-            .collect();
-        prims[7].min.x = -0.0;
-        prims[8].max.y = -0.0;
-        let all = prims.iter().fold(Bounds3::EMPTY, |b, p| b.union(*p));
-        let bins = 8;
-        let binner = Binner {
-            cmin: all.min,
-            scale: Vec3A::splat(bins as f32 * (1.0 - 1e-6)) / all.diagonal(),
-            last: Vec3A::splat((bins - 1) as f32),
-        };
-        let bits = |bin: &Bin| {
-            let b = bin.bounds();
-            (
-                b.min.to_array().map(f32::to_bits),
-                b.max.to_array().map(f32::to_bits),
-                bin.count,
-            )
-        };
-        let mut grids = [(); 2].map(|_| Box::new([[[EMPTY_BIN; 3]; 256]; 2]));
-        let [even, odd] = &mut *grids[0];
-        binner.bin_all_axes_portable(even, odd, &prims);
-        let [even, odd] = &mut *grids[1];
-        // SAFETY: the CPU has AVX (checked above).
-        unsafe { binner.bin_all_axes_avx(even, odd, &prims) };
-        for (g, (portable, avx)) in grids[0].iter().zip(grids[1].iter()).enumerate() {
-            for (k, (p, a)) in portable.iter().zip(avx.iter()).enumerate().take(bins) {
-                for axis in 0..3 {
-                    assert_eq!(bits(&p[axis]), bits(&a[axis]), "grid {g}, bin {k}, axis {axis}");
-                }
-            }
-        }
-        let binned: u32 = grids[1].iter().flat_map(|g| g[..bins].iter().map(|b| b[0].count)).sum();
-        assert_eq!(binned, 1001);
     }
 
     fn brute_force(prims: &[(PrimGeometry, u32)], ray: &Ray) -> Option<(f32, u32)> {

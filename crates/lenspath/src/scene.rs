@@ -245,6 +245,8 @@ impl Scene {
     }
 
     /// Validates the scene and builds its acceleration structure and lights.
+    /// The BVH is built on the current rayon pool's threads (every core
+    /// unless the caller installs a pool); its tree does not depend on how many.
     pub fn compile(self, settings: &BvhSettings) -> Result<CompiledScene> {
         self.validate()?;
         let mut prims = Vec::with_capacity(self.triangle_count() + self.spheres.len());

@@ -1,0 +1,1055 @@
+//! The BVH build: a binned SAH binary tree, its subtrees built in parallel,
+//! collapsed to the wide tree and leaf packs that rays traverse.
+//!
+//! The binary tree follows Wald, "On fast Construction of SAH-based Bounding
+//! Volume Hierarchies" (2007) and pbrt-v4 `BVHAggregate`: primitives are
+//! binned by centroid along all three axes and the split minimising
+//! `C_trav + C_isect · (SA(L)·N(L) + SA(R)·N(R)) / SA(P)` is taken.
+//!
+//! Every node has a place fixed before it is built (see [`Node`]), so
+//! subtrees are built on any thread in any order into one array: the tree,
+//! and so every image, is the same bytes for any thread count.
+
+use std::mem::MaybeUninit;
+
+use glam::{Vec3A, Vec4};
+use rayon::prelude::*;
+
+use super::{BvhSettings, PrimGeometry, TrianglePack, WideNode, PACK, QUADS, WIDTH};
+use crate::math::Bounds3;
+
+/// A binary node: 32 bytes. A subtree of `n` primitives has at most
+/// `2n − 1` nodes, and takes that many places: its root first, then its left
+/// subtree's places, then its right one's. So each child's place is known
+/// from the split alone, before either child is built (the left child
+/// follows its parent, the right one is `2 · (left primitives)` after it),
+/// and subtrees can be built in parallel into one array. A leaf's unused
+/// places hold [`UNUSED`] nodes, never visited.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
+pub(super) struct Node {
+    pub(super) min: [f32; 3],
+    /// The subtree's first primitive (in the build's order).
+    first: u32,
+    pub(super) max: [f32; 3],
+    /// How many primitives the subtree holds, [`LEAF`] set for leaves.
+    count: u32,
+}
+
+/// The bit of [`Node::count`] set in leaves.
+const LEAF: u32 = 1 << 31;
+
+/// What fills the places a leaf leaves unused.
+const UNUSED: Node = Node {
+    min: [0.0; 3],
+    first: 0,
+    max: [0.0; 3],
+    count: 0,
+};
+
+impl Node {
+    fn new(b: &Bounds3, first: usize, count: usize, leaf: bool) -> Node {
+        Node {
+            min: b.min.to_array(),
+            first: first as u32,
+            max: b.max.to_array(),
+            count: count as u32 | if leaf { LEAF } else { 0 },
+        }
+    }
+
+    /// Its box.
+    pub(super) fn bounds(&self) -> Bounds3 {
+        Bounds3 {
+            min: Vec3A::from_array(self.min),
+            max: Vec3A::from_array(self.max),
+        }
+    }
+
+    pub(super) fn is_leaf(&self) -> bool {
+        self.count & LEAF != 0
+    }
+
+    /// The subtree's primitives (in the build's order).
+    pub(super) fn primitives(&self) -> std::ops::Range<u32> {
+        self.first..self.first + (self.count & !LEAF)
+    }
+}
+
+/// The right child of interior node `i` (the left one is `i + 1`).
+pub(super) fn right_child(nodes: &[Node], i: usize) -> usize {
+    i + 2 * nodes[i + 1].primitives().len()
+}
+
+/// Subtrees of at least this many primitives build their two children in
+/// parallel (below it a task is too small to repay a thread's start).
+const PARALLEL_MIN_PRIMITIVES: usize = 4096;
+
+/// The binary tree, what it cost, and the primitives' order in it.
+pub(super) struct BinaryTree {
+    /// Indexed as [`Node`] says: `2n − 1` entries for `n` primitives.
+    pub(super) nodes: Vec<Node>,
+    /// Primitive `order[k]` of the input is the `k`-th of the tree.
+    pub(super) order: Vec<u32>,
+    pub(super) stats: SubtreeStats,
+}
+
+/// What a subtree adds to the build's statistics. Subtrees' statistics are
+/// added in the tree's order, whatever thread built them, so the SAH cost's
+/// rounding does not depend on the thread count.
+#[derive(Clone, Copy, Default)]
+pub(super) struct SubtreeStats {
+    pub(super) nodes: usize,
+    pub(super) leaves: usize,
+    pub(super) max_depth: usize,
+    pub(super) sah_cost: f32,
+}
+
+impl SubtreeStats {
+    fn leaf(&mut self, depth: usize, cost: f32) {
+        self.nodes += 1;
+        self.leaves += 1;
+        self.max_depth = self.max_depth.max(depth);
+        self.sah_cost += cost;
+    }
+
+    fn interior(&mut self, depth: usize, cost: f32) {
+        self.nodes += 1;
+        self.max_depth = self.max_depth.max(depth);
+        self.sah_cost += cost;
+    }
+
+    fn then(self, other: SubtreeStats) -> SubtreeStats {
+        SubtreeStats {
+            nodes: self.nodes + other.nodes,
+            leaves: self.leaves + other.leaves,
+            max_depth: self.max_depth.max(other.max_depth),
+            sah_cost: self.sah_cost + other.sah_cost,
+        }
+    }
+}
+
+/// A build task: a primitive range and its boxes.
+struct Task {
+    /// Its node's place (see [`Node`]).
+    slot: usize,
+    start: usize,
+    end: usize,
+    bounds: Bounds3,
+    centroid_bounds: Bounds3,
+    depth: usize,
+}
+
+/// One builder's working memory: the SAH bins (even and odd primitives'
+/// grids) and the sweep's right-side sums.
+struct Scratch {
+    grids: Box<[[[Bin; 3]; 256]; 2]>,
+    right_area: Vec<[f32; 3]>,
+    right_count: Vec<[u32; 3]>,
+}
+
+impl Scratch {
+    fn new(bins: usize) -> Scratch {
+        Scratch {
+            grids: Box::new([[[EMPTY_BIN; 3]; 256]; 2]),
+            right_area: vec![[0.0; 3]; bins],
+            right_count: vec![[0; 3]; bins],
+        }
+    }
+}
+
+/// The binned SAH tree over primitives with boxes `bounds` (in the current
+/// rayon pool: its subtrees are built in parallel).
+pub(super) fn binary_tree(mut bounds: Vec<Bounds3>, settings: &BvhSettings) -> BinaryTree {
+    let n = bounds.len();
+    let mut order: Vec<u32> = (0..n as u32).into_par_iter().collect();
+    if n == 0 {
+        return BinaryTree {
+            nodes: Vec::new(),
+            order,
+            stats: SubtreeStats::default(),
+        };
+    }
+    // Min and max are exact, so these do not depend on how the work is split.
+    let (root_bounds, root_centroids) = bounds
+        .par_iter()
+        .fold(
+            || (Bounds3::EMPTY, Bounds3::EMPTY),
+            |(b, c), p| (b.union(*p), c.grow(p.centroid())),
+        )
+        .reduce(
+            || (Bounds3::EMPTY, Bounds3::EMPTY),
+            |(b0, c0), (b1, c1)| (b0.union(b1), c0.union(c1)),
+        );
+    let builder = Builder {
+        settings,
+        bins: settings.bins.clamp(2, 256),
+        root_area: root_bounds.surface_area().max(f32::MIN_POSITIVE),
+    };
+    let slots = 2 * n - 1;
+    let mut nodes: Vec<Node> = Vec::with_capacity(slots);
+    let root = Task {
+        slot: 0,
+        start: 0,
+        end: n,
+        bounds: root_bounds,
+        centroid_bounds: root_centroids,
+        depth: 0,
+    };
+    let stats = builder.subtree(root, &mut bounds, &mut order, &mut nodes.spare_capacity_mut()[..slots]);
+    // SAFETY: `Builder::subtree` writes every entry of the slice it is given
+    // (a leaf fills all of its own, an interior node its first and hands the
+    // rest to its two children), and that slice was the first `slots`.
+    unsafe { nodes.set_len(slots) };
+    BinaryTree { nodes, order, stats }
+}
+
+/// What every task of one build shares.
+struct Builder<'a> {
+    settings: &'a BvhSettings,
+    bins: usize,
+    root_area: f32,
+}
+
+impl Builder<'_> {
+    /// Builds `task`'s subtree: `bounds` and `order` are its primitives,
+    /// `nodes` its `2n − 1` places, all of which it writes. Large subtrees
+    /// build their two children in parallel.
+    fn subtree(
+        &self,
+        task: Task,
+        bounds: &mut [Bounds3],
+        order: &mut [u32],
+        nodes: &mut [MaybeUninit<Node>],
+    ) -> SubtreeStats {
+        let mut scratch = Scratch::new(self.bins);
+        let mut stats = SubtreeStats::default();
+        if task.end - task.start < PARALLEL_MIN_PRIMITIVES {
+            // Smaller ones run here, as a loop over a stack of tasks.
+            let (base, base_slot) = (task.start, task.slot);
+            let mut stack = Vec::with_capacity(64);
+            stack.push(task);
+            while let Some(task) = stack.pop() {
+                let (s, e) = (task.start - base, task.end - base);
+                let slot = task.slot - base_slot;
+                let local = (
+                    &mut bounds[s..e],
+                    &mut order[s..e],
+                    &mut nodes[slot..slot + 2 * (e - s) - 1],
+                );
+                if let Some((left, right)) = self.node(&mut scratch, &task, local, &mut stats) {
+                    stack.extend([right, left]);
+                }
+            }
+            return stats;
+        }
+        let Some((left, right)) = self.node(&mut scratch, &task, (bounds, order, nodes), &mut stats) else {
+            return stats;
+        };
+        drop(scratch);
+        let split = left.end - left.start;
+        let (left_bounds, right_bounds) = bounds.split_at_mut(split);
+        let (left_order, right_order) = order.split_at_mut(split);
+        let (left_nodes, right_nodes) = nodes[1..].split_at_mut(2 * split - 1);
+        let (l, r) = rayon::join(
+            || self.subtree(left, left_bounds, left_order, left_nodes),
+            || self.subtree(right, right_bounds, right_order, right_nodes),
+        );
+        stats.then(l).then(r)
+    }
+
+    /// Makes `task`'s node in the first of `nodes`, its places (see
+    /// [`Builder::subtree`]): a leaf, which also fills the places it leaves
+    /// unused, or an interior node, whose two children's tasks it returns
+    /// (their places are the rest).
+    fn node(
+        &self,
+        scratch: &mut Scratch,
+        task: &Task,
+        (bounds, order, nodes): (&mut [Bounds3], &mut [u32], &mut [MaybeUninit<Node>]),
+        stats: &mut SubtreeStats,
+    ) -> Option<(Task, Task)> {
+        let settings = self.settings;
+        let count = task.end - task.start;
+        let node_area = task.bounds.surface_area();
+        let parent_area = node_area.max(f32::MIN_POSITIVE);
+        let area_fraction = node_area / self.root_area;
+        let leaf_cost = settings.intersection_cost * count as f32;
+        let leaf = |nodes: &mut [MaybeUninit<Node>], stats: &mut SubtreeStats| {
+            nodes[0].write(Node::new(&task.bounds, task.start, count, true));
+            for unused in &mut nodes[1..] {
+                unused.write(UNUSED);
+            }
+            stats.leaf(task.depth, leaf_cost * area_fraction);
+            None
+        };
+
+        // Degenerate: one primitive, or all centroids in one point.
+        let extent = task.centroid_bounds.diagonal();
+        if count == 1 || (extent.max_element() <= 0.0 && count <= settings.max_leaf_size) {
+            return leaf(nodes, stats);
+        }
+
+        // Two primitives: the only split is one per side; no binning needed.
+        if count == 2 {
+            let (a, b) = (bounds[0], bounds[1]);
+            let split_cost = settings.traversal_cost
+                + settings.intersection_cost * (a.surface_area() + b.surface_area()) / parent_area;
+            if count <= settings.max_leaf_size && leaf_cost <= split_cost {
+                return leaf(nodes, stats);
+            }
+            nodes[0].write(Node::new(&task.bounds, task.start, 2, false));
+            stats.interior(task.depth, settings.traversal_cost * area_fraction);
+            for (k, child) in [a, b].iter().enumerate() {
+                nodes[1 + k].write(Node::new(child, task.start + k, 1, true));
+                stats.leaf(
+                    task.depth + 1,
+                    settings.intersection_cost * child.surface_area() / self.root_area,
+                );
+            }
+            return None;
+        }
+
+        // Deep in the tree, halving the range bounds the depth (`max_sah_depth`).
+        let sah_allowed = task.depth < settings.max_sah_depth;
+
+        // Bin the centroids: along all three axes, or only the longest one in
+        // small nodes. Small nodes also use fewer bins, so the sweep costs
+        // no more than the binning.
+        let node_bins = self.bins.min(count.max(4));
+        let cmin = task.centroid_bounds.min;
+        let scale = Vec3A::select(
+            extent.cmpgt(Vec3A::ZERO),
+            Vec3A::splat(node_bins as f32 * (1.0 - 1e-6)) / extent,
+            Vec3A::ZERO,
+        );
+        let mut split: Option<(usize, usize, f32)> = None;
+        let axes = if count < settings.all_axes_min_primitives {
+            let a = task.centroid_bounds.max_extent_axis();
+            a..a + 1
+        } else {
+            0..3
+        };
+        let Scratch {
+            grids,
+            right_area,
+            right_count,
+        } = scratch;
+        if extent.max_element() > 0.0 && sah_allowed {
+            let [grid, odd_grid] = &mut **grids;
+            let last = (node_bins - 1) as f32;
+            let binner = Binner {
+                cmin,
+                scale,
+                last: Vec3A::splat(last),
+            };
+            if axes.len() == 3 {
+                // Even and odd primitives go to separate grids, merged
+                // after: consecutive primitives in one bin then do not wait
+                // on each other's stores.
+                reset(grid, node_bins, 0..3);
+                reset(odd_grid, node_bins, 0..3);
+                binner.bin_all_axes(grid, odd_grid, bounds);
+                for (bin, odd) in grid[..node_bins].iter_mut().zip(&odd_grid[..node_bins]) {
+                    for axis in 0..3 {
+                        bin[axis].merge(&odd[axis]);
+                    }
+                }
+            } else {
+                reset(grid, node_bins, axes.clone());
+                match axes.start {
+                    0 => binner.bin_one_axis::<0>(grid, bounds),
+                    1 => binner.bin_one_axis::<1>(grid, bounds),
+                    _ => binner.bin_one_axis::<2>(grid, bounds),
+                }
+            }
+            let bin_grid = &*grid;
+            // Sweep from the right to know the right side of every plane...
+            // An empty bin adds no new plane, so only non-empty bins cost work.
+            let mut acc = [Bounds3::EMPTY; 3];
+            let mut acc_area = [0f32; 3];
+            let mut acc_count = [0u32; 3];
+            for i in (1..node_bins).rev() {
+                for axis in axes.clone() {
+                    let bin = &bin_grid[i][axis];
+                    if bin.count > 0 {
+                        acc[axis] = acc[axis].union(bin.bounds());
+                        acc_area[axis] = acc[axis].surface_area();
+                        acc_count[axis] += bin.count;
+                    }
+                    right_area[i][axis] = acc_area[axis];
+                    right_count[i][axis] = acc_count[axis];
+                }
+            }
+            // ...then from the left, evaluating the SAH at each distinct plane.
+            let mut left = [Bounds3::EMPTY; 3];
+            let mut left_count = [0u32; 3];
+            for i in 1..node_bins {
+                for axis in axes.clone() {
+                    let bin = &bin_grid[i - 1][axis];
+                    if bin.count == 0 {
+                        continue;
+                    }
+                    left[axis] = left[axis].union(bin.bounds());
+                    left_count[axis] += bin.count;
+                    if right_count[i][axis] == 0 {
+                        continue;
+                    }
+                    let cost = settings.traversal_cost
+                        + settings.intersection_cost
+                            * (left[axis].surface_area() * left_count[axis] as f32
+                                + right_area[i][axis] * right_count[i][axis] as f32)
+                            / parent_area;
+                    if split.is_none_or(|(_, _, c)| cost < c) {
+                        split = Some((axis, i, cost));
+                    }
+                }
+            }
+        }
+
+        let split_cost = split.map_or(f32::INFINITY, |s| s.2);
+        if count <= settings.max_leaf_size && leaf_cost <= split_cost {
+            return leaf(nodes, stats);
+        }
+
+        // Partition the range with the binning's own arithmetic, so every
+        // primitive lands on the side its bin is on; the children's
+        // bounds come from the bins, their centroid bounds from this pass.
+        let (mid, left_bounds, right_bounds, left_cb, right_cb) = match split {
+            Some((axis, plane, _)) => {
+                let part = Partition {
+                    axis_min: cmin[axis],
+                    axis_scale: scale[axis],
+                    plane: plane as f32,
+                };
+                let (i, lcb, rcb) = match axis {
+                    0 => part.run::<0>(bounds, order),
+                    1 => part.run::<1>(bounds, order),
+                    _ => part.run::<2>(bounds, order),
+                };
+                let bin_grid = &grids[0];
+                let fold = |range: std::ops::Range<usize>| {
+                    bin_grid[range]
+                        .iter()
+                        .fold(Bounds3::EMPTY, |b, bin| b.union(bin[axis].bounds()))
+                };
+                (i, fold(0..plane), fold(plane..node_bins), lcb, rcb)
+            }
+            None => {
+                // All centroids coincide, or the tree is deep: split the range in the middle.
+                let mid = count / 2;
+                let fold = |r: &[Bounds3]| r.iter().fold(Bounds3::EMPTY, |b, p| b.union(*p));
+                let c = task.centroid_bounds;
+                (mid, fold(&bounds[..mid]), fold(&bounds[mid..]), c, c)
+            }
+        };
+        nodes[0].write(Node::new(&task.bounds, task.start, count, false));
+        stats.interior(task.depth, settings.traversal_cost * area_fraction);
+        let (slot, mid) = (task.slot + 2 * mid, task.start + mid);
+        Some((
+            Task {
+                slot: task.slot + 1,
+                start: task.start,
+                end: mid,
+                bounds: left_bounds,
+                centroid_bounds: left_cb,
+                depth: task.depth + 1,
+            },
+            Task {
+                slot,
+                start: mid,
+                end: task.end,
+                bounds: right_bounds,
+                centroid_bounds: right_cb,
+                depth: task.depth + 1,
+            },
+        ))
+    }
+}
+
+/// A SAH bin: the box of its primitives, kept as (−min, max) so that growing
+/// it is one `max` over eight lanes (as tinybvh's `BuildAVX` bins), and
+/// their count.
+#[derive(Clone, Copy)]
+#[repr(C, align(32))]
+struct Bin {
+    neg_min: Vec3A,
+    max: Vec3A,
+    count: u32,
+}
+
+const EMPTY_BIN: Bin = Bin {
+    neg_min: Vec3A::NEG_INFINITY,
+    max: Vec3A::NEG_INFINITY,
+    count: 0,
+};
+
+impl Bin {
+    /// Its box.
+    fn bounds(&self) -> Bounds3 {
+        Bounds3 {
+            min: -self.neg_min,
+            max: self.max,
+        }
+    }
+
+    /// Takes in the primitives of `other`.
+    fn merge(&mut self, other: &Bin) {
+        self.neg_min = self.neg_min.max(other.neg_min);
+        self.max = self.max.max(other.max);
+        self.count += other.count;
+    }
+}
+
+/// The largest subtree the collapse turns into one wide leaf (two packs).
+/// Measured on the dragon, Lucy and the 1 M knot (one thread, interleaved
+/// rounds): against four, incoherent rays +8 to +26% and coherent ones
+/// −3 to +8%; against twelve, or a SAH choice between a subtree and its
+/// packs, faster on all three.
+const WIDE_LEAF_PRIMITIVES: usize = 2 * PACK;
+
+/// ... when its box has at most this fraction of the root box's surface
+/// area. Deep in a mesh's tree (where such subtrees have 10⁻⁴ of it) a
+/// leaf's packs save the box tests of its last levels; but a few large
+/// primitives near the root, such as the walls of a room, are better in
+/// their own boxes, which only the rays that hit them enter (a flat box
+/// around an axis-aligned quad is the quad). Measured on cornell-spheres
+/// (callgrind, 160×120, 8 spp): 1.12 G instructions without the area bound,
+/// 0.92 G with it; the dragon's tree is unchanged.
+const WIDE_LEAF_MAX_AREA_FRACTION: f32 = 0.01;
+
+/// The binary tree `nodes` (see [`Node`]) as a wide tree: each wide node
+/// takes a binary node's children and keeps opening the interior one of
+/// largest surface area until it has [`WIDTH`] (Wald et al. 2008, "Getting
+/// rid of packets"; Embree's BVH4 and BVH8 collapse). A small subtree of at
+/// most [`WIDE_LEAF_PRIMITIVES`] primitives is not opened but becomes one
+/// leaf, its triangles tested [`PACK`] at a time in one SIMD step (Embree's
+/// `Triangle4` leaves): the last levels of box tests become one or two
+/// triangle tests. Returns the wide nodes and the leaves' packs of the
+/// primitives `prims[order[k]]` (traversal order `k`).
+///
+/// The tree's shape is decided first, in one pass that writes only links;
+/// the boxes and packs, nearly all of the bytes, are then filled in
+/// parallel, straight into allocations of their final size.
+pub(super) fn collapse<T: Sync>(
+    nodes: &[Node],
+    prims: &[(PrimGeometry, T)],
+    order: &[u32],
+) -> (Vec<WideNode>, Vec<TrianglePack>) {
+    if nodes.is_empty() {
+        return (Vec::new(), Vec::new());
+    }
+    let (links, pack_ranges) = wide_links(nodes);
+    let mut wide = huge_vec(links.len());
+    links.par_iter().map(|l| l.node(nodes)).collect_into_vec(&mut wide);
+    let mut packs = huge_vec(pack_ranges.len());
+    pack_ranges
+        .par_iter()
+        .map(|&(first, end)| pack(prims, order, first, end))
+        .collect_into_vec(&mut packs);
+    (wide, packs)
+}
+
+/// A wide node without its boxes: what the collapse decides serially.
+#[derive(Clone, Copy)]
+struct WideLinks {
+    /// The binary node behind each lane.
+    binary: [u32; WIDTH],
+    child: [u32; WIDTH],
+    count: [u16; WIDTH],
+    lanes: u16,
+    leaves: u16,
+}
+
+impl WideLinks {
+    /// The wide node, its lanes' boxes those of their binary nodes.
+    fn node(&self, nodes: &[Node]) -> WideNode {
+        let mut node = WideNode {
+            min: [[Vec4::ZERO; QUADS]; 3],
+            max: [[Vec4::ZERO; QUADS]; 3],
+            child: self.child,
+            count: self.count,
+            lanes: self.lanes,
+            leaves: self.leaves,
+        };
+        for lane in 0..self.lanes.count_ones() as usize {
+            let b = &nodes[self.binary[lane] as usize];
+            for axis in 0..3 {
+                node.min[axis][lane / 4][lane % 4] = b.min[axis];
+                node.max[axis][lane / 4][lane % 4] = b.max[axis];
+            }
+        }
+        node
+    }
+}
+
+/// The wide tree's shape: its nodes' links, and the primitive range of each
+/// pack in the order the leaves are met.
+fn wide_links(nodes: &[Node]) -> (Vec<WideLinks>, Vec<(u32, u32)>) {
+    let limit = WIDE_LEAF_MAX_AREA_FRACTION * nodes[0].bounds().surface_area();
+    let candidate = |i: usize| Candidate::new(nodes, i, limit);
+    let empty = WideLinks {
+        binary: [0; WIDTH],
+        child: [0; WIDTH],
+        count: [0; WIDTH],
+        lanes: 0,
+        leaves: 0,
+    };
+    let mut links = vec![empty];
+    let mut pack_ranges = Vec::new();
+    // A leaf root becomes one wide node with a single leaf lane.
+    let root = candidate(0);
+    let mut pending = vec![(0usize, if root.wide_leaf { None } else { Some(0usize) })];
+    while let Some((slot, binary)) = pending.pop() {
+        // Up to WIDTH children, on the stack (no allocation per node).
+        let mut children = [root; WIDTH];
+        let mut len = match binary {
+            None => 1,
+            Some(i) => {
+                children[..2].copy_from_slice(&[candidate(i + 1), candidate(right_child(nodes, i))]);
+                2
+            }
+        };
+        while len < WIDTH {
+            let widest = children[..len]
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| !c.wide_leaf)
+                .max_by(|a, b| a.1.area.total_cmp(&b.1.area));
+            let Some((k, &c)) = widest else { break };
+            children[k] = candidate(c.node + 1);
+            children[len] = candidate(right_child(nodes, c.node));
+            len += 1;
+        }
+        let mut node = empty;
+        for (lane, c) in children[..len].iter().enumerate() {
+            node.binary[lane] = c.node as u32;
+            node.lanes |= 1 << lane;
+            if c.wide_leaf {
+                let std::ops::Range { start: first, end } = nodes[c.node].primitives();
+                node.child[lane] = pack_ranges.len() as u32;
+                node.count[lane] = (end - first) as u16;
+                node.leaves |= 1 << lane;
+                pack_ranges.extend((first..end).step_by(PACK).map(|p| (p, end.min(p + PACK as u32))));
+            } else {
+                node.child[lane] = links.len() as u32;
+                links.push(empty);
+                pending.push((node.child[lane] as usize, Some(c.node)));
+            }
+        }
+        links[slot] = node;
+    }
+    (links, pack_ranges)
+}
+
+/// A binary node the collapse may open, with what it decides by, worked
+/// out once (the choice looks at each child several times).
+#[derive(Clone, Copy)]
+struct Candidate {
+    node: usize,
+    area: f32,
+    /// Whether it becomes a wide leaf: every binary leaf, and every subtree
+    /// of at most [`WIDE_LEAF_PRIMITIVES`] primitives whose box has at most
+    /// the area limit of surface (see [`WIDE_LEAF_MAX_AREA_FRACTION`]).
+    wide_leaf: bool,
+}
+
+impl Candidate {
+    fn new(nodes: &[Node], node: usize, area_limit: f32) -> Candidate {
+        let n = &nodes[node];
+        let area = n.bounds().surface_area();
+        Candidate {
+            node,
+            area,
+            wide_leaf: n.is_leaf() || (n.primitives().len() <= WIDE_LEAF_PRIMITIVES && area <= area_limit),
+        }
+    }
+}
+
+fn pack<T>(prims: &[(PrimGeometry, T)], order: &[u32], first: u32, end: u32) -> TrianglePack {
+    let mut pack = TrianglePack {
+        corners: [[Vec4::ZERO; 3]; 3],
+        first,
+        triangles: 0,
+        spheres: 0,
+    };
+    for (lane, &prim) in order[first as usize..end as usize].iter().enumerate() {
+        match &prims[prim as usize].0 {
+            PrimGeometry::Triangle(p) => {
+                for (k, corner) in p.iter().enumerate() {
+                    for axis in 0..3 {
+                        pack.corners[k][axis][lane] = corner[axis];
+                    }
+                }
+                pack.triangles |= 1 << lane;
+            }
+            PrimGeometry::Sphere { center, radius } => {
+                for axis in 0..3 {
+                    pack.corners[0][axis][lane] = center[axis];
+                }
+                pack.corners[1][0][lane] = *radius;
+                pack.spheres |= 1 << lane;
+            }
+        }
+    }
+    pack
+}
+
+/// An empty vector with room for `capacity` elements whose memory Linux may
+/// back with 2 MB pages (transparent huge pages on `madvise`, as Embree's
+/// allocator asks). For the arrays rays read at random (wide nodes and
+/// packs), where each 4 KB page would cost a TLB miss: incoherent rays
+/// through the 1 M knot +16% (median of 7 interleaved rounds). Not for the
+/// build's own arrays: written once, in order, their 2 MB pages cost more
+/// to get (the kernel compacts and clears them; 0.08–0.58 s of system time
+/// a 1 M build) than their fewer page faults save.
+fn huge_vec<T>(capacity: usize) -> Vec<T> {
+    let v: Vec<T> = Vec::with_capacity(capacity);
+    #[cfg(target_os = "linux")]
+    {
+        const PAGE: usize = 4096;
+        let bytes = capacity * size_of::<T>();
+        if bytes >= 2 << 20 {
+            // Advice is given for whole pages: here those of the allocation's
+            // mapping (a large allocation is a mapping of its own).
+            let start = v.as_ptr() as usize / PAGE * PAGE;
+            let end = (v.as_ptr() as usize + bytes).next_multiple_of(PAGE);
+            // SAFETY: advice only, on pages of this allocation's mapping.
+            unsafe { libc::madvise(start as *mut libc::c_void, end - start, libc::MADV_HUGEPAGE) };
+        }
+    }
+    v
+}
+
+fn reset(grid: &mut [[Bin; 3]; 256], n: usize, axes: std::ops::Range<usize>) {
+    for bin in &mut grid[..n] {
+        for axis in axes.clone() {
+            bin[axis] = EMPTY_BIN;
+        }
+    }
+}
+
+/// Maps centroids to bins. Axis loops are unrolled and bins are indexed
+/// `& 255` into fixed arrays, so the hot loops carry no bounds checks.
+struct Binner {
+    cmin: Vec3A,
+    scale: Vec3A,
+    last: Vec3A,
+}
+
+impl Binner {
+    #[inline(always)]
+    fn indices(&self, b: &Bounds3) -> [u32; 3] {
+        bin_indices(((b.centroid() - self.cmin) * self.scale).min(self.last))
+    }
+
+    #[inline(always)]
+    fn add<const A: usize>(grid: &mut [[Bin; 3]; 256], k: u32, b: &Bounds3) {
+        let bin = &mut grid[(k & 255) as usize][A];
+        bin.neg_min = bin.neg_min.max(-b.min);
+        bin.max = bin.max.max(b.max);
+        bin.count += 1;
+    }
+
+    /// Bins `prims` along all three axes, even ones into `grid`, odd ones
+    /// into `odd_grid`: with AVX where the CPU has it (the same bins).
+    fn bin_all_axes(&self, grid: &mut [[Bin; 3]; 256], odd_grid: &mut [[Bin; 3]; 256], prims: &[Bounds3]) {
+        #[cfg(target_arch = "x86_64")]
+        if cpu_has_avx() {
+            // SAFETY: the CPU has the feature the function is compiled for.
+            return unsafe { self.bin_all_axes_avx(grid, odd_grid, prims) };
+        }
+        self.bin_all_axes_portable(grid, odd_grid, prims);
+    }
+
+    /// [`Binner::bin_all_axes`] without SIMD beyond the baseline.
+    fn bin_all_axes_portable(&self, grid: &mut [[Bin; 3]; 256], odd_grid: &mut [[Bin; 3]; 256], prims: &[Bounds3]) {
+        let mut pairs = prims.chunks_exact(2);
+        for pair in &mut pairs {
+            let (k0, k1) = (self.indices(&pair[0]), self.indices(&pair[1]));
+            Self::add::<0>(grid, k0[0], &pair[0]);
+            Self::add::<0>(odd_grid, k1[0], &pair[1]);
+            Self::add::<1>(grid, k0[1], &pair[0]);
+            Self::add::<1>(odd_grid, k1[1], &pair[1]);
+            Self::add::<2>(grid, k0[2], &pair[0]);
+            Self::add::<2>(odd_grid, k1[2], &pair[1]);
+        }
+        if let [b] = pairs.remainder() {
+            let k = self.indices(b);
+            Self::add::<0>(grid, k[0], b);
+            Self::add::<1>(grid, k[1], b);
+            Self::add::<2>(grid, k[2], b);
+        }
+    }
+
+    /// [`Binner::bin_all_axes`] with each box grown by one 8-lane `max`.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    fn bin_all_axes_avx(&self, grid: &mut [[Bin; 3]; 256], odd_grid: &mut [[Bin; 3]; 256], prims: &[Bounds3]) {
+        use std::arch::x86_64::{__m256, _mm256_castsi256_ps, _mm256_loadu_ps, _mm256_max_ps, _mm256_setr_epi32};
+        use std::arch::x86_64::{_mm256_store_ps, _mm256_xor_ps};
+        // Flips the sign of the min corner's four lanes: (min, max) → (−min, max).
+        let flip = _mm256_castsi256_ps(_mm256_setr_epi32(i32::MIN, i32::MIN, i32::MIN, i32::MIN, 0, 0, 0, 0));
+        let load = |b: &Bounds3| {
+            // SAFETY: `Bounds3` is `repr(C)`: 32 bytes, min then max.
+            _mm256_xor_ps(unsafe { _mm256_loadu_ps((b as *const Bounds3).cast()) }, flip)
+        };
+        let add = |grid: &mut [[Bin; 3]; 256], axis: usize, k: u32, f: __m256| {
+            let bin = &mut grid[(k & 255) as usize][axis];
+            let lanes = (bin as *mut Bin).cast::<f32>();
+            // SAFETY: a `Bin` is `repr(C, align(32))` and opens with its 32
+            // bytes of (−min, max), the same `max_ps` as `Binner::add`'s.
+            unsafe { _mm256_store_ps(lanes, _mm256_max_ps(_mm256_loadu_ps(lanes), f)) };
+            bin.count += 1;
+        };
+        let mut pairs = prims.chunks_exact(2);
+        for pair in &mut pairs {
+            let (k0, k1) = (self.indices(&pair[0]), self.indices(&pair[1]));
+            let (f0, f1) = (load(&pair[0]), load(&pair[1]));
+            for axis in 0..3 {
+                add(grid, axis, k0[axis], f0);
+                add(odd_grid, axis, k1[axis], f1);
+            }
+        }
+        if let [b] = pairs.remainder() {
+            let f = load(b);
+            for (axis, k) in self.indices(b).into_iter().enumerate() {
+                add(grid, axis, k, f);
+            }
+        }
+    }
+
+    fn bin_one_axis<const A: usize>(&self, grid: &mut [[Bin; 3]; 256], prims: &[Bounds3]) {
+        for b in prims {
+            Self::add::<A>(grid, self.indices(b)[A], b);
+        }
+    }
+}
+
+/// Splits a primitive range at a bin plane with the binning's own arithmetic
+/// (the same IEEE operations per lane), so each primitive goes where its bin is.
+struct Partition {
+    axis_min: f32,
+    axis_scale: f32,
+    plane: f32,
+}
+
+impl Partition {
+    /// Partitions `bounds` (and `order` alike) in place; returns the split
+    /// index and the centroid bounds of both sides.
+    fn run<const A: usize>(&self, bounds: &mut [Bounds3], order: &mut [u32]) -> (usize, Bounds3, Bounds3) {
+        // Hoare's scheme: scan in from both ends and swap only pairs that are
+        // both on the wrong side (a quarter of a random range, where moving
+        // every right-side primitive to the end would swap half of it).
+        let (mut i, mut j) = (0, bounds.len());
+        let (mut lcb, mut rcb) = (Bounds3::EMPTY, Bounds3::EMPTY);
+        // The binning puts x in bin trunc(min(x, last)); for x ≥ 0 and an
+        // integer plane ≤ last that bin is left of the plane iff x < plane.
+        let left = |c: Vec3A| (c[A] - self.axis_min) * self.axis_scale < self.plane;
+        'scan: loop {
+            // The first primitive from the left that belongs right...
+            let right_centroid = loop {
+                if i == j {
+                    break 'scan;
+                }
+                let c = bounds[i].centroid();
+                if !left(c) {
+                    break c;
+                }
+                lcb = lcb.grow(c);
+                i += 1;
+            };
+            // ...and the first from the right that belongs left.
+            let left_centroid = loop {
+                j -= 1;
+                if j == i {
+                    rcb = rcb.grow(right_centroid);
+                    break 'scan;
+                }
+                let c = bounds[j].centroid();
+                if left(c) {
+                    break c;
+                }
+                rcb = rcb.grow(c);
+            };
+            bounds.swap(i, j);
+            order.swap(i, j);
+            lcb = lcb.grow(left_centroid);
+            rcb = rcb.grow(right_centroid);
+            i += 1;
+        }
+        (i, lcb, rcb)
+    }
+}
+
+/// Truncates three non-negative floats to bin indices in one conversion.
+#[inline(always)]
+fn bin_indices(v: Vec3A) -> [u32; 3] {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{__m128, __m128i, _mm_cvttps_epi32};
+        // SAFETY: SSE2 is part of the x86_64 baseline; the casts reinterpret
+        // 16-byte SIMD values of the same size.
+        let k: [u32; 4] = unsafe { std::mem::transmute::<__m128i, [u32; 4]>(_mm_cvttps_epi32(__m128::from(v))) };
+        [k[0], k[1], k[2]]
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        [v.x as u32, v.y as u32, v.z as u32]
+    }
+}
+
+/// Whether this CPU runs the AVX binning of the BVH build.
+#[cfg(target_arch = "x86_64")]
+fn cpu_has_avx() -> bool {
+    std::is_x86_feature_detected!("avx")
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+    use crate::accel::tests::{random_triangles, room_walls};
+    use crate::accel::Bvh;
+    use crate::sampling::Rng;
+
+    /// The binary nodes a traversal from the root can reach.
+    fn reachable(nodes: &[Node]) -> Vec<usize> {
+        let (mut found, mut stack) = (Vec::new(), vec![0]);
+        while let Some(i) = stack.pop() {
+            found.push(i);
+            if !nodes[i].is_leaf() {
+                stack.extend([i + 1, right_child(nodes, i)]);
+            }
+        }
+        found
+    }
+
+    /// Built in one thread and in four, the tree is the same bytes: its
+    /// wide nodes, packs, tags and SAH cost (summed in the tree's order).
+    /// 40 000 primitives, so the top of the tree is split between threads.
+    #[test]
+    fn the_tree_is_the_same_for_any_thread_count() {
+        let mut prims = random_triangles(40_000, &mut Rng::new(9));
+        prims.extend(room_walls(100_000));
+        let build = |threads: usize| {
+            let pool = crate::parallel::worker_pool(Some(threads)).unwrap();
+            pool.install(|| Bvh::build(prims.clone(), &BvhSettings::default()))
+        };
+        let (one, four) = (build(1), build(4));
+        let bytes = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        let boxes = |b: &Bvh<u32>| {
+            b.wide
+                .iter()
+                .flat_map(|n| n.min.iter().chain(&n.max).flatten().flat_map(|q| q.to_array()))
+                .collect::<Vec<f32>>()
+        };
+        let corners = |b: &Bvh<u32>| {
+            b.packs
+                .iter()
+                .flat_map(|p| p.corners.iter().flatten().flat_map(|q| q.to_array()))
+                .collect::<Vec<f32>>()
+        };
+        let links = |b: &Bvh<u32>| {
+            b.wide
+                .iter()
+                .map(|n| (n.child, n.count, n.lanes, n.leaves))
+                .collect::<Vec<_>>()
+        };
+        assert!(one.stats().nodes > 2 * PARALLEL_MIN_PRIMITIVES / 8);
+        assert_eq!(bytes(&boxes(&one)), bytes(&boxes(&four)));
+        assert_eq!(bytes(&corners(&one)), bytes(&corners(&four)));
+        assert_eq!(links(&one), links(&four));
+        assert_eq!(one.tags, four.tags);
+        assert_eq!(one.slots, four.slots);
+        assert_eq!(one.stats().sah_cost.to_bits(), four.stats().sah_cost.to_bits());
+        assert_eq!(one.stats().nodes, four.stats().nodes);
+    }
+
+    /// The collapse packs the small subtrees of a dense cluster into wide
+    /// leaves but opens those of a room's walls down to their own boxes.
+    #[test]
+    fn collapse_packs_small_subtrees_but_not_large_walls() {
+        let mut prims = random_triangles(3000, &mut Rng::new(3))
+            .into_iter()
+            .map(|(mut g, tag)| {
+                // Shrink the cluster to a tenth of the room.
+                if let PrimGeometry::Triangle(t) = &mut g {
+                    *t = t.map(|p| p * 0.1 + Vec3::splat(5.0));
+                }
+                (g, tag)
+            })
+            .collect::<Vec<_>>();
+        prims.extend(room_walls(20_000));
+        let bvh = Bvh::build(prims.clone(), &BvhSettings::default());
+        let nodes = &bvh.nodes;
+        let limit = WIDE_LEAF_MAX_AREA_FRACTION * nodes[0].bounds().surface_area();
+        let reachable = reachable(nodes);
+        let range = |i: usize| nodes[i].primitives();
+        let is_wall = |i: usize| range(i).all(|p| bvh.tag(p) >= 20_000);
+        let small = |i: usize| !nodes[i].is_leaf() && range(i).len() <= WIDE_LEAF_PRIMITIVES;
+        let leaf = |i: usize| Candidate::new(nodes, i, limit).wide_leaf;
+        let count = |f: &dyn Fn(usize) -> bool| reachable.iter().filter(|&&i| f(i)).count();
+        let packed_cluster = count(&|i| small(i) && leaf(i) && !is_wall(i));
+        let opened_walls = count(&|i| small(i) && !leaf(i) && is_wall(i));
+        let packed_walls = count(&|i| small(i) && leaf(i) && is_wall(i));
+        assert!(packed_cluster > 100, "cluster subtrees packed: {packed_cluster}");
+        assert!(opened_walls > 0, "wall subtrees opened: {opened_walls}");
+        assert_eq!(packed_walls, 0, "a wall subtree was packed");
+        // Every primitive sits in exactly one pack lane, the one its slot names.
+        for prim in 0..prims.len() as u32 {
+            let slot = bvh.slots[prim as usize] as usize;
+            assert_eq!(bvh.packs[slot / PACK].first + (slot % PACK) as u32, prim);
+        }
+        let lanes: u32 = bvh.packs.iter().map(|p| (p.triangles | p.spheres).count_ones()).sum();
+        assert_eq!(lanes as usize, prims.len());
+    }
+
+    /// The AVX binning fills the same bins as the portable one, bit for bit
+    /// (so the tree does not depend on the CPU), over a range with an odd
+    /// count and negative zeros among the coordinates.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn avx_binning_matches_the_portable_one_bit_for_bit() {
+        if !cpu_has_avx() {
+            eprintln!("skipped: this CPU has no AVX");
+            return;
+        }
+        let mut prims: Vec<Bounds3> = random_triangles(1001, &mut Rng::new(5))
+            .iter()
+            .map(|(g, _)| g.bounds())
+            .collect();
+        prims[7].min.x = -0.0;
+        prims[8].max.y = -0.0;
+        let all = prims.iter().fold(Bounds3::EMPTY, |b, p| b.union(*p));
+        let bins = 8;
+        let binner = Binner {
+            cmin: all.min,
+            scale: Vec3A::splat(bins as f32 * (1.0 - 1e-6)) / all.diagonal(),
+            last: Vec3A::splat((bins - 1) as f32),
+        };
+        let bits = |bin: &Bin| {
+            let b = bin.bounds();
+            (
+                b.min.to_array().map(f32::to_bits),
+                b.max.to_array().map(f32::to_bits),
+                bin.count,
+            )
+        };
+        let mut grids = [(); 2].map(|_| Box::new([[[EMPTY_BIN; 3]; 256]; 2]));
+        let [even, odd] = &mut *grids[0];
+        binner.bin_all_axes_portable(even, odd, &prims);
+        let [even, odd] = &mut *grids[1];
+        // SAFETY: the CPU has AVX (checked above).
+        unsafe { binner.bin_all_axes_avx(even, odd, &prims) };
+        for (g, (portable, avx)) in grids[0].iter().zip(grids[1].iter()).enumerate() {
+            for (k, (p, a)) in portable.iter().zip(avx.iter()).enumerate().take(bins) {
+                for axis in 0..3 {
+                    assert_eq!(bits(&p[axis]), bits(&a[axis]), "grid {g}, bin {k}, axis {axis}");
+                }
+            }
+        }
+        let binned: u32 = grids[1].iter().flat_map(|g| g[..bins].iter().map(|b| b[0].count)).sum();
+        assert_eq!(binned, 1001);
+    }
+}
