@@ -170,7 +170,7 @@ def test_f_stop_changes_the_image_and_back_gives_the_same_pixels(chromium, viewe
     assert page.errors == []
 
 
-def test_the_sensor_panel_records_through_a_sensor_and_back(chromium, viewer: Viewer) -> None:
+def test_the_sensor_panel_records_through_a_sensor_and_back(chromium, viewer: Viewer, tmp_path: Path) -> None:
     page = open_page(chromium, viewer, max_spp=2)
     wait_for_spp(page, 2)
     radiance = canvas_pixels(page)
@@ -192,6 +192,11 @@ def test_the_sensor_panel_records_through_a_sensor_and_back(chromium, viewer: Vi
     assert viewer.state()["settings"]["sensor"]["iso"] == 880.0
     brighter = canvas_pixels(page)
     assert sum(brighter) > 1.5 * sum(developed)
+    # The EXR download records how the frame was taken, as `lenspath render --sensor` does.
+    (tmp_path / "taken.exr").write_bytes(viewer.get("api/image.exr"))
+    attributes = lenspath.read_exr(tmp_path / "taken.exr")["attributes"]
+    assert attributes["isoSpeed"] == 880.0 and abs(attributes["expTime"] - 1 / 60) < 1e-6
+    assert attributes["lenspath/sensor"] == "sony_ilce_7m3"
 
     # Metered: the camera chooses, and the default scene is dim enough to need the gain.
     g = generation(page)

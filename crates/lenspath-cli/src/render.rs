@@ -389,7 +389,7 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
             if let Some(raw) = &args.raw {
                 write_raw(raw, &frame)?;
             }
-            let header = setup.image_header(&scene_name, Some(&frame))?;
+            let header = setup.image_header(&scene_name, Some(&frame.exposure()))?;
             write_image_with_header(&args.out, &develop(&frame, &development), args.exposure, &header)?;
             eprintln!("{}", exposure_line(&frame));
         }

@@ -32,7 +32,9 @@ use crate::options::SceneOptions;
 use crate::render::{FilmResponse, RenderSettings};
 use crate::sampling::SamplerKind;
 use crate::scene::SceneView;
-use crate::sensor::{capture_through, needs_a_lens, Development, RawFrame, SensorDescription, SensorSettings};
+use crate::sensor::{
+    capture_through, needs_a_lens, Development, Exposure, RawFrame, SensorDescription, SensorSettings,
+};
 
 // ---------------------------------------------------------------------------
 // What a caller asks for
@@ -222,15 +224,15 @@ impl RenderSetup {
         Ok(Some((frame, sensor.development)))
     }
 
-    /// The EXR header of this setup's render of `scene_name` (read out as
-    /// `frame` through a sensor): a crop's place in the full frame, the
+    /// The EXR header of this setup's render of `scene_name` (taken with
+    /// `exposure` through a sensor): a crop's place in the full frame, the
     /// OpenEXR standard attributes that apply (`worldToCamera`; `worldToNDC`
     /// for the projective cameras, which a real lens's distortion is not;
     /// `focus` in metres and `aperture` as an f-number for a real lens;
     /// `expTime` and `isoSpeed` through a sensor; `software`, `comments`),
     /// and the settings under `lenspath/`. No `owner`: lenspath does not
     /// know who owns the image.
-    pub fn image_header(&self, scene_name: &str, frame: Option<&RawFrame>) -> Result<ImageHeader> {
+    pub fn image_header(&self, scene_name: &str, exposure: Option<&Exposure>) -> Result<ImageHeader> {
         use HeaderValue::{Float, Int, Matrix, Text};
         let s = &self.settings;
         let (width, height) = (s.width, s.height);
@@ -285,10 +287,10 @@ impl RenderSetup {
                 comments += &format!(" ({} at f/{f_number:.2})", r.lens.name());
             }
         }
-        if let Some(frame) = frame {
-            put("expTime", Float(frame.exposure_time_s as f32));
-            put("isoSpeed", Float(frame.iso as f32));
-            put("lenspath/sensor", Text(frame.sensor_name.clone()));
+        if let Some(exposure) = exposure {
+            put("expTime", Float(exposure.exposure_time_s as f32));
+            put("isoSpeed", Float(exposure.iso as f32));
+            put("lenspath/sensor", Text(exposure.sensor_name.clone()));
         }
         let path = s.integrator.path_settings();
         put("lenspath/integrator", Text(s.integrator.kind().name().to_string()));

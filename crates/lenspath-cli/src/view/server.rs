@@ -239,7 +239,7 @@ fn encode(session: &Session, frame: &Frame, what: Download) -> lenspath::Result<
                 pose: frame.view.pose,
                 sensor: None,
             };
-            let header = setup.image_header(&session.scene_name, None)?;
+            let header = setup.image_header(&session.scene_name, frame.exposure.as_ref())?;
             (
                 encode_image(&image, ImageFormat::Exr, 0.0, &header)?,
                 "image/x-exr",

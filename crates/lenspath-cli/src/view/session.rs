@@ -19,7 +19,7 @@ use lenspath::options::SceneOptions;
 use lenspath::render::{check_max_depth, FilmResponse, NormalizedRect, RenderSettings};
 use lenspath::sampling::SamplerKind;
 use lenspath::scene::{CompiledScene, SceneView};
-use lenspath::sensor::{capture_through, develop::develop, SensorSettings};
+use lenspath::sensor::{capture_through, develop::develop, Exposure, SensorSettings};
 use lenspath::setup::{
     realistic_settings, resolve, resolve_settings, CameraSettings, RealisticDescription, RenderOverrides,
 };
@@ -149,9 +149,9 @@ pub struct View {
 impl View {
     /// What the page shows of a render's `film`: the film itself, or
     /// through a sensor the raw frame it reads out, developed (its samples
-    /// per pixel the film's), with the exposure time and ISO it was taken
-    /// at. `camera` is the camera it was rendered with.
-    pub fn shown(&self, camera: &RealisticCamera, film: Image) -> Result<(Image, Option<(f64, f64)>)> {
+    /// per pixel the film's), with how it was taken. `camera` is the camera
+    /// it was rendered with.
+    pub fn shown(&self, camera: &RealisticCamera, film: Image) -> Result<(Image, Option<Exposure>)> {
         let Some(sensor) = &self.sensor else {
             return Ok((film, None));
         };
@@ -161,7 +161,7 @@ impl View {
             spp_requested: film.spp_requested,
             ..develop(&frame, &sensor.development)
         };
-        Ok((image, Some((frame.exposure_time_s, frame.iso))))
+        Ok((image, Some(frame.exposure())))
     }
 }
 
@@ -175,6 +175,8 @@ pub struct Frame {
     pub jpeg: Bytes,
     /// The view it was rendered with.
     pub view: Arc<View>,
+    /// How it was taken, through a sensor.
+    pub exposure: Option<Exposure>,
 }
 
 /// What the render thread and the handlers tell the pages.

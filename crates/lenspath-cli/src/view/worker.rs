@@ -187,6 +187,7 @@ fn step(session: &Session, progress: &mut Progress, view: &Arc<View>, changed_at
         image,
         jpeg,
         view: view.clone(),
+        exposure,
     });
     {
         let mut state = session.lock();
@@ -208,7 +209,7 @@ fn step(session: &Session, progress: &mut Progress, view: &Arc<View>, changed_at
         "samples_per_second": s.samples as f64 / s.seconds.max(1e-9),
         "full_latency_ms": full_latency_ms,
         "sensor_depth_mm": view.sensor_depth_mm,
-        "exposure": exposure.map(|(time_s, iso)| json!({"time_s": time_s, "iso": iso})),
+        "exposure": frame.exposure.as_ref().map(|e| json!({"time_s": e.exposure_time_s, "iso": e.iso})),
     }));
     let _ = session.events.send(Event::Frame(frame.jpeg.clone()));
     Ok(())

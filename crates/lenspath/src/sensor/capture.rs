@@ -44,6 +44,29 @@ pub struct RawFrame {
     pub iso: f64,
 }
 
+/// How a frame was taken: what an image of it records (EXR `expTime`,
+/// `isoSpeed` and `lenspath/sensor`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Exposure {
+    /// The exposure time, s.
+    pub exposure_time_s: f64,
+    /// The ISO speed.
+    pub iso: f64,
+    /// The spectral response's name.
+    pub sensor_name: String,
+}
+
+impl RawFrame {
+    /// How it was taken.
+    pub fn exposure(&self) -> Exposure {
+        Exposure {
+            exposure_time_s: self.exposure_time_s,
+            iso: self.iso,
+            sensor_name: self.sensor_name.clone(),
+        }
+    }
+}
+
 /// The frame `settings` read out from `film`, a sensor render's film
 /// through `camera` (its pixel (0, 0) at `origin` on the full sensor): the
 /// camera says what a reading is ([`Camera::film_radiometry`]); only a

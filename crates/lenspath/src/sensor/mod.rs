@@ -33,7 +33,7 @@ pub mod raw_file;
 pub mod response;
 mod white_balance;
 
-pub use capture::{capture, capture_through, RawFrame};
+pub use capture::{capture, capture_through, Exposure, RawFrame};
 pub use develop::{Demosaic, Development, ToneCurve};
 pub use response::SpectralResponse;
 pub use white_balance::WhiteBalance;
