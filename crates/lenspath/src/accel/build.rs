@@ -527,9 +527,11 @@ const WIDE_LEAF_MAX_AREA_FRACTION: f32 = 0.01;
 /// triangle tests. Returns the wide nodes and the leaves' packs of the
 /// primitives `prims[order[k]]` (traversal order `k`).
 ///
-/// The tree's shape is decided first, in one pass that writes only links;
-/// the boxes and packs, nearly all of the bytes, are then filled in
-/// parallel, straight into allocations of their final size.
+/// The tree's shape is decided first, writing only links: the top of the
+/// tree, then the binary subtrees below it in parallel (see
+/// [`SHAPE_TASK_PRIMITIVES`]); the boxes and packs, nearly all of the bytes,
+/// are then filled in parallel, straight into allocations of their final
+/// size. The wide nodes lie in that order: the top's, then each subtree's.
 pub(super) fn collapse<T: Sync>(
     nodes: &[Node],
     prims: &[(PrimGeometry, T)],
@@ -538,9 +540,35 @@ pub(super) fn collapse<T: Sync>(
     if nodes.is_empty() {
         return (Vec::new(), Vec::new());
     }
-    let (links, pack_ranges) = wide_links(nodes);
+    let limit = WIDE_LEAF_MAX_AREA_FRACTION * nodes[0].bounds().surface_area();
+    let mut top = Shape::of(nodes, Candidate::new(nodes, 0, limit), limit, SHAPE_TASK_PRIMITIVES);
+    let below: Vec<Shape> = top
+        .deferred
+        .par_iter()
+        .map(|&(_, _, c)| Shape::of(nodes, Candidate::new(nodes, c, limit), limit, 0))
+        .collect();
+    // Each subtree's nodes and packs follow the top's and those of the
+    // subtrees before it: its links are shifted by those counts, and its
+    // root is where the top's lane points.
+    let mut offsets = vec![(0, 0)];
+    let (mut link_offset, mut pack_offset) = (top.links.len() as u32, top.pack_ranges.len() as u32);
+    for (shape, &(slot, lane, _)) in below.iter().zip(&top.deferred) {
+        top.links[slot].child[lane] = link_offset;
+        offsets.push((link_offset, pack_offset));
+        link_offset += shape.links.len() as u32;
+        pack_offset += shape.pack_ranges.len() as u32;
+    }
+    let shapes = || std::iter::once(&top).chain(&below);
+    let links: Vec<(&WideLinks, (u32, u32))> = shapes()
+        .zip(&offsets)
+        .flat_map(|(shape, &offset)| shape.links.iter().map(move |l| (l, offset)))
+        .collect();
     let mut wide = huge_vec(links.len());
-    links.par_iter().map(|l| l.node(nodes)).collect_into_vec(&mut wide);
+    links
+        .par_iter()
+        .map(|&(l, (link_offset, pack_offset))| l.node(nodes, link_offset, pack_offset))
+        .collect_into_vec(&mut wide);
+    let pack_ranges: Vec<(u32, u32)> = shapes().flat_map(|shape| shape.pack_ranges.iter().copied()).collect();
     let mut packs = huge_vec(pack_ranges.len());
     pack_ranges
         .par_iter()
@@ -561,8 +589,10 @@ struct WideLinks {
 }
 
 impl WideLinks {
-    /// The wide node, its lanes' boxes those of their binary nodes.
-    fn node(&self, nodes: &[Node]) -> WideNode {
+    /// The wide node, its lanes' boxes those of their binary nodes, its
+    /// children's indices shifted by `link_offset` (wide nodes) or
+    /// `pack_offset` (packs).
+    fn node(&self, nodes: &[Node], link_offset: u32, pack_offset: u32) -> WideNode {
         let mut node = WideNode {
             min: [[Vec4::ZERO; QUADS]; 3],
             max: [[Vec4::ZERO; QUADS]; 3],
@@ -572,6 +602,11 @@ impl WideLinks {
             leaves: self.leaves,
         };
         for lane in 0..self.lanes.count_ones() as usize {
+            node.child[lane] += if self.leaves & (1 << lane) != 0 {
+                pack_offset
+            } else {
+                link_offset
+            };
             let b = &nodes[self.binary[lane] as usize];
             for axis in 0..3 {
                 node.min[axis][lane / 4][lane % 4] = b.min[axis];
@@ -582,63 +617,83 @@ impl WideLinks {
     }
 }
 
-/// The wide tree's shape: its nodes' links, and the primitive range of each
-/// pack in the order the leaves are met.
-fn wide_links(nodes: &[Node]) -> (Vec<WideLinks>, Vec<(u32, u32)>) {
-    let limit = WIDE_LEAF_MAX_AREA_FRACTION * nodes[0].bounds().surface_area();
-    let candidate = |i: usize| Candidate::new(nodes, i, limit);
-    let empty = WideLinks {
-        binary: [0; WIDTH],
-        child: [0; WIDTH],
-        count: [0; WIDTH],
-        lanes: 0,
-        leaves: 0,
-    };
-    let mut links = vec![empty];
-    let mut pack_ranges = Vec::new();
-    // A leaf root becomes one wide node with a single leaf lane.
-    let root = candidate(0);
-    let mut pending = vec![(0usize, if root.wide_leaf { None } else { Some(0usize) })];
-    while let Some((slot, binary)) = pending.pop() {
-        // Up to WIDTH children, on the stack (no allocation per node).
-        let mut children = [root; WIDTH];
-        let mut len = match binary {
-            None => 1,
-            Some(i) => {
-                children[..2].copy_from_slice(&[candidate(i + 1), candidate(right_child(nodes, i))]);
-                2
-            }
+/// Binary subtrees of fewer primitives than this, below the top of the
+/// tree, are each collapsed as one parallel task.
+const SHAPE_TASK_PRIMITIVES: usize = 1 << 14;
+
+/// The shape of (part of) the wide tree.
+struct Shape {
+    /// Its wide nodes' links (children indexed within this shape).
+    links: Vec<WideLinks>,
+    /// The primitive range of each pack, in the order the leaves are met.
+    pack_ranges: Vec<(u32, u32)>,
+    /// The interior children left to other shapes: (wide node, lane, binary node).
+    deferred: Vec<(usize, usize, usize)>,
+}
+
+impl Shape {
+    /// The shape of the wide tree over binary node `root`, leaving the
+    /// interior children of fewer than `defer_below` primitives to others.
+    fn of(nodes: &[Node], root: Candidate, limit: f32, defer_below: usize) -> Shape {
+        let candidate = |i: usize| Candidate::new(nodes, i, limit);
+        let empty = WideLinks {
+            binary: [0; WIDTH],
+            child: [0; WIDTH],
+            count: [0; WIDTH],
+            lanes: 0,
+            leaves: 0,
         };
-        while len < WIDTH {
-            let widest = children[..len]
-                .iter()
-                .enumerate()
-                .filter(|(_, c)| !c.wide_leaf)
-                .max_by(|a, b| a.1.area.total_cmp(&b.1.area));
-            let Some((k, &c)) = widest else { break };
-            children[k] = candidate(c.node + 1);
-            children[len] = candidate(right_child(nodes, c.node));
-            len += 1;
-        }
-        let mut node = empty;
-        for (lane, c) in children[..len].iter().enumerate() {
-            node.binary[lane] = c.node as u32;
-            node.lanes |= 1 << lane;
-            if c.wide_leaf {
-                let std::ops::Range { start: first, end } = nodes[c.node].primitives();
-                node.child[lane] = pack_ranges.len() as u32;
-                node.count[lane] = (end - first) as u16;
-                node.leaves |= 1 << lane;
-                pack_ranges.extend((first..end).step_by(PACK).map(|p| (p, end.min(p + PACK as u32))));
-            } else {
-                node.child[lane] = links.len() as u32;
-                links.push(empty);
-                pending.push((node.child[lane] as usize, Some(c.node)));
+        let mut links = vec![empty];
+        let (mut pack_ranges, mut deferred) = (Vec::new(), Vec::new());
+        // A leaf root becomes one wide node with a single leaf lane.
+        let mut pending = vec![(0usize, if root.wide_leaf { None } else { Some(root.node) })];
+        while let Some((slot, binary)) = pending.pop() {
+            // Up to WIDTH children, on the stack (no allocation per node).
+            let mut children = [root; WIDTH];
+            let mut len = match binary {
+                None => 1,
+                Some(i) => {
+                    children[..2].copy_from_slice(&[candidate(i + 1), candidate(right_child(nodes, i))]);
+                    2
+                }
+            };
+            while len < WIDTH {
+                let widest = children[..len]
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, c)| !c.wide_leaf)
+                    .max_by(|a, b| a.1.area.total_cmp(&b.1.area));
+                let Some((k, &c)) = widest else { break };
+                children[k] = candidate(c.node + 1);
+                children[len] = candidate(right_child(nodes, c.node));
+                len += 1;
             }
+            let mut node = empty;
+            for (lane, c) in children[..len].iter().enumerate() {
+                node.binary[lane] = c.node as u32;
+                node.lanes |= 1 << lane;
+                if c.wide_leaf {
+                    let std::ops::Range { start: first, end } = nodes[c.node].primitives();
+                    node.child[lane] = pack_ranges.len() as u32;
+                    node.count[lane] = (end - first) as u16;
+                    node.leaves |= 1 << lane;
+                    pack_ranges.extend((first..end).step_by(PACK).map(|p| (p, end.min(p + PACK as u32))));
+                } else if nodes[c.node].primitives().len() < defer_below {
+                    deferred.push((slot, lane, c.node));
+                } else {
+                    node.child[lane] = links.len() as u32;
+                    links.push(empty);
+                    pending.push((node.child[lane] as usize, Some(c.node)));
+                }
+            }
+            links[slot] = node;
         }
-        links[slot] = node;
+        Shape {
+            links,
+            pack_ranges,
+            deferred,
+        }
     }
-    (links, pack_ranges)
 }
 
 /// A binary node the collapse may open, with what it decides by, worked
