@@ -119,8 +119,7 @@ pub fn run(args: AutofocusArgs) -> Result<Outcome> {
         .ok_or_else(|| Error::InvalidArgument("the scene has no camera".into()))?;
     let patch = args.patch;
     let search = resolve_autofocus(&options, &view, patch, &overrides(&args)?)?;
-    // The BVH is built on the worker threads asked for (the same tree on any number).
-    let compiled = lenspath::parallel::worker_pool(args.threads)?.install(|| scene.compile(&BvhSettings::default()))?;
+    let compiled = scene.compile_on(&BvhSettings::default(), args.threads)?;
     let (width, height) = (search.settings.width, search.settings.height);
     let lens = search.settings.camera.clone();
     let strategy = search.strategy;

@@ -308,8 +308,7 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
     }
     // Hashed only for checkpoints: a million triangles take a tenth of a second.
     let scene_hash = checkpoint_path.is_some().then(|| scene_hasher(&scene));
-    // The BVH is built on the worker threads asked for (the same tree on any number).
-    let compiled = lenspath::parallel::worker_pool(args.threads)?.install(|| scene.compile(&BvhSettings::default()))?;
+    let compiled = scene.compile_on(&BvhSettings::default(), args.threads)?;
     if let Some(patch) = args.autofocus {
         let search = autofocus_before_render(&setup, patch)?;
         let scene_unit_m = search.settings.camera.scene_unit_m;

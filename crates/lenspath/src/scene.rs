@@ -244,6 +244,12 @@ impl Scene {
         Ok(())
     }
 
+    /// [`Scene::compile`] on `threads` worker threads (`None`: every core),
+    /// as a render asked for that many runs.
+    pub fn compile_on(self, settings: &BvhSettings, threads: Option<usize>) -> Result<CompiledScene> {
+        crate::parallel::worker_pool(threads)?.install(|| self.compile(settings))
+    }
+
     /// Validates the scene and builds its acceleration structure and lights.
     /// The BVH is built on the current rayon pool's threads (every core
     /// unless the caller installs a pool); its tree does not depend on how many.

@@ -543,11 +543,11 @@ pub(super) fn collapse<T: Sync>(
         return (Vec::new(), Vec::new());
     }
     let limit = WIDE_LEAF_MAX_AREA_FRACTION * nodes[0].bounds().surface_area();
-    let mut top = Shape::of(nodes, Candidate::new(nodes, 0, limit), limit, SHAPE_TASK_PRIMITIVES);
+    let mut top = Shape::of(nodes, 0, limit, SHAPE_TASK_PRIMITIVES);
     let below: Vec<Shape> = top
         .deferred
         .par_iter()
-        .map(|&(_, _, c)| Shape::of(nodes, Candidate::new(nodes, c, limit), limit, 0))
+        .map(|&(_, _, c)| Shape::of(nodes, c, limit, 0))
         .collect();
     // Each subtree's nodes and packs follow the top's and those of the
     // subtrees before it: its links are shifted by those counts, and its
@@ -636,8 +636,9 @@ struct Shape {
 impl Shape {
     /// The shape of the wide tree over binary node `root`, leaving the
     /// interior children of fewer than `defer_below` primitives to others.
-    fn of(nodes: &[Node], root: Candidate, limit: f32, defer_below: usize) -> Shape {
+    fn of(nodes: &[Node], root: usize, limit: f32, defer_below: usize) -> Shape {
         let candidate = |i: usize| Candidate::new(nodes, i, limit);
+        let root = candidate(root);
         let empty = WideLinks {
             binary: [0; WIDTH],
             child: [0; WIDTH],
