@@ -536,7 +536,7 @@ impl<T: Copy> Bvh<T> {
             let node = &self.nodes[current];
             if tr.hits_box(node, t_max) {
                 if node.is_leaf() {
-                    for prim in node.primitives() {
+                    for prim in build::primitives(&self.nodes, current) {
                         if let Some(hit) = intersect_prim(&tr, ray, self.primitive(prim), prim, t_max) {
                             if ANY {
                                 return Some(hit);
@@ -924,10 +924,15 @@ mod tests {
     fn depth_is_bounded_past_the_sah_depth() {
         let mut rng = Rng::new(21);
         let prims = random_triangles(3000, &mut rng);
-        let free = Bvh::build(prims.clone(), &BvhSettings::default());
+        // Leaves of one primitive, so that nothing stops the splitting early.
+        let single = BvhSettings {
+            max_leaf_size: 1,
+            ..Default::default()
+        };
+        let free = Bvh::build(prims.clone(), &single);
         let settings = BvhSettings {
             max_sah_depth: 2,
-            ..Default::default()
+            ..single
         };
         let bounded = Bvh::build(prims.clone(), &settings);
         let limit = 2 + 12; // ⌈log2 3000⌉ = 12
