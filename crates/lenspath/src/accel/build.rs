@@ -205,12 +205,20 @@ pub(super) fn binary_tree(mut bounds: Vec<Bounds3>, settings: &BvhSettings) -> B
         centroid_bounds: root_centroids,
         depth: 0,
     };
-    let (pieces, stats) = builder.subtree(root, &mut bounds, &mut order);
-    BinaryTree {
-        nodes: join(&pieces),
-        order,
-        stats,
-    }
+    // On one thread the whole tree is one piece, with room for the most
+    // nodes it can have (pages never written are never touched).
+    let mut pieces = vec![Vec::with_capacity(if rayon::current_num_threads() == 1 {
+        2 * n - 1
+    } else {
+        0
+    })];
+    let stats = builder.subtree(root, &mut bounds, &mut order, &mut pieces);
+    let nodes = if pieces.len() == 1 {
+        pieces.pop().unwrap_or_default()
+    } else {
+        join(&pieces)
+    };
+    BinaryTree { nodes, order, stats }
 }
 
 /// The pieces of a tree's node array, one after another in one array
@@ -244,16 +252,25 @@ struct Builder<'a> {
 
 impl Builder<'_> {
     /// Builds `task`'s subtree over the primitives `bounds` and `order`:
-    /// its nodes in depth-first order, in pieces to be joined one after
-    /// another. Large subtrees build their two children in parallel.
-    fn subtree(&self, task: Task, bounds: &mut [Bounds3], order: &mut [u32]) -> (Vec<Vec<Node>>, SubtreeStats) {
+    /// appends its nodes in depth-first order to `pieces`, which are to be
+    /// joined one after another. Large subtrees build their two children in
+    /// parallel, each into pieces of its own, when the pool has threads to
+    /// spare.
+    fn subtree(
+        &self,
+        task: Task,
+        bounds: &mut [Bounds3],
+        order: &mut [u32],
+        pieces: &mut Vec<Vec<Node>>,
+    ) -> SubtreeStats {
         let mut scratch = Scratch::new(self.bins);
         let mut stats = SubtreeStats::default();
         let count = task.end - task.start;
         if count < PARALLEL_MIN_PRIMITIVES {
             // Smaller ones run here, as a loop over a stack of tasks, each
             // a left child or a right one with its parent's place.
-            let mut nodes: Vec<Node> = Vec::with_capacity(2 * count - 1);
+            let nodes = pieces.last_mut().expect("a piece to append to");
+            nodes.reserve(2 * count - 1);
             let base = task.start;
             let mut stack: Vec<(Task, Option<usize>)> = Vec::with_capacity(64);
             stack.push((task, None));
@@ -269,26 +286,34 @@ impl Builder<'_> {
                     stack.extend([(right, Some(place)), (left, None)]);
                 }
             }
-            return (vec![nodes], stats);
+            return stats;
         }
-        let (mut node, children) = self.node(&mut scratch, &task, bounds, order, &mut stats);
-        let Some((left, right)) = children else {
-            return (vec![vec![node]], stats);
-        };
+        let (node, children) = self.node(&mut scratch, &task, bounds, order, &mut stats);
         drop(scratch);
+        let (piece, place) = (pieces.len() - 1, pieces[pieces.len() - 1].len());
+        pieces[piece].push(node);
+        let Some((left, right)) = children else {
+            return stats;
+        };
         let split = left.end - left.start;
         let (left_bounds, right_bounds) = bounds.split_at_mut(split);
         let (left_order, right_order) = order.split_at_mut(split);
-        let ((left_pieces, l), (right_pieces, r)) = rayon::join(
-            || self.subtree(left, left_bounds, left_order),
-            || self.subtree(right, right_bounds, right_order),
-        );
-        node.link = 1 + left_pieces.iter().map(Vec::len).sum::<usize>() as u32;
-        let mut pieces = Vec::with_capacity(1 + left_pieces.len() + right_pieces.len());
-        pieces.push(vec![node]);
-        pieces.extend(left_pieces);
-        pieces.extend(right_pieces);
-        (pieces, stats.then(l).then(r))
+        let (l, r) = if rayon::current_num_threads() == 1 {
+            let l = self.subtree(left, left_bounds, left_order, pieces);
+            (l, self.subtree(right, right_bounds, right_order, pieces))
+        } else {
+            let (mut left_pieces, mut right_pieces) = (vec![Vec::new()], vec![Vec::new()]);
+            let (l, r) = rayon::join(
+                || self.subtree(left, left_bounds, left_order, &mut left_pieces),
+                || self.subtree(right, right_bounds, right_order, &mut right_pieces),
+            );
+            pieces.extend(left_pieces);
+            pieces.extend(right_pieces);
+            (l, r)
+        };
+        // The right child follows the left subtree's nodes.
+        pieces[piece][place].link = 1 + l.nodes as u32;
+        stats.then(l).then(r)
     }
 
     /// Makes `task`'s node: a leaf, or an interior node with its two
