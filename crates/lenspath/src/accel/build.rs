@@ -21,7 +21,8 @@ use crate::math::Bounds3;
 /// left child of interior node `i` is `i + 1`, and the node holds how far
 /// after it the right child is. Since every link is relative, a subtree's
 /// nodes are the same wherever they end up, so large subtrees are built in
-/// parallel into arrays of their own and joined after.
+/// parallel into arrays of their own and joined after (on one thread, the
+/// whole tree into one).
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(32))]
 pub(super) struct Node {
@@ -197,6 +198,7 @@ pub(super) fn binary_tree(mut bounds: Vec<Bounds3>, settings: &BvhSettings) -> B
         settings,
         bins: settings.bins.clamp(2, 256),
         root_area: root_bounds.surface_area().max(f32::MIN_POSITIVE),
+        one_thread: rayon::current_num_threads() == 1,
     };
     let root = Task {
         start: 0,
@@ -207,11 +209,7 @@ pub(super) fn binary_tree(mut bounds: Vec<Bounds3>, settings: &BvhSettings) -> B
     };
     // On one thread the whole tree is one piece, with room for the most
     // nodes it can have (pages never written are never touched).
-    let mut pieces = vec![Vec::with_capacity(if rayon::current_num_threads() == 1 {
-        2 * n - 1
-    } else {
-        0
-    })];
+    let mut pieces = vec![Vec::with_capacity(if builder.one_thread { 2 * n - 1 } else { 0 })];
     let stats = builder.subtree(root, &mut bounds, &mut order, &mut pieces);
     let nodes = if pieces.len() == 1 {
         pieces.pop().unwrap_or_default()
@@ -248,6 +246,9 @@ struct Builder<'a> {
     settings: &'a BvhSettings,
     bins: usize,
     root_area: f32,
+    /// Whether the pool has one thread: then the whole tree is built into
+    /// one array, with no pieces to join.
+    one_thread: bool,
 }
 
 impl Builder<'_> {
@@ -298,7 +299,7 @@ impl Builder<'_> {
         let split = left.end - left.start;
         let (left_bounds, right_bounds) = bounds.split_at_mut(split);
         let (left_order, right_order) = order.split_at_mut(split);
-        let (l, r) = if rayon::current_num_threads() == 1 {
+        let (l, r) = if self.one_thread {
             let l = self.subtree(left, left_bounds, left_order, pieces);
             (l, self.subtree(right, right_bounds, right_order, pieces))
         } else {
