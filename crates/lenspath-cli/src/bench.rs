@@ -193,7 +193,7 @@ pub fn run_bvh(args: BvhArgs) -> Result<Outcome> {
             stats.nodes, stats.leaves, stats.max_depth, stats.sah_cost
         );
         println!(
-            "memory              {:.1} MB ({:.1} bytes a triangle: wide nodes, packs with the geometry, slots, tags)",
+            "memory              {:.1} MB ({:.1} bytes a triangle: wide nodes, packs with the geometry, tags)",
             stats.memory_bytes as f64 / 1e6,
             stats.memory_bytes as f64 / mesh.indices.len() as f64
         );

@@ -71,8 +71,8 @@ pub struct BuildStats {
     /// Wall time of the build, in milliseconds.
     pub build_ms: f64,
     /// Bytes the tree holds for traversal and shading: its wide nodes, leaf
-    /// packs (which hold the primitives' geometry), each primitive's place in
-    /// them and its tag (the binary tree the build makes is dropped).
+    /// packs (which hold the primitives' geometry) and the packs' lanes' tags
+    /// (the binary tree the build makes is dropped).
     pub memory_bytes: usize,
 }
 
@@ -102,13 +102,13 @@ impl PrimGeometry {
     }
 }
 
-/// A closest hit: the distance, the primitive (index in traversal order,
-/// see [`Bvh::primitive`]) and, for triangles, the barycentrics of corners 1 and 2.
+/// A closest hit: the distance, the primitive (its slot in the tree, see
+/// [`Bvh::primitive`]) and, for triangles, the barycentrics of corners 1 and 2.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
     /// Ray parameter of the hit.
     pub t: f32,
-    /// Primitive index in traversal order.
+    /// The primitive's slot: its pack's index · 4 + its lane.
     pub prim: u32,
     /// Barycentric coordinate of the second corner (triangles).
     pub b1: f32,
@@ -137,15 +137,16 @@ struct WideNode {
 
 /// Up to four consecutive primitives of a wide leaf, triangles' corners side
 /// by side (`corners[k][axis]`, one lane each, as Embree's `Triangle4`), so
-/// one SIMD watertight test meets all four. Lane `k` is primitive
-/// `first + k`. A sphere's lane holds its centre in `corners[0]` and its
+/// one SIMD watertight test meets all four. Lane `k` is the primitive in
+/// slot `first_slot + k`. A sphere's lane holds its centre in `corners[0]` and its
 /// radius in `corners[1][0]`; spheres (rare) are tested one by one. The
 /// packs are the tree's only copy of the geometry.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(16))]
 struct TrianglePack {
     corners: [[Vec4; 3]; 3],
-    first: u32,
+    /// The slot of lane 0: this pack's index · 4.
+    first_slot: u32,
     /// Bit `k` set where lane `k` is a triangle.
     triangles: u32,
     /// Bit `k` set where lane `k` is a sphere.
@@ -180,9 +181,12 @@ pub struct Bvh<T> {
     wide: Vec<WideNode>,
     /// The wide tree's leaves, four primitives a pack (see [`TrianglePack`]).
     packs: Vec<TrianglePack>,
-    /// Where each primitive (traversal order) sits: pack index · 4 + lane.
-    slots: Vec<u32>,
-    tags: Vec<T>,
+    /// The tags of each pack's lanes (an unused lane repeats lane 0's).
+    tags: Vec<[T; PACK]>,
+    /// The slot of each primitive in the binary tree's order, for the
+    /// reference traversal.
+    #[cfg(test)]
+    slot_of: Vec<u32>,
     stats: BuildStats,
 }
 
@@ -322,21 +326,17 @@ impl<T: Copy + Send + Sync> Bvh<T> {
         let n = prims.len();
         let bounds: Vec<Bounds3> = prims.par_iter().map(|(g, _)| g.bounds()).collect();
         let tree = build::binary_tree(bounds, settings);
-        // Tags in traversal order; the geometry goes into the wide leaves' packs.
-        let tags: Vec<T> = tree.order.par_iter().map(|&i| prims[i as usize].1).collect();
-        let (wide, packs) = build::collapse(&tree.nodes, &prims, &tree.order);
-        let mut slots = vec![0u32; n];
-        for (index, pack) in packs.iter().enumerate() {
-            for lane in 0..PACK as u32 {
-                if (pack.triangles | pack.spheres) & (1 << lane) != 0 {
-                    slots[(pack.first + lane) as usize] = index as u32 * PACK as u32 + lane;
-                }
-            }
-        }
-        let memory_bytes = size_of_val(wide.as_slice())
-            + size_of_val(packs.as_slice())
-            + size_of_val(slots.as_slice())
-            + size_of_val(tags.as_slice());
+        // The geometry and the tags go into the wide leaves' packs.
+        let build::WideTree {
+            wide,
+            packs,
+            tags,
+            pack_ranges,
+        } = build::collapse(&tree.nodes, &prims, &tree.order);
+        #[cfg(test)]
+        let slot_of = build::slots_in_binary_order(&pack_ranges, n);
+        drop(pack_ranges);
+        let memory_bytes = size_of_val(wide.as_slice()) + size_of_val(packs.as_slice()) + size_of_val(tags.as_slice());
         let stats = BuildStats {
             primitives: n,
             nodes: tree.stats.nodes,
@@ -351,8 +351,9 @@ impl<T: Copy + Send + Sync> Bvh<T> {
             #[cfg(test)]
             nodes: tree.nodes,
             wide,
+            #[cfg(test)]
+            slot_of,
             packs,
-            slots,
             tags,
             stats,
         }
@@ -370,16 +371,17 @@ impl<T: Copy> Bvh<T> {
         self.bounds
     }
 
-    /// The caller's tag of primitive `prim` (traversal order).
+    /// The caller's tag of the primitive in slot `prim` (a [`Hit`]'s).
     #[inline]
     pub fn tag(&self, prim: u32) -> T {
-        self.tags[prim as usize]
+        let slot = prim as usize;
+        self.tags[slot / PACK][slot % PACK]
     }
 
-    /// The geometry of primitive `prim` (traversal order).
+    /// The geometry of the primitive in slot `prim` (a [`Hit`]'s).
     #[inline]
     pub fn primitive(&self, prim: u32) -> PrimGeometry {
-        let slot = self.slots[prim as usize] as usize;
+        let slot = prim as usize;
         self.packs[slot / PACK].lane(slot % PACK)
     }
 
@@ -537,7 +539,8 @@ impl<T: Copy> Bvh<T> {
             if tr.hits_box(node, t_max) {
                 if node.is_leaf() {
                     for prim in build::primitives(&self.nodes, current) {
-                        if let Some(hit) = intersect_prim(&tr, ray, self.primitive(prim), prim, t_max) {
+                        let slot = self.slot_of[prim as usize];
+                        if let Some(hit) = intersect_prim(&tr, ray, self.primitive(slot), slot, t_max) {
                             if ANY {
                                 return Some(hit);
                             }
@@ -587,7 +590,7 @@ impl<T: Copy> Bvh<T> {
                     t_max = found.t[lane];
                     closest = Some(Hit {
                         t: t_max,
-                        prim: pack.first + lane as u32,
+                        prim: pack.first_slot + lane as u32,
                         b1: found.b1[lane],
                         b2: found.b2[lane],
                     });
@@ -600,7 +603,7 @@ impl<T: Copy> Bvh<T> {
         while scalar != 0 {
             let lane = scalar.trailing_zeros();
             scalar &= scalar - 1;
-            let prim = pack.first + lane;
+            let prim = pack.first_slot + lane;
             // Tested against the pack's own range, so a lane before the best
             // hit so far wins a tie, as in a scalar loop over the pack.
             if let Some(hit) = intersect_prim(tr, ray, pack.lane(lane as usize), prim, t_limit) {

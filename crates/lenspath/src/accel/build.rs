@@ -629,21 +629,26 @@ fn packs_whole(count: usize, area_fraction: f32) -> bool {
 /// most [`WIDE_LEAF_PRIMITIVES`] primitives is not opened but becomes one
 /// leaf, its triangles tested [`PACK`] at a time in one SIMD step (Embree's
 /// `Triangle4` leaves): the last levels of box tests become one or two
-/// triangle tests. Returns the wide nodes and the leaves' packs of the
-/// primitives `prims[order[k]]` (traversal order `k`).
+/// triangle tests. The leaves' packs hold the primitives `prims[order[k]]`
+/// (binary tree order `k`).
 ///
 /// The tree's shape is decided first, writing only links: the top of the
 /// tree, then the binary subtrees below it in parallel (see
 /// [`SHAPE_TASK_PRIMITIVES`]); the boxes and packs, nearly all of the bytes,
 /// are then filled in parallel, straight into allocations of their final
 /// size. The wide nodes lie in that order: the top's, then each subtree's.
-pub(super) fn collapse<T: Sync>(
+pub(super) fn collapse<T: Copy + Send + Sync>(
     nodes: &[Node],
     prims: &[(PrimGeometry, T)],
     order: &[u32],
-) -> (Vec<WideNode>, Vec<TrianglePack>) {
+) -> WideTree<T> {
     if nodes.is_empty() {
-        return (Vec::new(), Vec::new());
+        return WideTree {
+            wide: Vec::new(),
+            packs: Vec::new(),
+            tags: Vec::new(),
+            pack_ranges: Vec::new(),
+        };
     }
     let root_area = nodes[0].bounds().surface_area().max(f32::MIN_POSITIVE);
     let mut top = Shape::of(nodes, 0, root_area, SHAPE_TASK_PRIMITIVES);
@@ -674,12 +679,41 @@ pub(super) fn collapse<T: Sync>(
         .map(|&(l, (link_offset, pack_offset))| l.node(nodes, link_offset, pack_offset))
         .collect_into_vec(&mut wide);
     let pack_ranges: Vec<(u32, u32)> = shapes().flat_map(|shape| shape.pack_ranges.iter().copied()).collect();
-    let mut packs = huge_vec(pack_ranges.len());
+    let (mut packs, mut tags) = (huge_vec(pack_ranges.len()), Vec::new());
     pack_ranges
         .par_iter()
-        .map(|&(first, end)| pack(prims, order, first, end))
-        .collect_into_vec(&mut packs);
-    (wide, packs)
+        .enumerate()
+        .map(|(index, &(first, end))| pack(prims, &order[first as usize..end as usize], index))
+        .unzip_into_vecs(&mut packs, &mut tags);
+    WideTree {
+        wide,
+        packs,
+        tags,
+        pack_ranges,
+    }
+}
+
+/// What [`collapse`] makes.
+pub(super) struct WideTree<T> {
+    pub(super) wide: Vec<WideNode>,
+    pub(super) packs: Vec<TrianglePack>,
+    /// The packs' lanes' tags.
+    pub(super) tags: Vec<[T; PACK]>,
+    /// Each pack's range of the binary tree's order `k`.
+    pub(super) pack_ranges: Vec<(u32, u32)>,
+}
+
+/// The slot of each primitive in the binary tree's order `k`, from the
+/// packs' ranges of `k` (see [`collapse`]).
+#[cfg(test)]
+pub(super) fn slots_in_binary_order(pack_ranges: &[(u32, u32)], n: usize) -> Vec<u32> {
+    let mut slots = vec![u32::MAX; n];
+    for (index, &(first, end)) in pack_ranges.iter().enumerate() {
+        for (lane, k) in (first..end).enumerate() {
+            slots[k as usize] = (index * PACK + lane) as u32;
+        }
+    }
+    slots
 }
 
 /// A wide node without its boxes: what the collapse decides serially.
@@ -826,15 +860,20 @@ impl Candidate {
     }
 }
 
-fn pack<T>(prims: &[(PrimGeometry, T)], order: &[u32], first: u32, end: u32) -> TrianglePack {
+/// Pack `index` of the wide leaves, holding the primitives `prims[i]` for
+/// `i` in `members` (one to four), and its lanes' tags.
+fn pack<T: Copy>(prims: &[(PrimGeometry, T)], members: &[u32], index: usize) -> (TrianglePack, [T; PACK]) {
     let mut pack = TrianglePack {
         corners: [[Vec4::ZERO; 3]; 3],
-        first,
+        first_slot: (index * PACK) as u32,
         triangles: 0,
         spheres: 0,
     };
-    for (lane, &prim) in order[first as usize..end as usize].iter().enumerate() {
-        match &prims[prim as usize].0 {
+    let mut tags = [prims[members[0] as usize].1; PACK];
+    for (lane, &prim) in members.iter().enumerate() {
+        let (geometry, tag) = &prims[prim as usize];
+        tags[lane] = *tag;
+        match geometry {
             PrimGeometry::Triangle(p) => {
                 for (k, corner) in p.iter().enumerate() {
                     for axis in 0..3 {
@@ -852,7 +891,7 @@ fn pack<T>(prims: &[(PrimGeometry, T)], order: &[u32], first: u32, end: u32) -> 
             }
         }
     }
-    pack
+    (pack, tags)
 }
 
 /// An empty vector with room for `capacity` elements whose memory Linux may
@@ -1149,7 +1188,6 @@ mod tests {
         assert_eq!(bytes(&corners(&one)), bytes(&corners(&four)));
         assert_eq!(links(&one), links(&four));
         assert_eq!(one.tags, four.tags);
-        assert_eq!(one.slots, four.slots);
         assert_eq!(one.stats().sah_cost.to_bits(), four.stats().sah_cost.to_bits());
         assert_eq!(one.stats().nodes, four.stats().nodes);
     }
@@ -1168,7 +1206,9 @@ mod tests {
         for i in reachable(nodes) {
             let range = primitives(nodes, i);
             sampled += usize::from(range.len() >= SAMPLED_BINNING_MIN_PRIMITIVES);
-            let union = range.fold(Bounds3::EMPTY, |b, p| b.union(bvh.primitive(p).bounds()));
+            let union = range.fold(Bounds3::EMPTY, |b, k| {
+                b.union(bvh.primitive(bvh.slot_of[k as usize]).bounds())
+            });
             assert_eq!(
                 (nodes[i].min, nodes[i].max),
                 (union.min.to_array(), union.max.to_array()),
@@ -1201,7 +1241,7 @@ mod tests {
         let root_area = nodes[0].bounds().surface_area();
         let reachable = reachable(nodes);
         let range = |i: usize| primitives(nodes, i);
-        let is_wall = |i: usize| range(i).all(|p| bvh.tag(p) >= 20_000);
+        let is_wall = |i: usize| range(i).all(|k| bvh.tag(bvh.slot_of[k as usize]) >= 20_000);
         // Subtrees of several primitives that the collapse could pack.
         let small = |i: usize| (2..=WIDE_LEAF_PRIMITIVES).contains(&range(i).len());
         let leaf = |i: usize| Candidate::new(nodes, i, root_area).wide_leaf;
@@ -1214,11 +1254,18 @@ mod tests {
         assert!(packed_cluster > 100, "cluster subtrees packed: {packed_cluster}");
         assert!(opened_walls > 0, "wall subtrees opened: {opened_walls}");
         assert_eq!(packed_walls, 0, "a wall subtree was packed");
-        // Every primitive sits in exactly one pack lane, the one its slot names.
-        for prim in 0..prims.len() as u32 {
-            let slot = bvh.slots[prim as usize] as usize;
-            assert_eq!(bvh.packs[slot / PACK].first + (slot % PACK) as u32, prim);
+        // Every primitive sits in its own pack lane, which holds its tag.
+        let mut slots = bvh.slot_of.clone();
+        slots.sort_unstable();
+        slots.dedup();
+        assert_eq!(slots.len(), prims.len());
+        for &slot in &slots {
+            let pack = &bvh.packs[slot as usize / PACK];
+            assert!((pack.triangles | pack.spheres) & (1 << (slot as usize % PACK)) != 0);
         }
+        let mut tags: Vec<u32> = slots.iter().map(|&slot| bvh.tag(slot)).collect();
+        tags.sort_unstable();
+        assert_eq!(tags, prims.iter().map(|p| p.1).collect::<Vec<_>>());
         let lanes: u32 = bvh.packs.iter().map(|p| (p.triangles | p.spheres).count_ones()).sum();
         assert_eq!(lanes as usize, prims.len());
     }
