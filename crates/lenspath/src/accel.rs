@@ -13,6 +13,8 @@ use rayon::prelude::*;
 
 use crate::math::Bounds3;
 use crate::ray::Ray;
+#[cfg(target_arch = "x86_64")]
+use crate::shapes::intersect_triangles8;
 use crate::shapes::{intersect_sphere, intersect_triangle, intersect_triangles4, triangle_bounds, TriangleRay};
 
 mod build;
@@ -444,14 +446,12 @@ impl<T: Copy> Bvh<T> {
             while leaves != 0 {
                 let lane = leaves.trailing_zeros() as usize;
                 leaves &= leaves - 1;
-                for pack in self.leaf_packs(node, lane) {
-                    if let Some(hit) = self.intersect_pack::<ANY>(&tr, ray, pack, t_max) {
-                        if ANY {
-                            return Some(hit);
-                        }
-                        t_max = hit.t;
-                        closest = Some(hit);
+                if let Some(hit) = self.intersect_leaf::<ANY, AVX2>(&tr, ray, self.leaf_packs(node, lane), t_max) {
+                    if ANY {
+                        return Some(hit);
                     }
+                    t_max = hit.t;
+                    closest = Some(hit);
                 }
             }
             mask &= !u32::from(node.leaves);
@@ -564,10 +564,40 @@ impl<T: Copy> Bvh<T> {
         }
     }
 
+    /// The closest hit among a leaf's `packs` before `t_max` (with `ANY`,
+    /// the first found). With `AVX2`, a leaf of two packs has its eight
+    /// triangles tested in one step.
+    #[inline(always)]
+    fn intersect_leaf<const ANY: bool, const AVX2: bool>(
+        &self,
+        tr: &TraversalRay,
+        ray: &Ray,
+        packs: &[TrianglePack],
+        t_max: f32,
+    ) -> Option<Hit> {
+        #[cfg(target_arch = "x86_64")]
+        if AVX2 {
+            if let [low, high] = packs {
+                // SAFETY: `AVX2` is only set by `traverse_wide_avx2`, which
+                // runs on CPUs with the features.
+                return unsafe { self.intersect_pack_pair::<ANY>(tr, ray, low, high, t_max) };
+            }
+        }
+        let (mut t_max, mut closest) = (t_max, None);
+        for pack in packs {
+            if let Some(hit) = self.intersect_pack::<ANY>(tr, ray, pack, t_max) {
+                if ANY {
+                    return Some(hit);
+                }
+                t_max = hit.t;
+                closest = Some(hit);
+            }
+        }
+        closest
+    }
+
     /// The closest hit in `pack` before `t_max` (with `ANY`, the first
-    /// found): its triangles in one SIMD test, then any lanes that test
-    /// hands back and any spheres one by one. Ties go to the lowest lane, as
-    /// the scalar loop over the same primitives would have it.
+    /// found): its triangles in one SIMD test, then see [`Self::resolve`].
     #[inline(always)]
     fn intersect_pack<const ANY: bool>(
         &self,
@@ -576,37 +606,93 @@ impl<T: Copy> Bvh<T> {
         pack: &TrianglePack,
         t_max: f32,
     ) -> Option<Hit> {
+        if pack.triangles == 0 {
+            return self.resolve::<ANY, PACK>(tr, ray, pack.first_slot, 0, pack.spheres, [[0.0; PACK]; 3], t_max);
+        }
+        let found = intersect_triangles4(&tr.tri, &pack.corners, t_max);
+        self.resolve::<ANY, PACK>(
+            tr,
+            ray,
+            pack.first_slot,
+            found.hit & pack.triangles,
+            pack.spheres | (found.redo & pack.triangles),
+            [found.t.to_array(), found.b1.to_array(), found.b2.to_array()],
+            t_max,
+        )
+    }
+
+    /// [`Self::intersect_pack`] for two consecutive packs at once, `low`'s
+    /// lanes first: the closest hit of their eight primitives, ties going
+    /// to the lowest lane as when the packs are tested one after the other.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    #[inline]
+    fn intersect_pack_pair<const ANY: bool>(
+        &self,
+        tr: &TraversalRay,
+        ray: &Ray,
+        low: &TrianglePack,
+        high: &TrianglePack,
+        t_max: f32,
+    ) -> Option<Hit> {
+        let triangles = low.triangles | high.triangles << PACK;
+        let spheres = low.spheres | high.spheres << PACK;
+        // SAFETY: the CPU has AVX (this function's features).
+        let found = unsafe { intersect_triangles8(&tr.tri, &low.corners, &high.corners, t_max) };
+        // The packs lie side by side, so `high`'s slots follow `low`'s.
+        self.resolve::<ANY, { 2 * PACK }>(
+            tr,
+            ray,
+            low.first_slot,
+            found.hit & triangles,
+            spheres | (found.redo & triangles),
+            [found.t, found.b1, found.b2],
+            t_max,
+        )
+    }
+
+    /// The closest of `N` lanes from slot `first_slot` on: the SIMD test's
+    /// `hits` with their distances and barycentrics, then the `scalar`
+    /// lanes (spheres, and triangles the SIMD test handed back) one by one.
+    /// Ties go to the lowest lane, as a scalar loop over the same
+    /// primitives would have it.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn resolve<const ANY: bool, const N: usize>(
+        &self,
+        tr: &TraversalRay,
+        ray: &Ray,
+        first_slot: u32,
+        mut hits: u32,
+        mut scalar: u32,
+        [t, b1, b2]: [[f32; N]; 3],
+        t_max: f32,
+    ) -> Option<Hit> {
         let mut closest: Option<Hit> = None;
         let (t_limit, mut t_max) = (t_max, t_max);
-        let mut scalar = pack.spheres;
-        if pack.triangles != 0 {
-            let found = intersect_triangles4(&tr.tri, &pack.corners, t_max);
-            let mut hits = found.hit & pack.triangles;
-            scalar |= found.redo & pack.triangles;
-            while hits != 0 {
-                let lane = hits.trailing_zeros() as usize;
-                hits &= hits - 1;
-                if found.t[lane] < t_max {
-                    t_max = found.t[lane];
-                    closest = Some(Hit {
-                        t: t_max,
-                        prim: pack.first_slot + lane as u32,
-                        b1: found.b1[lane],
-                        b2: found.b2[lane],
-                    });
-                    if ANY {
-                        return closest;
-                    }
+        while hits != 0 {
+            let lane = hits.trailing_zeros() as usize;
+            hits &= hits - 1;
+            if t[lane] < t_max {
+                t_max = t[lane];
+                closest = Some(Hit {
+                    t: t_max,
+                    prim: first_slot + lane as u32,
+                    b1: b1[lane],
+                    b2: b2[lane],
+                });
+                if ANY {
+                    return closest;
                 }
             }
         }
         while scalar != 0 {
             let lane = scalar.trailing_zeros();
             scalar &= scalar - 1;
-            let prim = pack.first_slot + lane;
-            // Tested against the pack's own range, so a lane before the best
-            // hit so far wins a tie, as in a scalar loop over the pack.
-            if let Some(hit) = intersect_prim(tr, ray, pack.lane(lane as usize), prim, t_limit) {
+            let prim = first_slot + lane;
+            // Tested against the lanes' own range, so a lane before the best
+            // hit so far wins a tie, as in a scalar loop over the lanes.
+            if let Some(hit) = intersect_prim(tr, ray, self.primitive(prim), prim, t_limit) {
                 if closest.is_none_or(|c| hit.t < c.t || (hit.t == c.t && hit.prim < c.prim)) {
                     closest = Some(hit);
                     if ANY {

@@ -227,6 +227,103 @@ pub fn intersect_triangles4(r: &TriangleRay, corners: &[[Vec4; 3]; 3], t_max: f3
     }
 }
 
+/// What [`intersect_triangles8`] found, one lane a triangle.
+#[derive(Clone, Copy, Debug)]
+pub struct Triangles8Hit {
+    /// Bit `k` set where triangle `k` is hit in `(0, t_max)`.
+    pub hit: u32,
+    /// Bit `k` set where an edge function of triangle `k` rounded to zero
+    /// (see [`Triangles4Hit::redo`]).
+    pub redo: u32,
+    /// Hit distances (meaningful where `hit`).
+    pub t: [f32; 8],
+    /// Barycentrics of the second corners.
+    pub b1: [f32; 8],
+    /// Barycentrics of the third corners.
+    pub b2: [f32; 8],
+}
+
+/// [`intersect_triangles4`] for eight triangles in one AVX step: those of
+/// `low` in lanes 0–3, those of `high` in lanes 4–7. The same IEEE
+/// operations in the same order, so each lane is bit for bit the four-wide
+/// (and so the scalar) test's. When no lane can be a hit the division is
+/// skipped, and `t`, `b1` and `b2` are left zero.
+///
+/// # Safety
+/// The CPU must have AVX.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+pub unsafe fn intersect_triangles8(
+    r: &TriangleRay,
+    low: &[[Vec4; 3]; 3],
+    high: &[[Vec4; 3]; 3],
+    t_max: f32,
+) -> Triangles8Hit {
+    use std::arch::x86_64::*;
+    let (kx, ky, kz) = (r.kx, r.ky, r.kz);
+    let o = r.origin;
+    let (ox, oy, oz) = (_mm256_set1_ps(o[kx]), _mm256_set1_ps(o[ky]), _mm256_set1_ps(o[kz]));
+    let (sx, sy, sz) = (
+        _mm256_set1_ps(r.shear.x),
+        _mm256_set1_ps(r.shear.y),
+        _mm256_set1_ps(r.shear.z),
+    );
+    let lanes = |k: usize, axis: usize| _mm256_set_m128(high[k][axis].into(), low[k][axis].into());
+    let (sub, mul, add) = (_mm256_sub_ps, _mm256_mul_ps, _mm256_add_ps);
+    // Translate, permute, shear, as `intersect_triangles4`.
+    let corner = |k: usize| {
+        let z = sub(lanes(k, kz), oz);
+        (
+            add(sub(lanes(k, kx), ox), mul(sx, z)),
+            add(sub(lanes(k, ky), oy), mul(sy, z)),
+            z,
+        )
+    };
+    let (ax, ay, az) = corner(0);
+    let (bx, by, bz) = corner(1);
+    let (cx, cy, cz) = corner(2);
+    let u = sub(mul(cx, by), mul(cy, bx));
+    let v = sub(mul(ax, cy), mul(ay, cx));
+    let w = sub(mul(bx, ay), mul(by, ax));
+    let zero = _mm256_setzero_ps();
+    let (or, and) = (_mm256_or_ps, _mm256_and_ps);
+    let eq = |a, b| _mm256_cmp_ps::<_CMP_EQ_OQ>(a, b);
+    let lt = |a, b| _mm256_cmp_ps::<_CMP_LT_OQ>(a, b);
+    let le = |a, b| _mm256_cmp_ps::<_CMP_LE_OQ>(a, b);
+    let redo = _mm256_movemask_ps(or(or(eq(u, zero), eq(v, zero)), eq(w, zero))) as u32;
+    let mut miss = and(
+        or(or(lt(u, zero), lt(v, zero)), lt(w, zero)),
+        or(or(lt(zero, u), lt(zero, v)), lt(zero, w)),
+    );
+    let det = add(add(u, v), w);
+    miss = or(miss, eq(det, zero));
+    let t_scaled = add(add(mul(u, mul(sz, az)), mul(v, mul(sz, bz))), mul(w, mul(sz, cz)));
+    let t_max8 = _mm256_set1_ps(t_max);
+    let range = mul(t_max8, det);
+    miss = or(miss, and(lt(det, zero), or(le(zero, t_scaled), lt(t_scaled, range))));
+    miss = or(miss, and(lt(zero, det), or(le(t_scaled, zero), lt(range, t_scaled))));
+    let mut found = Triangles8Hit {
+        hit: !(_mm256_movemask_ps(miss) as u32) & !redo & 0xff,
+        redo,
+        t: [0.0; 8],
+        b1: [0.0; 8],
+        b2: [0.0; 8],
+    };
+    if found.hit == 0 {
+        return found;
+    }
+    let inv_det = _mm256_div_ps(_mm256_set1_ps(1.0), det);
+    let t = mul(t_scaled, inv_det);
+    found.hit &= !(_mm256_movemask_ps(or(le(t, zero), le(t_max8, t))) as u32);
+    // SAFETY: each array holds eight floats.
+    unsafe {
+        _mm256_storeu_ps(found.t.as_mut_ptr(), t);
+        _mm256_storeu_ps(found.b1.as_mut_ptr(), mul(v, inv_det));
+        _mm256_storeu_ps(found.b2.as_mut_ptr(), mul(w, inv_det));
+    }
+    found
+}
+
 /// Ray–sphere intersection: the nearest root in `(0, t_max)`, from outside
 /// or inside. Uses the numerically stable form of Hearn and Baker /
 /// "Precision Improvements for Ray/Sphere Intersection" (Ray Tracing Gems, ch. 7).
@@ -337,13 +434,10 @@ mod tests {
         );
     }
 
-    /// The SIMD kernel against the scalar test it mirrors: on every lane it
-    /// hits where the scalar test hits, with bit-identical distance and
-    /// barycentrics, or hands the lane back (`redo`); random triangles,
-    /// grid triangles with rays through their shared edges and corners,
-    /// and finite `t_max` that cuts some hits off.
-    #[test]
-    fn four_wide_triangle_test_matches_the_scalar_test() {
+    /// Four triangles and a ray (with its `t_max`) a case, for the SIMD
+    /// kernels: random triangles, grid triangles with rays through their
+    /// shared edges and corners, and finite `t_max` that cuts some hits off.
+    fn simd_cases() -> Vec<([[Vec3; 3]; 4], Ray, f32)> {
         let mut rng = crate::sampling::Rng::new(11);
         let mut random = || Vec3::new(rng.uniform(), rng.uniform(), rng.uniform());
         let mut cases: Vec<([[Vec3; 3]; 4], Ray, f32)> = Vec::new();
@@ -378,10 +472,21 @@ mod tests {
             let origin = target + Vec3::new(random().x - 0.5, random().y - 0.5, 1.0 + random().z);
             cases.push((quad, Ray::new(origin, (target - origin).normalize()), f32::INFINITY));
         }
+        cases
+    }
+
+    /// The SIMD kernel against the scalar test it mirrors: on every lane it
+    /// hits where the scalar test hits, with bit-identical distance and
+    /// barycentrics, or hands the lane back (`redo`); random triangles,
+    /// grid triangles with rays through their shared edges and corners,
+    /// and finite `t_max` that cuts some hits off.
+    #[test]
+    fn four_wide_triangle_test_matches_the_scalar_test() {
+        let cases = simd_cases();
         let (mut hits, mut redos) = (0, 0);
         for (tris, ray, t_max) in &cases {
             let r = TriangleRay::new(ray);
-            let corners = [0, 1, 2].map(|k| [0, 1, 2].map(|axis| Vec4::from_array(tris.map(|t| t[k][axis]))));
+            let corners = pack_corners(tris);
             let simd = intersect_triangles4(&r, &corners, *t_max);
             for (lane, tri) in tris.iter().enumerate() {
                 let scalar = intersect_triangle(&r, tri, *t_max);
@@ -399,6 +504,49 @@ mod tests {
             hits > 10_000 && redos > 100,
             "too few hits ({hits}) or redone lanes ({redos}) to prove much"
         );
+    }
+
+    /// Four triangles' corners side by side, as the BVH's packs hold them.
+    fn pack_corners(tris: &[[Vec3; 3]; 4]) -> [[Vec4; 3]; 3] {
+        [0, 1, 2].map(|k| [0, 1, 2].map(|axis| Vec4::from_array(tris.map(|t| t[k][axis]))))
+    }
+
+    /// The eight-wide kernel against the four-wide one, each half of it: the
+    /// same hit and redo lanes, and bit for bit the same distances and
+    /// barycentrics where a lane is hit. The high half holds the next
+    /// case's triangles under this case's ray.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn eight_wide_triangle_test_matches_the_four_wide_one() {
+        if !std::is_x86_feature_detected!("avx") {
+            eprintln!("skipped: this CPU has no AVX");
+            return;
+        }
+        let cases = simd_cases();
+        let mut hits = 0;
+        for (case, next) in cases.iter().zip(cases.iter().cycle().skip(1)) {
+            let (tris, ray, t_max) = case;
+            let r = TriangleRay::new(ray);
+            let (low, high) = (pack_corners(tris), pack_corners(&next.0));
+            // SAFETY: the CPU has AVX (checked above).
+            let wide = unsafe { intersect_triangles8(&r, &low, &high, *t_max) };
+            for (half, corners) in [low, high].iter().enumerate() {
+                let four = intersect_triangles4(&r, corners, *t_max);
+                assert_eq!((wide.hit >> (4 * half)) & 0xf, four.hit, "hits of {case:?}");
+                assert_eq!((wide.redo >> (4 * half)) & 0xf, four.redo, "redone lanes of {case:?}");
+                for lane in (0..4).filter(|lane| four.hit & (1 << lane) != 0) {
+                    let k = 4 * half + lane;
+                    let bits = |x: [f32; 3]| x.map(f32::to_bits);
+                    assert_eq!(
+                        bits([wide.t[k], wide.b1[k], wide.b2[k]]),
+                        bits([four.t[lane], four.b1[lane], four.b2[lane]]),
+                        "lane {k} of {case:?}"
+                    );
+                    hits += 1;
+                }
+            }
+        }
+        assert!(hits > 10_000, "too few hits ({hits}) to prove much");
     }
 
     #[test]
