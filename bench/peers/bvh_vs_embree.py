@@ -277,7 +277,7 @@ def print_row(row: dict) -> None:
     ours, theirs = row["lenspath_memory_bytes"] / triangles, row["embree_memory_bytes"] / triangles
     buffers = (12 * triangles + 12 * row["vertices"]) / triangles
     print(
-        f"  memory           lenspath {ours:6.1f} B/triangle (nodes, packs with the geometry, slots, tags)   "
+        f"  memory           lenspath {ours:6.1f} B/triangle (nodes, packs with the geometry, tags)   "
         f"Embree {theirs:6.1f} B/triangle (BVH and its triangles; the caller's {buffers:.1f} of buffers besides)"
     )
     for key in ("coherent_closest", "incoherent_closest", "coherent_any_hit", "incoherent_any_hit"):

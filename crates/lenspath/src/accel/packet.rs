@@ -93,10 +93,10 @@ impl<T: Copy> Bvh<T> {
                 while testing != 0 {
                     let i = testing.trailing_zeros() as usize;
                     testing &= testing - 1;
-                    if packs.iter().any(|pack| {
-                        self.intersect_pack::<true>(&traversal[i], &rays[i], pack, t_max)
-                            .is_some()
-                    }) {
+                    if self
+                        .intersect_leaf::<true, AVX2>(&traversal[i], &rays[i], packs, t_max)
+                        .is_some()
+                    {
                         unresolved &= !(1 << i);
                     }
                 }
