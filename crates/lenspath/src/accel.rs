@@ -139,21 +139,20 @@ struct WideNode {
 
 /// Up to four consecutive primitives of a wide leaf, triangles' corners side
 /// by side (`corners[k][axis]`, one lane each, as Embree's `Triangle4`), so
-/// one SIMD watertight test meets all four. Lane `k` is the primitive in
-/// slot `first_slot + k`. A sphere's lane holds its centre in `corners[0]` and its
-/// radius in `corners[1][0]`; spheres (rare) are tested one by one. The
-/// packs are the tree's only copy of the geometry.
+/// one SIMD watertight test meets all four: 144 bytes. Lane `k` of pack `p`
+/// is the primitive in slot `4p + k`; how many lanes are in use is the
+/// leaf's count in its wide node. A sphere's lane holds its centre in
+/// `corners[0]`, its radius in `corners[1][0]` and a NaN in `corners[2][0]`
+/// (no triangle corner is NaN: scenes are checked for finite positions);
+/// spheres (rare) are tested one by one. The packs are the tree's only copy
+/// of the geometry.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(16))]
 struct TrianglePack {
     corners: [[Vec4; 3]; 3],
-    /// The slot of lane 0: this pack's index · 4.
-    first_slot: u32,
-    /// Bit `k` set where lane `k` is a triangle.
-    triangles: u32,
-    /// Bit `k` set where lane `k` is a sphere.
-    spheres: u32,
 }
+
+const _: () = assert!(size_of::<TrianglePack>() == 144);
 
 /// Children of a wide node: Embree's BVH8 on AVX2 machines. Measured
 /// against 4 (interleaved rounds, one thread, 300 k rays, median of the
@@ -446,7 +445,7 @@ impl<T: Copy> Bvh<T> {
             while leaves != 0 {
                 let lane = leaves.trailing_zeros() as usize;
                 leaves &= leaves - 1;
-                if let Some(hit) = self.intersect_leaf::<ANY, AVX2>(&tr, ray, self.leaf_packs(node, lane), t_max) {
+                if let Some(hit) = self.intersect_leaf::<ANY, AVX2>(&tr, ray, node, lane, t_max) {
                     if ANY {
                         return Some(hit);
                     }
@@ -564,28 +563,35 @@ impl<T: Copy> Bvh<T> {
         }
     }
 
-    /// The closest hit among a leaf's `packs` before `t_max` (with `ANY`,
-    /// the first found). With `AVX2`, a leaf of two packs has its eight
-    /// triangles tested in one step.
+    /// The closest hit in the leaf in `node`'s lane `lane` before `t_max`
+    /// (with `ANY`, the first found). With `AVX2`, a leaf of two packs has
+    /// its eight triangles tested in one step.
     #[inline(always)]
     fn intersect_leaf<const ANY: bool, const AVX2: bool>(
         &self,
         tr: &TraversalRay,
         ray: &Ray,
-        packs: &[TrianglePack],
+        node: &WideNode,
+        lane: usize,
         t_max: f32,
     ) -> Option<Hit> {
+        let packs = self.leaf_packs(node, lane);
+        let first_slot = node.child[lane] * PACK as u32;
+        // Bit `k` for the leaf's primitive in slot `first_slot + k`.
+        let used = (1u32 << node.count[lane]) - 1;
         #[cfg(target_arch = "x86_64")]
         if AVX2 {
             if let [low, high] = packs {
-                // SAFETY: `AVX2` is only set by `traverse_wide_avx2`, which
-                // runs on CPUs with the features.
-                return unsafe { self.intersect_pack_pair::<ANY>(tr, ray, low, high, t_max) };
+                // SAFETY: `AVX2` is only set by `traverse_wide_avx2` and
+                // `occluded_packet_avx2`, which run on CPUs with the features.
+                return unsafe { self.intersect_pack_pair::<ANY>(tr, ray, low, high, first_slot, used, t_max) };
             }
         }
         let (mut t_max, mut closest) = (t_max, None);
-        for pack in packs {
-            if let Some(hit) = self.intersect_pack::<ANY>(tr, ray, pack, t_max) {
+        for (j, pack) in packs.iter().enumerate() {
+            let slot = first_slot + (j * PACK) as u32;
+            let lanes = (used >> (j * PACK)) & 0xf;
+            if let Some(hit) = self.intersect_pack::<ANY>(tr, ray, pack, slot, lanes, t_max) {
                 if ANY {
                     return Some(hit);
                 }
@@ -596,54 +602,61 @@ impl<T: Copy> Bvh<T> {
         closest
     }
 
-    /// The closest hit in `pack` before `t_max` (with `ANY`, the first
-    /// found): its triangles in one SIMD test, then see [`Self::resolve`].
+    /// The closest hit in `pack`'s `lanes` (bit `k` for lane `k`; its slots
+    /// from `first_slot` on) before `t_max` (with `ANY`, the first found):
+    /// its triangles in one SIMD test, then see [`Self::resolve`].
     #[inline(always)]
     fn intersect_pack<const ANY: bool>(
         &self,
         tr: &TraversalRay,
         ray: &Ray,
         pack: &TrianglePack,
+        first_slot: u32,
+        lanes: u32,
         t_max: f32,
     ) -> Option<Hit> {
-        if pack.triangles == 0 {
-            return self.resolve::<ANY, PACK>(tr, ray, pack.first_slot, 0, pack.spheres, [[0.0; PACK]; 3], t_max);
+        let spheres = pack.spheres() & lanes;
+        let triangles = lanes & !spheres;
+        if triangles == 0 {
+            return self.resolve::<ANY, PACK>(tr, ray, first_slot, 0, spheres, [[0.0; PACK]; 3], t_max);
         }
         let found = intersect_triangles4(&tr.tri, &pack.corners, t_max);
         self.resolve::<ANY, PACK>(
             tr,
             ray,
-            pack.first_slot,
-            found.hit & pack.triangles,
-            pack.spheres | (found.redo & pack.triangles),
+            first_slot,
+            found.hit & triangles,
+            spheres | (found.redo & triangles),
             [found.t.to_array(), found.b1.to_array(), found.b2.to_array()],
             t_max,
         )
     }
 
-    /// [`Self::intersect_pack`] for two consecutive packs at once, `low`'s
-    /// lanes first: the closest hit of their eight primitives, ties going
-    /// to the lowest lane as when the packs are tested one after the other.
+    /// [`Self::intersect_pack`] for a leaf's two packs at once, `low`'s
+    /// lanes first: the closest hit of their primitives, ties going to the
+    /// lowest lane as when the packs are tested one after the other.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     #[inline]
+    #[allow(clippy::too_many_arguments)]
     fn intersect_pack_pair<const ANY: bool>(
         &self,
         tr: &TraversalRay,
         ray: &Ray,
         low: &TrianglePack,
         high: &TrianglePack,
+        first_slot: u32,
+        lanes: u32,
         t_max: f32,
     ) -> Option<Hit> {
-        let triangles = low.triangles | high.triangles << PACK;
-        let spheres = low.spheres | high.spheres << PACK;
+        let spheres = (low.spheres() | high.spheres() << PACK) & lanes;
+        let triangles = lanes & !spheres;
         // SAFETY: the CPU has AVX (this function's features).
         let found = unsafe { intersect_triangles8(&tr.tri, &low.corners, &high.corners, t_max) };
-        // The packs lie side by side, so `high`'s slots follow `low`'s.
         self.resolve::<ANY, { 2 * PACK }>(
             tr,
             ray,
-            low.first_slot,
+            first_slot,
             found.hit & triangles,
             spheres | (found.redo & triangles),
             [found.t, found.b1, found.b2],
@@ -720,6 +733,12 @@ fn intersect_prim(tr: &TraversalRay, ray: &Ray, geometry: PrimGeometry, prim: u3
 }
 
 impl TrianglePack {
+    /// Bit `k` set where lane `k` holds a sphere (see [`TrianglePack`]).
+    #[inline(always)]
+    fn spheres(&self) -> u32 {
+        self.corners[2][0].is_nan_mask().bitmask()
+    }
+
     /// The geometry in `lane`.
     #[inline]
     fn lane(&self, lane: usize) -> PrimGeometry {
@@ -730,7 +749,7 @@ impl TrianglePack {
                 self.corners[k][2][lane],
             )
         };
-        if self.spheres & (1 << lane) != 0 {
+        if self.corners[2][0][lane].is_nan() {
             PrimGeometry::Sphere {
                 center: corner(0),
                 radius: self.corners[1][0][lane],

@@ -682,8 +682,7 @@ pub(super) fn collapse<T: Copy + Send + Sync>(
     let (mut packs, mut tags) = (huge_vec(pack_ranges.len()), Vec::new());
     pack_ranges
         .par_iter()
-        .enumerate()
-        .map(|(index, &(first, end))| pack(prims, &order[first as usize..end as usize], index))
+        .map(|&(first, end)| pack(prims, &order[first as usize..end as usize]))
         .unzip_into_vecs(&mut packs, &mut tags);
     WideTree {
         wide,
@@ -860,14 +859,11 @@ impl Candidate {
     }
 }
 
-/// Pack `index` of the wide leaves, holding the primitives `prims[i]` for
-/// `i` in `members` (one to four), and its lanes' tags.
-fn pack<T: Copy>(prims: &[(PrimGeometry, T)], members: &[u32], index: usize) -> (TrianglePack, [T; PACK]) {
+/// A pack of the wide leaves holding the primitives `prims[i]` for `i` in
+/// `members` (one to four), and its lanes' tags.
+fn pack<T: Copy>(prims: &[(PrimGeometry, T)], members: &[u32]) -> (TrianglePack, [T; PACK]) {
     let mut pack = TrianglePack {
         corners: [[Vec4::ZERO; 3]; 3],
-        first_slot: (index * PACK) as u32,
-        triangles: 0,
-        spheres: 0,
     };
     let mut tags = [prims[members[0] as usize].1; PACK];
     for (lane, &prim) in members.iter().enumerate() {
@@ -880,14 +876,13 @@ fn pack<T: Copy>(prims: &[(PrimGeometry, T)], members: &[u32], index: usize) -> 
                         pack.corners[k][axis][lane] = corner[axis];
                     }
                 }
-                pack.triangles |= 1 << lane;
             }
             PrimGeometry::Sphere { center, radius } => {
                 for axis in 0..3 {
                     pack.corners[0][axis][lane] = center[axis];
                 }
                 pack.corners[1][0][lane] = *radius;
-                pack.spheres |= 1 << lane;
+                pack.corners[2][0][lane] = f32::NAN;
             }
         }
     }
@@ -1259,15 +1254,19 @@ mod tests {
         slots.sort_unstable();
         slots.dedup();
         assert_eq!(slots.len(), prims.len());
-        for &slot in &slots {
-            let pack = &bvh.packs[slot as usize / PACK];
-            assert!((pack.triangles | pack.spheres) & (1 << (slot as usize % PACK)) != 0);
-        }
         let mut tags: Vec<u32> = slots.iter().map(|&slot| bvh.tag(slot)).collect();
         tags.sort_unstable();
         assert_eq!(tags, prims.iter().map(|p| p.1).collect::<Vec<_>>());
-        let lanes: u32 = bvh.packs.iter().map(|p| (p.triangles | p.spheres).count_ones()).sum();
-        assert_eq!(lanes as usize, prims.len());
+        let lanes: usize = bvh
+            .wide
+            .iter()
+            .flat_map(|n| {
+                (0..WIDTH)
+                    .filter(|&l| n.leaves & (1 << l) != 0)
+                    .map(|l| usize::from(n.count[l]))
+            })
+            .sum();
+        assert_eq!(lanes, prims.len());
     }
 
     /// The AVX binning fills the same bins as the portable one, bit for bit

@@ -88,13 +88,12 @@ impl<T: Copy> Bvh<T> {
             while leaves != 0 {
                 let lane = leaves.trailing_zeros() as usize;
                 leaves &= leaves - 1;
-                let packs = self.leaf_packs(node, lane);
                 let mut testing = by_child[lane] & unresolved;
                 while testing != 0 {
                     let i = testing.trailing_zeros() as usize;
                     testing &= testing - 1;
                     if self
-                        .intersect_leaf::<true, AVX2>(&traversal[i], &rays[i], packs, t_max)
+                        .intersect_leaf::<true, AVX2>(&traversal[i], &rays[i], node, lane, t_max)
                         .is_some()
                     {
                         unresolved &= !(1 << i);
