@@ -750,7 +750,7 @@ impl TrianglePack {
                 self.corners[k][2][lane],
             )
         };
-        if self.corners[2][0][lane].is_nan() {
+        if self.spheres() & (1 << lane) != 0 {
             PrimGeometry::Sphere {
                 center: corner(0),
                 radius: self.corners[1][0][lane],

@@ -508,13 +508,10 @@ impl Builder<'_> {
                     axis_scale: scale[axis],
                     plane: plane as f32,
                 };
-                let sides = match (axis, sampled) {
-                    (0, false) => part.run::<0, false>(bounds, order),
-                    (1, false) => part.run::<1, false>(bounds, order),
-                    (_, false) => part.run::<2, false>(bounds, order),
-                    (0, true) => part.run::<0, true>(bounds, order),
-                    (1, true) => part.run::<1, true>(bounds, order),
-                    (_, true) => part.run::<2, true>(bounds, order),
+                let sides = if sampled {
+                    part.run_along::<true>(axis, bounds, order)
+                } else {
+                    part.run_along::<false>(axis, bounds, order)
                 };
                 let [lcb, rcb] = sides.centroid_bounds;
                 if sampled {
@@ -1029,6 +1026,16 @@ struct Partition {
 }
 
 impl Partition {
+    /// [`Partition::run`] along `axis`.
+    #[inline(always)]
+    fn run_along<const BOXES: bool>(&self, axis: usize, bounds: &mut [Bounds3], order: &mut [u32]) -> Sides {
+        match axis {
+            0 => self.run::<0, BOXES>(bounds, order),
+            1 => self.run::<1, BOXES>(bounds, order),
+            _ => self.run::<2, BOXES>(bounds, order),
+        }
+    }
+
     /// Partitions `bounds` (and `order` alike) in place; returns the split
     /// index, the centroid bounds of both sides and, with `BOXES`, their
     /// bounds.
