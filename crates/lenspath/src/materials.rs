@@ -369,37 +369,85 @@ impl Bsdf {
                 reflectance,
                 transmittance,
             } => {
-                let fresnel = fresnel_dielectric(wo.z, eta);
-                // Pick a lobe in proportion to what it carries, so a tint of zero
-                // (a refraction-only surface) wastes no paths (Mitsuba 3 `dielectric`).
-                let p_reflect = fresnel * mean(reflectance);
-                let p_transmit = (1.0 - fresnel) * mean(transmittance);
+                let ((reflected, p_reflect), (transmitted, p_transmit)) =
+                    dielectric_lobes(wo, eta, reflectance, transmittance);
                 let p_total = p_reflect + p_transmit;
                 if p_total <= 0.0 {
                     return None;
                 }
-                if uc * p_total < p_reflect {
-                    let wi = Vec3::new(-wo.x, -wo.y, wo.z);
-                    return Some(BsdfSample {
-                        wi,
-                        f: reflectance * (fresnel / wi.z.abs()),
-                        pdf: p_reflect / p_total,
-                        specular: true,
-                        eta: 1.0,
-                    });
-                }
-                let (wi, eta_rel) = refract(wo, Vec3::Z, eta)?;
-                // Radiance is compressed into the denser medium: divide by η² (pbrt-v4 §9.5.2).
-                Some(BsdfSample {
-                    wi,
-                    f: transmittance * ((1.0 - fresnel) / wi.z.abs() / (eta_rel * eta_rel)),
-                    pdf: p_transmit / p_total,
-                    specular: true,
-                    eta: eta_rel,
+                // Pick a lobe in proportion to what it carries, so a tint of zero
+                // (a refraction-only surface) wastes no paths (Mitsuba 3 `dielectric`).
+                let (lobe, p_lobe) = if uc * p_total < p_reflect {
+                    (Some(reflected), p_reflect)
+                } else {
+                    (transmitted, p_transmit)
+                };
+                lobe.map(|s| BsdfSample {
+                    pdf: p_lobe / p_total,
+                    ..s
                 })
             }
         }
     }
+
+    /// Both lobes of a smooth dielectric that reflects and transmits at
+    /// `wo`, each with `pdf` 1: a path split here follows both, each
+    /// weighted by what it carries (f·|cos θ|), where [`Bsdf::sample`]
+    /// would pick one. `None` for every other BSDF, and where a lobe
+    /// carries nothing (total internal reflection, a zero tint).
+    #[inline(always)]
+    pub fn split(&self, wo: Vec3) -> Option<[BsdfSample; 2]> {
+        let Bsdf::Dielectric {
+            eta,
+            reflectance,
+            transmittance,
+        } = *self
+        else {
+            return None;
+        };
+        if wo.z == 0.0 {
+            return None;
+        }
+        let ((reflected, p_reflect), (transmitted, p_transmit)) = dielectric_lobes(wo, eta, reflectance, transmittance);
+        match transmitted {
+            Some(transmitted) if p_reflect > 0.0 && p_transmit > 0.0 => Some([reflected, transmitted]),
+            _ => None,
+        }
+    }
+}
+
+/// A smooth dielectric's reflected lobe and its transmitted one (none on
+/// total internal reflection), each with `pdf` 1, beside the weight
+/// [`Bsdf::sample`] picks it by: what it carries, the Fresnel term times the
+/// tint's mean.
+#[inline(always)]
+fn dielectric_lobes(
+    wo: Vec3,
+    eta: f32,
+    reflectance: SampledSpectrum,
+    transmittance: SampledSpectrum,
+) -> ((BsdfSample, f32), (Option<BsdfSample>, f32)) {
+    let fresnel = fresnel_dielectric(wo.z, eta);
+    let wi = Vec3::new(-wo.x, -wo.y, wo.z);
+    let reflected = BsdfSample {
+        wi,
+        f: reflectance * (fresnel / wi.z.abs()),
+        pdf: 1.0,
+        specular: true,
+        eta: 1.0,
+    };
+    // Radiance is compressed into the denser medium: divide by η² (pbrt-v4 §9.5.2).
+    let transmitted = refract(wo, Vec3::Z, eta).map(|(wi, eta_rel)| BsdfSample {
+        wi,
+        f: transmittance * ((1.0 - fresnel) / wi.z.abs() / (eta_rel * eta_rel)),
+        pdf: 1.0,
+        specular: true,
+        eta: eta_rel,
+    });
+    (
+        (reflected, fresnel * mean(reflectance)),
+        (transmitted, (1.0 - fresnel) * mean(transmittance)),
+    )
 }
 
 /// Mean over the wavelengths.
@@ -824,7 +872,23 @@ mod tests {
                 (got - expected).abs().max_element() < 2e-3,
                 "R={reflectance} T={transmittance}: {got} vs {expected}"
             );
+            // Split, the two lobes carry exactly that expectation; a lobe
+            // that carries nothing is no split.
+            match glass.split(wo) {
+                Some(lobes) => {
+                    let carried: SampledSpectrum = lobes.iter().map(|s| s.f * s.wi.z.abs() / s.pdf).sum();
+                    assert!(
+                        (carried - expected).abs().max_element() < 1e-6,
+                        "split: {carried} vs {expected}"
+                    );
+                    assert!(lobes[0].wi.z > 0.0 && lobes[1].wi.z < 0.0);
+                }
+                None => assert!(reflectance == SampledSpectrum::ZERO || transmittance == SampledSpectrum::ZERO),
+            }
         }
+        // Total internal reflection leaves one lobe: no split.
+        assert!(clear_glass(1.5).split(direction(180.0 - 60.0, 0.0)).is_none());
+        assert!(clear_glass(1.5).split(direction(180.0 - 30.0, 0.0)).is_some());
         let black = Bsdf::Dielectric {
             eta,
             reflectance: SampledSpectrum::ZERO,
