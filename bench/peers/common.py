@@ -32,6 +32,18 @@ def in_venv(packages: list[str], install_lenspath: bool = False) -> None:
     os.execv(str(python), [str(python), *sys.argv])
 
 
+def at_time(rows: list[tuple[int, float, float]], seconds: float) -> float | None:
+    """From a renderer's (spp, seconds, MSE) rows in order of time, the MSE at `seconds` by
+    log-log interpolation between the two renders around it (None outside them)."""
+    import math
+
+    for (_, t0, e0), (_, t1, e1) in zip(rows, rows[1:], strict=False):
+        if t0 <= seconds <= t1:
+            f = (math.log(seconds) - math.log(t0)) / (math.log(t1) - math.log(t0))
+            return math.exp(math.log(e0) + f * (math.log(e1) - math.log(e0)))
+    return None
+
+
 def read_binary_ply(path: Path):
     """Vertices (N x 3 float32) and triangles (M x 3 int32) of a binary little-endian PLY
     whose faces are all triangles, whatever other properties it carries."""

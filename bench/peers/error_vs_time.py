@@ -32,7 +32,7 @@ import os
 import sys
 from pathlib import Path
 
-from common import ROOT, in_venv
+from common import ROOT, at_time, in_venv
 from render_vs_mitsuba import SPHERE_WHITE, Job, dragon, newest_libllvm, render_lenspath, render_mitsuba, variant_runs
 
 CACHE = ROOT / "target" / "bench-references"
@@ -77,17 +77,6 @@ def sweep(render, job: Job, reference, budget_s: float, warm_up: bool, runs: int
         if seconds > budget_s:
             return rows
         spp *= 2
-
-
-def at_time(rows: list[tuple[int, float, float]], seconds: float) -> float | None:
-    """The MSE at `seconds` by log-log interpolation between the two renders around it."""
-    import math
-
-    for (_, t0, e0), (_, t1, e1) in zip(rows, rows[1:], strict=False):
-        if t0 <= seconds <= t1:
-            f = (math.log(seconds) - math.log(t0)) / (math.log(t1) - math.log(t0))
-            return math.exp(math.log(e0) + f * (math.log(e1) - math.log(e0)))
-    return None
 
 
 def main() -> int:

@@ -42,7 +42,7 @@ import time
 import tomllib
 from pathlib import Path
 
-from common import ROOT, in_venv
+from common import ROOT, at_time, in_venv
 
 LENSPATH = ROOT / "target" / "release" / "lenspath"
 CACHE = ROOT / "target" / "bench-references"
@@ -256,15 +256,6 @@ def sweep(render, reference, longest_s: float, folder: Path) -> list[tuple[int, 
         if seconds > longest_s:
             return rows
         spp *= 2
-
-
-def at_time(rows: list[tuple[int, float, float]], seconds: float) -> float | None:
-    """The MSE at `seconds` by log-log interpolation between the two renders around it."""
-    for (_, t0, e0), (_, t1, e1) in zip(rows, rows[1:], strict=False):
-        if t0 <= seconds <= t1:
-            f = (math.log(seconds) - math.log(t0)) / (math.log(t1) - math.log(t0))
-            return math.exp(math.log(e0) + f * (math.log(e1) - math.log(e0)))
-    return None
 
 
 def main() -> int:
