@@ -283,24 +283,25 @@ def main() -> int:
         "Cycles guided": render_cycles,
         "Cycles path": lambda spp, seed, out: render_cycles(spp, seed, out, guided=False),
     }
+    # Each renderer's converged image, by its path tracer (lenspath) or its guided render (Cycles):
+    # each renderer's integrators converge to the same image.
+    converged_by = {"lenspath": "lenspath path", "cycles": "Cycles guided"}
     CACHE.mkdir(parents=True, exist_ok=True)
-    curves, means = {}, {}
+    references, curves = {}, {}
     with tempfile.TemporaryDirectory() as temporary:
         folder = Path(temporary)
         render_cycles(4, 1, folder / "warm-up.exr")  # loads Cycles' kernels, untimed
-        for label, render in renderers.items():
-            owner = "cycles" if label.startswith("Cycles") else "lenspath"
+        for owner, label in converged_by.items():
             cached = CACHE / f"guiding-{name}-{res[0]}x{res[1]}-{args.ref_spp}spp-{owner}.exr"
             if not cached.exists():
-                # Each renderer's reference is its guided render's (Cycles) or its path
-                # tracer's (lenspath); each renderer's integrators converge to the same image.
-                reference_render = renderers["Cycles guided" if owner == "cycles" else "lenspath path"]
-                seconds = reference_render(args.ref_spp, 1_000_003, cached)
+                seconds = renderers[label](args.ref_spp, 1_000_003, cached)
                 print(f"  {owner} reference: {args.ref_spp} spp in {seconds:.0f} s", flush=True)
-            reference = read_exr(cached)
-            means[owner] = float(reference.mean())
+            references[owner] = read_exr(cached)
+        for label, render in renderers.items():
             print(f"  {label}", flush=True)
+            reference = references["cycles" if label.startswith("Cycles") else "lenspath"]
             curves[label] = sweep(render, reference, max(args.budgets), folder)
+    means = {owner: float(image.mean()) for owner, image in references.items()}
     print(f"  mean of the references: lenspath {means['lenspath']:.4f}, Cycles {means['cycles']:.4f}")
     ratios = {}
     print("  budget   MSE / Cycles guided's: lenspath path, lenspath guided, Cycles without guiding")
