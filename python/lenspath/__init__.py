@@ -206,8 +206,9 @@ def render(
     monochromatic image (default: colour across the visible). ``integrator``:
     ``"path"`` (the path tracer, the default) or ``"guided"`` (path guiding:
     a guide of where light comes from is trained first, then steers the
-    paths; for caustics and light through glass or off metal; docs/guiding.md),
-    default the scene file's. ``progress``:
+    paths; for caustics and light through glass or off metal; docs/guiding.md;
+    a scene with no glass, mirror or smooth metal renders as with ``"path"``,
+    without training), default the scene file's. ``progress``:
     True for a tqdm bar, or a callable ``(samples_done, samples_total)``. The
     GIL is released while rendering; Ctrl-C stops the render and raises
     KeyboardInterrupt.

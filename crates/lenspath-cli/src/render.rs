@@ -11,7 +11,7 @@ use lenspath::autofocus::Focuser;
 use lenspath::camera::{ApertureShape, LensFocus};
 use lenspath::defaults;
 use lenspath::film::{Filter, NormalizedRect, PixelRect};
-use lenspath::integrator::IntegratorKind;
+use lenspath::integrator::{guiding_can_help, IntegratorKind};
 use lenspath::io::checkpoint::{read_checkpoint, write_checkpoint};
 use lenspath::io::image::{check_output_path, write_image_with_header};
 use lenspath::render::{render_from, Accumulation, Checkpoints, RenderSettings};
@@ -71,7 +71,8 @@ pub struct RenderArgs {
     #[arg(long, value_enum)]
     sampler: Option<SamplerArg>,
     /// Integrator: the path tracer, or the path tracer guided by a guide of where light comes from,
-    /// trained first (for caustics and light through glass or off metal; docs/guiding.md).
+    /// trained first (for caustics and light through glass or off metal; docs/guiding.md). A scene
+    /// with no glass, mirror or smooth metal renders guided as with the path tracer, without training.
     #[arg(long, value_enum)]
     integrator: Option<IntegratorArg>,
     /// Render at this one wavelength (360-830 nm): a grey image of the spectral radiance there (default: colour).
@@ -349,6 +350,12 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
                 std::process::exit(i32::from(crate::EXIT_INTERRUPTED));
             }
         });
+    }
+    if settings.integrator.kind() == IntegratorKind::Guided && !guiding_can_help(&compiled) {
+        eprintln!(
+            "guiding off: nothing in {scene_name} is glass, a mirror or smooth metal, so light samples find all its light; \
+             rendering with the path tracer, without training a guide"
+        );
     }
     let total = u64::from(settings.width) * u64::from(settings.height) * u64::from(settings.spp);
     let progress = Progress::new(&format!("render {scene_name}"), total);

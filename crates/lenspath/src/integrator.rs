@@ -123,13 +123,33 @@ impl Integrator {
         }
     }
 
-    /// The guide's training samples per pixel, for a guided integrator.
-    pub fn guide_training_spp(&self) -> Option<u32> {
+    /// The guide's training samples per pixel for a render of `scene`:
+    /// `None` for the path tracer, and for a guided one where a guide cannot
+    /// help ([`guiding_can_help`]), which then renders as the path tracer,
+    /// image for image, without the cost of training.
+    pub fn guide_training_spp(&self, scene: &CompiledScene) -> Option<u32> {
         match self {
             Integrator::Path(_) => None,
-            Integrator::Guided(g) => Some(g.training_spp),
+            Integrator::Guided(g) => guiding_can_help(scene).then_some(g.training_spp),
         }
     }
+}
+
+/// True when `scene` has light that a guide can find and next-event
+/// estimation cannot: light that reaches a diffuse or rough surface through
+/// glass, off a mirror or off nearly smooth metal (a caustic path), which
+/// only a surface the guide does not steer makes. Where
+/// every surface is diffuse or rough, light samples reach every light a path
+/// can see and a guide only reshapes the indirect bounces: on the Cornell box
+/// with diffuse spheres that cost its training and 3% a sample for no gain
+/// in error at equal samples (BENCHMARKS.md, issue 33), so a guided render
+/// switches itself off there.
+pub fn guiding_can_help(scene: &CompiledScene) -> bool {
+    scene.spectral_materials().iter().any(|m| {
+        // A material's kind of lobes does not depend on the wavelength.
+        let mut lambda = SampledWavelengths::single(550.0);
+        !is_guidable(&m.bsdf(&mut lambda))
+    })
 }
 
 impl Integrator {

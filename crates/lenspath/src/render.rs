@@ -319,7 +319,7 @@ pub fn render_from(
         let started = Instant::now();
         let trained = settings
             .integrator
-            .guide_training_spp()
+            .guide_training_spp(scene)
             .map(|spp| train_in_pool(scene, camera, settings, spp, cancel));
         let guide = trained.as_ref().map(|(guide, _)| guide);
         let mut output = render_in_pool(scene, camera, settings, guide, tiles, checkpoints, progress, cancel)?;
@@ -387,8 +387,9 @@ pub fn check_checkpoint_interval(every: Duration) -> Result<()> {
 }
 
 /// Trains the guide of a guided render of `scene` through `camera` with
-/// `settings` (`None` when its integrator is not guided, or when `cancel`
-/// stopped the training): iterations of 1, 2, 4, ... samples per pixel over
+/// `settings` (`None` when its integrator is not guided, when guiding cannot
+/// help in `scene` ([`crate::integrator::guiding_can_help`]), or when
+/// `cancel` stopped the training): iterations of 1, 2, 4, ... samples per pixel over
 /// the whole image (whatever its crop, so a crop's pixels are the full
 /// render's), as many as fit in the integrator's training samples, each with
 /// its own sample sequence and guided by what the ones before it learned.
@@ -401,7 +402,7 @@ pub fn train_guide(
     cancel: &AtomicBool,
 ) -> Result<Option<Guide>> {
     settings.validate()?;
-    let Some(spp) = settings.integrator.guide_training_spp() else {
+    let Some(spp) = settings.integrator.guide_training_spp(scene) else {
         return Ok(None);
     };
     let (guide, _) = worker_pool(settings.threads)?.install(|| train_in_pool(scene, camera, settings, spp, cancel));

@@ -340,6 +340,11 @@ impl CompiledScene {
         self.scene.lights.iter().zip(&self.light_emission)
     }
 
+    /// Every material's spectra, by [`MaterialId`].
+    pub fn spectral_materials(&self) -> &[SpectralMaterial] {
+        &self.materials
+    }
+
     /// Material `id`'s spectra.
     #[inline(always)]
     pub fn spectral_material(&self, id: MaterialId) -> &SpectralMaterial {

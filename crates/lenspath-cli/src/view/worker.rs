@@ -144,7 +144,7 @@ fn step(session: &Session, progress: &mut Progress, view: &Arc<View>, changed_at
         Ok(())
     };
     // A guided render's guide is trained once, for every step of this view.
-    if progress.guide.is_none() && settings.integrator.guide_training_spp().is_some() {
+    if progress.guide.is_none() && settings.integrator.guide_training_spp(&session.scene).is_some() {
         progress.guide = train_guide(&session.scene, &view.camera, &settings, &session.cancel)?;
         if progress.guide.is_none() {
             return Ok(());

@@ -10,7 +10,8 @@ use lenspath::accel::BvhSettings;
 use lenspath::builtin::builtin_scene;
 use lenspath::camera::{CameraPose, PerspectiveCamera};
 use lenspath::film::Image;
-use lenspath::integrator::{Integrator, IntegratorKind, PathSettings};
+use lenspath::glass::Dispersion;
+use lenspath::integrator::{guiding_can_help, Integrator, IntegratorKind, PathSettings};
 use lenspath::lights::Light;
 use lenspath::materials::Material;
 use lenspath::math::Rgb;
@@ -50,17 +51,29 @@ fn rendered(scene: &CompiledScene, camera: &PerspectiveCamera, s: &RenderSetting
 
 /// A white diffuse sphere in a uniform sky of radiance 1 vanishes (every
 /// pixel 1), guided as unguided: the guide's density enters the MIS weights
-/// and the throughput consistently.
+/// and the throughput consistently. A perfect mirror beside it (which
+/// vanishes too) is what switches guiding on.
 #[test]
 fn a_guided_white_furnace_sphere_disappears() {
     let scene = Scene {
-        spheres: vec![Sphere {
-            center: Vec3::ZERO,
-            radius: 1.0,
-            material: 0,
-            emission: None,
-        }],
-        materials: vec![Material::Diffuse { reflectance: Rgb::ONE }],
+        spheres: vec![
+            Sphere {
+                center: Vec3::ZERO,
+                radius: 1.0,
+                material: 0,
+                emission: None,
+            },
+            Sphere {
+                center: Vec3::new(1.9, 0.0, 0.0),
+                radius: 0.8,
+                material: 1,
+                emission: None,
+            },
+        ],
+        materials: vec![
+            Material::Diffuse { reflectance: Rgb::ONE },
+            Material::Mirror { reflectance: Rgb::ONE },
+        ],
         lights: vec![Light::Environment {
             radiance: Rgb::ONE.into(),
         }],
@@ -68,6 +81,7 @@ fn a_guided_white_furnace_sphere_disappears() {
     }
     .compile(&BvhSettings::default())
     .unwrap();
+    assert!(guiding_can_help(&scene));
     let pose = CameraPose::look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y);
     let camera = PerspectiveCamera::pinhole(pose, 25.0, 24, 24);
     let image = rendered(&scene, &camera, &settings(24, 24, 128, guided(100, 15), 1));
@@ -84,15 +98,29 @@ fn a_guided_white_furnace_sphere_disappears() {
     }
 }
 
-/// On the Cornell box (diffuse: nothing for the guide to find) the guided
-/// render's mean pixel is the path tracer's within the noise, channel by
-/// channel, and its images are bit-identical for one thread or two, for a
-/// crop of them and for a render continued from a saved state.
+/// The Cornell box with its nearer sphere made of glass (which throws a
+/// caustic the guide learns).
+fn cornell_box_with_a_glass_sphere() -> Scene {
+    let mut scene = builtin_scene("cornell-spheres", 0).unwrap();
+    scene.materials.push(Material::Dielectric {
+        eta: Dispersion::Constant(1.5),
+        reflectance: Rgb::ONE,
+        transmittance: Rgb::ONE,
+    });
+    scene.spheres[1].material = scene.materials.len() as u32 - 1;
+    scene
+}
+
+/// On the Cornell box with a glass sphere the guided render's mean pixel is
+/// the path tracer's within the noise, channel by channel, and its images
+/// are bit-identical for one thread or two, for a crop of them and for a
+/// render continued from a saved state.
 #[test]
 fn guided_cornell_box_is_unbiased_and_deterministic() {
-    let scene = builtin_scene("cornell-spheres", 0).unwrap();
+    let scene = cornell_box_with_a_glass_sphere();
     let view = scene.view.unwrap();
     let scene = scene.compile(&BvhSettings::default()).unwrap();
+    assert!(guiding_can_help(&scene));
     let camera = PerspectiveCamera::pinhole(view.pose, view.fov_y_deg, 64, 48);
     let path = rendered(&scene, &camera, &settings(64, 48, 128, Integrator::path(16, 1), 3));
     let guided_settings = settings(64, 48, 128, guided(16, 7), 4);
@@ -170,4 +198,39 @@ fn guided_cornell_box_is_unbiased_and_deterministic() {
     )
     .unwrap();
     assert_eq!(with_guide.image.rgb, guided_image.rgb, "a guide trained beforehand");
+}
+
+/// Where every surface is diffuse (the Cornell box with its two white
+/// spheres) a guided render switches itself off: it trains no guide and
+/// gives the path tracer's image byte for byte. Made glass, one sphere
+/// turns it on again.
+#[test]
+fn guiding_switches_itself_off_where_nothing_is_specular() {
+    let scene = builtin_scene("cornell-spheres", 0).unwrap();
+    let view = scene.view.unwrap();
+    let compiled = scene.compile(&BvhSettings::default()).unwrap();
+    assert!(!guiding_can_help(&compiled));
+    let camera = PerspectiveCamera::pinhole(view.pose, view.fov_y_deg, 32, 24);
+    let guided_settings = settings(32, 24, 16, guided(16, 7), 5);
+    let never = AtomicBool::new(false);
+    assert!(train_guide(&compiled, &camera, &guided_settings, &never)
+        .unwrap()
+        .is_none());
+    assert_eq!(
+        rendered(&compiled, &camera, &guided_settings).rgb,
+        rendered(&compiled, &camera, &settings(32, 24, 16, Integrator::path(16, 1), 5)).rgb,
+        "guided without a guide vs the path tracer"
+    );
+
+    let glass = cornell_box_with_a_glass_sphere()
+        .compile(&BvhSettings::default())
+        .unwrap();
+    assert!(guiding_can_help(&glass));
+    let guide = train_guide(&glass, &camera, &guided_settings, &never).unwrap().unwrap();
+    assert_eq!(guide.iterations(), 3);
+    assert_ne!(
+        rendered(&glass, &camera, &guided_settings).rgb,
+        rendered(&glass, &camera, &settings(32, 24, 16, Integrator::path(16, 1), 5)).rgb,
+        "a guided render with glass samples the guide"
+    );
 }
