@@ -1,10 +1,13 @@
-"""examples/readme_pictures.py runs, and makes what the CLI makes with the same settings."""
+"""The examples run: readme_pictures.py makes what the CLI makes with the same settings, and
+guiding_pictures.py makes its pictures."""
 
 from __future__ import annotations
 
 import subprocess
 import sys
 from pathlib import Path
+
+import numpy as np
 
 import lenspath
 
@@ -36,3 +39,23 @@ def test_readme_pictures_match_the_clis(cli, tmp_path: Path) -> None:
         tiles = len(list((SHARED / "scenes" / "cs184").glob("*/*.dae")))
         rows = (tiles + 5) // 6
         assert lenspath.read(sheet).shape == (rows * (144 + 16), 6 * 192, 3)
+
+
+def test_guiding_pictures_compare_the_integrators_and_map_the_guide(cli, tmp_path: Path) -> None:
+    args = ["--lenspath", str(cli), "--out-dir", str(tmp_path), "--res", "64x48", "--seconds", "0.3"]
+    run = subprocess.run(
+        [sys.executable, str(REPO / "examples" / "guiding_pictures.py"), *args],
+        check=True,
+        capture_output=True,
+        text=True,
+    )
+    for scene in ("glass-and-gold", "caustics"):
+        # The path tracer's image, the guided one's and their difference, 4 pixels apart.
+        assert lenspath.read(tmp_path / f"guiding-{scene}.png").shape == (48, 3 * 64 + 2 * 4, 3)
+        assert f"{scene}: guided" in run.stdout
+    maps = lenspath.read(tmp_path / "guiding-maps.png")
+    assert maps.shape == (256, 3 * 256 + 2 * 4, 3)
+    # Each map's centre (the direction along the normal) is inside its disc: not the grey outside.
+    centres = maps[128, [128, 128 + 260, 128 + 520]]
+    grey = lenspath.read(tmp_path / "guiding-maps.png")[0, 0]
+    assert not np.any(np.all(np.isclose(centres, grey), axis=1))

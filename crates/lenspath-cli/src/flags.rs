@@ -135,6 +135,18 @@ pub fn parse_crop(s: &str) -> std::result::Result<PixelRect, String> {
     }
 }
 
+/// Parses X,Y, a point of the image as fractions of its width and height
+/// from the top left (0 to 1), for `--guide-at`.
+pub fn parse_image_point(s: &str) -> std::result::Result<(f64, f64), String> {
+    let inside = |v: &str| v.trim().parse::<f64>().ok().filter(|v| (0.0..=1.0).contains(v));
+    match s.split_once(',').map(|(x, y)| (inside(x), inside(y))) {
+        Some((Some(x), Some(y))) => Ok((x, y)),
+        _ => Err(format!(
+            "expected X,Y as fractions of the image from its top left (0 to 1), such as 0.18,0.71; got '{s}'"
+        )),
+    }
+}
+
 /// Parses a duration such as 90s, 5m, 1h or 1.5 (seconds).
 pub fn parse_duration(s: &str) -> std::result::Result<Duration, String> {
     let t = s.trim();

@@ -10,6 +10,7 @@ mod bench;
 mod bokeh;
 mod flags;
 mod glass;
+mod guide_map;
 mod info;
 mod lens;
 mod progress;

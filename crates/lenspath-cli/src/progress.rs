@@ -54,7 +54,7 @@ impl Progress {
     }
 
     /// Prints `message` to stderr on a line of its own (above the bar).
-    pub fn warn(&self, message: &str) {
+    pub fn say(&self, message: &str) {
         match self {
             Progress::Bar(bar) => bar.suspend(|| eprintln!("{message}")),
             Progress::Plain { .. } => eprintln!("{message}"),

@@ -14,7 +14,9 @@ use lenspath::film::{Filter, NormalizedRect, PixelRect};
 use lenspath::integrator::{guiding_can_help, IntegratorKind};
 use lenspath::io::checkpoint::{read_checkpoint, write_checkpoint};
 use lenspath::io::image::{check_output_path, write_image_with_header};
-use lenspath::render::{render_from, Accumulation, Checkpoints, RenderSettings};
+use lenspath::render::{
+    guide_map_at_pixel, render_from, render_guided_from, train_guide, Accumulation, Checkpoints, RenderSettings,
+};
 use lenspath::sampling::SamplerKind;
 use lenspath::scene::Scene;
 use lenspath::sensor::develop::develop;
@@ -28,9 +30,10 @@ use lenspath::{Error, Result};
 use sha2::{Digest, Sha256};
 
 use crate::flags::{
-    parse_crop, parse_duration, parse_patch, parse_resolution, ApertureFlags, CameraKind, FilterKind, LensFlags,
-    Resolution, SamplerArg, SceneArgs, SensorFlags,
+    parse_crop, parse_duration, parse_image_point, parse_patch, parse_resolution, ApertureFlags, CameraKind,
+    FilterKind, LensFlags, Resolution, SamplerArg, SceneArgs, SensorFlags,
 };
+use crate::guide_map::{write_guide_map, MAP_SIZE};
 use crate::progress::Progress;
 use crate::Outcome;
 
@@ -75,6 +78,16 @@ pub struct RenderArgs {
     /// with no glass, mirror or smooth metal renders guided as with the path tracer, without training.
     #[arg(long, value_enum)]
     integrator: Option<IntegratorArg>,
+    /// Guided renders: also write what the guide learned at the surface seen at --guide-at, its
+    /// density over the sphere of directions in an equal-area disc (the normal at the centre, the
+    /// horizon a circle, the camera's side at the bottom): .png in false colour, .exr the density
+    /// per steradian (docs/guiding.md).
+    #[arg(long, value_name = "FILE", requires = "guide_at")]
+    guide_map: Option<PathBuf>,
+    /// The point X,Y of the image whose surface --guide-map shows, as fractions of the image from
+    /// its top left (0 to 1), such as 0.18,0.71.
+    #[arg(long, value_name = "X,Y", value_parser = parse_image_point, requires = "guide_map")]
+    guide_at: Option<(f64, f64)>,
     /// Render at this one wavelength (360-830 nm): a grey image of the spectral radiance there (default: colour).
     #[arg(long, value_name = "NM")]
     wavelength_nm: Option<f32>,
@@ -307,6 +320,14 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
     if let Some(path) = &args.checkpoint {
         lenspath::io::check_writable(path)?;
     }
+    if let Some(path) = &args.guide_map {
+        check_output_path(path)?;
+        if setup.settings.integrator.kind() != IntegratorKind::Guided {
+            return Err(Error::InvalidArgument(
+                "--guide-map shows a guided render's guide; add --integrator guided".into(),
+            ));
+        }
+    }
     // Hashed only for checkpoints: a million triangles take a tenth of a second.
     let scene_hash = checkpoint_path.is_some().then(|| scene_hasher(&scene));
     let compiled = scene.compile_on(&BvhSettings::default(), args.threads)?;
@@ -352,6 +373,11 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
         });
     }
     if settings.integrator.kind() == IntegratorKind::Guided && !guiding_can_help(&compiled) {
+        if args.guide_map.is_some() {
+            return Err(Error::InvalidArgument(format!(
+                "--guide-map: guiding is off for {scene_name} (nothing in it is glass, a mirror or smooth metal), so there is no guide to show"
+            )));
+        }
         eprintln!(
             "guiding off: nothing in {scene_name} is glass, a mirror or smooth metal, so light samples find all its light; \
              rendering with the path tracer, without training a guide"
@@ -367,7 +393,7 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
             // not the render: it goes on and writes its image.
             save = |state: &Accumulation| {
                 if let Err(e) = write_checkpoint(path, fingerprint, state) {
-                    progress.warn(&format!("warning: checkpoint not saved ({e}); the render goes on"));
+                    progress.say(&format!("warning: checkpoint not saved ({e}); the render goes on"));
                 }
                 Ok(())
             };
@@ -378,16 +404,74 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
         }
         None => None,
     };
-    let output = render_from(
-        &compiled,
-        camera.as_ref(),
-        &settings,
-        start,
-        checkpoints,
-        &|d, t| progress.update(d, t),
-        &cancel,
-    )?;
+    // With a map to write, the guide is trained here, once, for the render and the map.
+    let trained_at = std::time::Instant::now();
+    let guide = match &args.guide_map {
+        // None only when stopped: the render then stops at once too.
+        Some(_) => train_guide(&compiled, camera.as_ref(), &settings, &cancel)?,
+        None => None,
+    };
+    // Made before the render, so that a pixel it cannot show fails before any output is written.
+    // The pixel the point lies in (the last one for a point on the right or bottom edge).
+    let pixel = args.guide_at.map(|(x, y)| {
+        let at = |f: f64, size: u32| ((f * f64::from(size)) as u32).min(size - 1);
+        (at(x, settings.width), at(y, settings.height))
+    });
+    let map = match (&guide, pixel) {
+        (Some(guide), Some(pixel)) => Some(guide_map_at_pixel(
+            &compiled,
+            camera.as_ref(),
+            &settings,
+            guide,
+            pixel,
+            MAP_SIZE,
+        )?),
+        _ => None,
+    };
+    if let Some(guide) = &guide {
+        progress.say(&format!(
+            "trained the guide in {:.3} s: {} regions, {} directional leaves",
+            trained_at.elapsed().as_secs_f64(),
+            guide.region_count(),
+            guide.directional_leaf_count()
+        ));
+    }
+    let output = match &guide {
+        Some(guide) => render_guided_from(
+            &compiled,
+            camera.as_ref(),
+            &settings,
+            guide,
+            start,
+            checkpoints,
+            &|d, t| progress.update(d, t),
+            &cancel,
+        )?,
+        None => render_from(
+            &compiled,
+            camera.as_ref(),
+            &settings,
+            start,
+            checkpoints,
+            &|d, t| progress.update(d, t),
+            &cancel,
+        )?,
+    };
     progress.finish();
+    if let (Some(map), Some(path), Some(pixel)) = (&map, &args.guide_map, pixel) {
+        write_guide_map(path, map)?;
+        eprintln!(
+            "guide at pixel ({}, {}): {} directional leaves, {:.1}% of its samples above the surface, \
+             density up to {:.3} /sr (uniform: {:.3}) -> {}",
+            pixel.0,
+            pixel.1,
+            map.leaves,
+            100.0 * map.share_above_surface,
+            map.max_density_per_sr(),
+            1.0 / (4.0 * std::f32::consts::PI),
+            path.display()
+        );
+    }
     // Through a sensor the film holds its channels' electron rates: the
     // image written is the raw frame developed.
     match setup.capture(camera.as_ref(), &output.image)? {

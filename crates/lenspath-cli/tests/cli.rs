@@ -738,3 +738,142 @@ fn bokeh_spreads_light_into_the_mask_and_refuses_bad_input() {
     assert!(String::from_utf8_lossy(&o.stdout).contains("by depth (circles of confusion up to"));
     assert!(blurred.exists());
 }
+
+/// `render --guide-map FILE --guide-at X,Y` writes what a guided render's
+/// guide learned at a floor point of the caustic scene (PNG and EXR: the EXR
+/// holds the density, whose sum over the equal-area disc is the guide's
+/// whole probability, 1); asked of a pixel it cannot show, of a render that
+/// is not guided or of a scene where guiding is off, it says why, with exit
+/// code 2 and no output written.
+#[test]
+fn guided_renders_write_the_guide_map_or_say_why_not() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/caustics.toml");
+    let (image, png, exr) = (
+        dir.path().join("c.png"),
+        dir.path().join("map.png"),
+        dir.path().join("map.exr"),
+    );
+    let guided = |map: &Path, pixel: &str| {
+        let (out, map) = (image.to_str().unwrap().to_owned(), map.to_str().unwrap().to_owned());
+        lenspath(&[
+            "render",
+            scene,
+            "--res",
+            "48x36",
+            "--spp",
+            "2",
+            "--integrator",
+            "guided",
+            "--out",
+            &out,
+            "--guide-map",
+            &map,
+            "--guide-at",
+            pixel,
+        ])
+    };
+    for map in [&png, &exr] {
+        let o = guided(map, "0.5,0.95");
+        let err = stderr(&o);
+        assert!(o.status.success(), "{err}");
+        // A floor point's guide sends (almost) all its samples above the floor.
+        let share: f64 = err
+            .split_once("guide at pixel (24, 34): ")
+            .and_then(|(_, rest)| rest.split_once("% of its samples above the surface"))
+            .and_then(|(head, _)| head.rsplit(' ').next()?.parse().ok())
+            .unwrap_or_else(|| panic!("no share in: {err}"));
+        assert!(share > 95.0, "{share}% above the floor");
+    }
+    let exr = lenspath::io::exr::read_exr_image(&exr).unwrap();
+    let density = &exr.channels["Y"];
+    let pixel_sr = (4.0 / f64::from(exr.width)).powi(2);
+    let total: f64 = density.iter().map(|&d| f64::from(d) * pixel_sr).sum();
+    assert!(
+        (total - 1.0).abs() < 0.03,
+        "the map holds {total} of the guide's probability"
+    );
+    assert!(png.metadata().unwrap().len() > 1000);
+
+    std::fs::remove_file(&image).unwrap();
+    let out = image.to_str().unwrap();
+    let map = png.to_str().unwrap();
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec![
+                "render",
+                scene,
+                "--res",
+                "48x36",
+                "--integrator",
+                "guided",
+                "--out",
+                out,
+                "--guide-map",
+                map,
+                "--guide-at",
+                "0.3,0.5",
+            ],
+            "pixel (14, 18) sees glass, a mirror or smooth metal",
+        ),
+        (
+            vec![
+                "render",
+                scene,
+                "--res",
+                "48x36",
+                "--integrator",
+                "guided",
+                "--out",
+                out,
+                "--guide-map",
+                map,
+                "--guide-at",
+                "1.2,0",
+            ],
+            "expected X,Y as fractions of the image",
+        ),
+        (
+            vec![
+                "render",
+                scene,
+                "--res",
+                "48x36",
+                "--out",
+                out,
+                "--guide-map",
+                map,
+                "--guide-at",
+                "0.5,0.95",
+            ],
+            "add --integrator guided",
+        ),
+        (
+            vec![
+                "render",
+                "--res",
+                "48x36",
+                "--integrator",
+                "guided",
+                "--out",
+                out,
+                "--guide-map",
+                map,
+                "--guide-at",
+                "0.5,0.95",
+            ],
+            "guiding is off for cornell-spheres",
+        ),
+    ];
+    for (args, expected) in cases {
+        let o = lenspath(&args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?} → {err}");
+        assert!(err.contains(expected), "{args:?}: expected '{expected}' in: {err}");
+        assert_one_error(&args, &err);
+    }
+    assert!(!image.exists(), "a failed command must not write its image");
+    let o = lenspath(&["render", "--guide-map", map]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--guide-at <X,Y>"), "{}", stderr(&o));
+}

@@ -286,7 +286,7 @@ impl GuideAt<'_> {
 /// light a path finds depends on where it comes from (not for delta lobes
 /// or nearly smooth metal, whose own sampling is better than any guide).
 #[inline(always)]
-fn is_guidable(bsdf: &Bsdf) -> bool {
+pub(crate) fn is_guidable(bsdf: &Bsdf) -> bool {
     match bsdf {
         Bsdf::Diffuse { .. } => true,
         Bsdf::Conductor { alpha, .. } => *alpha >= GUIDED_MIN_ALPHA,

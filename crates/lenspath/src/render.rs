@@ -12,8 +12,9 @@ use crate::defaults;
 use crate::error::{Error, Result};
 use crate::film::{Filter, Image};
 pub use crate::film::{NormalizedRect, PixelRect};
+use crate::guiding::map::DensityMap;
 use crate::guiding::{Guide, GuideRecord, PathRecorder};
-use crate::integrator::Integrator;
+use crate::integrator::{is_guidable, Integrator};
 use crate::math::Rgb;
 use crate::parallel::worker_pool;
 use crate::ray::Ray;
@@ -588,6 +589,54 @@ fn accumulation(tiles: &[Tile], region: PixelRect) -> Accumulation {
     a
 }
 
+/// A camera ray through the centre of pixel `(px, py)`, along the first lens
+/// position the optics let through.
+#[inline(always)]
+fn centre_ray(camera: &dyn Camera, px: u32, py: u32) -> Option<CameraRay> {
+    let film = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
+    depth_lens_samples().find_map(|lens| camera.generate_ray(CameraSample::new(film, lens)))
+}
+
+/// What `guide` learned at the surface seen through the centre of pixel
+/// `(px, py)` of a `settings`-sized image through `camera`: its density
+/// over the sphere of directions there, `size` pixels square
+/// ([`DensityMap`]). For a look at the guide when a guided render
+/// misbehaves. Fails for a pixel outside the image, one that sees nothing,
+/// and one that sees a surface the guide does not steer (glass, a mirror,
+/// nearly smooth metal).
+pub fn guide_map_at_pixel(
+    scene: &CompiledScene,
+    camera: &dyn Camera,
+    settings: &RenderSettings,
+    guide: &Guide,
+    (px, py): (u32, u32),
+    size: u32,
+) -> Result<DensityMap> {
+    if px >= settings.width || py >= settings.height {
+        return Err(Error::InvalidArgument(format!(
+            "pixel ({px}, {py}) is outside the {}x{} image",
+            settings.width, settings.height
+        )));
+    }
+    let ray = centre_ray(camera, px, py).map(|cr| cr.ray);
+    let Some((ray, hit)) = ray.and_then(|r| scene.intersect(&r).map(|hit| (r, hit))) else {
+        return Err(Error::InvalidArgument(format!(
+            "pixel ({px}, {py}) sees no surface: nothing for the guide to show"
+        )));
+    };
+    let mut lambda = SampledWavelengths::single(crate::spectrum::D_LINE_NM);
+    if !is_guidable(&scene.spectral_material(hit.material).bsdf(&mut lambda)) {
+        return Err(Error::InvalidArgument(format!(
+            "pixel ({px}, {py}) sees glass, a mirror or smooth metal, which the guide does not steer; \
+             pick a pixel on a diffuse or rough surface"
+        )));
+    }
+    let toward_viewer = -ray.direction;
+    let n = hit.shading_normal;
+    let facing = if n.dot(toward_viewer) < 0.0 { -n } else { n };
+    Ok(DensityMap::at(guide, hit.p, facing, toward_viewer, size))
+}
+
 /// The depth of pixel `(px, py)` along the view `axis` (origin, direction),
 /// along the first lens position the optics let through (infinite when
 /// nothing is hit), and the camera rays that took (0 or 1).
@@ -599,8 +648,7 @@ fn pixel_depth(
     px: u32,
     py: u32,
 ) -> (f32, u64) {
-    let film = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
-    let ray = depth_lens_samples().find_map(|lens| camera.generate_ray(CameraSample::new(film, lens)));
+    let ray = centre_ray(camera, px, py);
     let depth = ray
         .and_then(|cr| scene.intersect(&cr.ray))
         .map_or(f32::INFINITY, |hit| (hit.p - axis.0).dot(axis.1));

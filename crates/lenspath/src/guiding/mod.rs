@@ -19,6 +19,7 @@
 //! guide does not depend on the thread count ([`Guide::learn`]).
 
 pub mod directional;
+pub mod map;
 
 use glam::{Vec2, Vec3, Vec3A};
 use rayon::prelude::*;
