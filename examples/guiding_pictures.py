@@ -64,7 +64,8 @@ def signed(diff: np.ndarray) -> np.ndarray:
     scale = max(float(np.percentile(np.abs(y), 99)), 1e-6)
     t = np.clip(y / scale, -1.0, 1.0)[..., None]
     red, blue = np.array([1.0, 0.05, 0.02]), np.array([0.02, 0.1, 1.0])
-    return np.where(t > 0, t * red, -t * blue).astype(np.float32)
+    colour: np.ndarray = np.where(t > 0, t * red, -t * blue).astype(np.float32)
+    return colour
 
 
 def side_by_side(panels: list[np.ndarray]) -> np.ndarray:
@@ -115,7 +116,8 @@ def main() -> int:
     parser.add_argument("--seconds", type=float, default=4.0, help="each render's time budget")
     parser.add_argument("--res", default="320x240", help="WIDTHxHEIGHT")
     args = parser.parse_args()
-    res = tuple(int(v) for v in args.res.split("x"))
+    width, height = (int(v) for v in args.res.split("x"))
+    res = (width, height)
     args.out_dir.mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
