@@ -68,6 +68,7 @@ __all__ = [
     "defaults",
     "focus_measure",
     "focus_measures",
+    "guide_map",
     "lens_blur",
     "load",
     "read",
@@ -271,6 +272,37 @@ def render(
         sampler=sampler,
         wavelength_nm=wavelength_nm,
         integrator=integrator,
+    )
+
+
+def guide_map(
+    scene: Scene | str | os.PathLike[str],
+    camera: Camera | None = None,
+    *,
+    at: tuple[float, float],
+    resolution: tuple[int, int] | None = None,
+    seed: int | None = None,
+    max_depth: int | None = None,
+    light_samples: int | None = None,
+    threads: int | None = None,
+    sampler: Literal["sobol", "independent"] | None = None,
+    size: int = 256,
+) -> dict[str, Any]:
+    """What a guided render's guide learned at the surface seen at ``at`` (fractions of the
+    image from its top left): its density over the sphere of directions as an equal-area
+    disc, ``lenspath render --guide-map``'s. ``scene`` as for :func:`render`; see
+    ``_core.pyi`` for the result."""
+    return _core.guide_map(
+        _as_scene(scene),
+        camera,
+        at=at,
+        resolution=resolution,
+        seed=seed,
+        max_depth=max_depth,
+        light_samples=light_samples,
+        threads=threads,
+        sampler=sampler,
+        size=size,
     )
 
 

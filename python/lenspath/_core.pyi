@@ -41,6 +41,7 @@ __all__ = [
     "run_cli",
     "focus_measure",
     "focus_measures",
+    "guide_map",
     "bokeh",
     "lens_blur",
     "AutofocusResult",
@@ -435,6 +436,32 @@ def render(
     integrator: Literal["path", "guided"] | None = None,
     sensor: None = None,
 ) -> dict[str, npt.NDArray[np.float32]]: ...
+def guide_map(
+    scene: Scene,
+    camera: Camera | None = None,
+    *,
+    at: tuple[float, float],
+    resolution: tuple[int, int] | None = None,
+    seed: int | None = None,
+    max_depth: int | None = None,
+    light_samples: int | None = None,
+    threads: int | None = None,
+    sampler: Literal["sobol", "independent"] | None = None,
+    size: int = 256,
+) -> dict[str, Any]:
+    """What the guide of a guided render (``render(..., integrator="guided")`` with the same
+    settings) learned at the surface seen at ``at``, a point of the image as fractions of its
+    width and height from its top left: the guide's density over the sphere of directions
+    there, in the Lambert azimuthal equal-area projection centred on the surface normal, as
+    ``lenspath render --guide-map`` writes it. Returns a dict: ``"density_per_sr"`` (float32,
+    (size, size): per steradian at each pixel's direction, 0 outside the disc of the sphere;
+    the normal at the centre, the horizon the circle of radius size/(2√2), the camera's side
+    at the bottom; each pixel covers (4/size)² sr), ``"pixel"`` (the image pixel, x and y),
+    ``"share_above_surface"``, ``"total_probability"`` (the density summed over the pixels
+    times their solid angle) and ``"leaves"`` (the directional leaves there). Raises
+    ValueError where guiding is off (no glass, mirror or smooth metal in the scene), for a
+    point that sees nothing or sees glass, a mirror or smooth metal, and for a bad ``at``
+    (docs/guiding.md)."""
 
 @final
 class Sensor:

@@ -412,11 +412,7 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
         None => None,
     };
     // Made before the render, so that a pixel it cannot show fails before any output is written.
-    // The pixel the point lies in (the last one for a point on the right or bottom edge).
-    let pixel = args.guide_at.map(|(x, y)| {
-        let at = |f: f64, size: u32| ((f * f64::from(size)) as u32).min(size - 1);
-        (at(x, settings.width), at(y, settings.height))
-    });
+    let pixel = args.guide_at.map(|point| settings.pixel_at(point));
     let map = match (&guide, pixel) {
         (Some(guide), Some(pixel)) => Some(guide_map_at_pixel(
             &compiled,

@@ -8,7 +8,7 @@
 //! poll for Ctrl-C (see [`render::render`]).
 //!
 //! One module per concept, as the library: `error` (exceptions), `cli` (the `lenspath` command), `scene`,
-//! `emission` (light spectra), `glass`, `lens`, `camera`, `sensor`, `render`, `autofocus`, `image`; this file only
+//! `emission` (light spectra), `glass`, `lens`, `camera`, `sensor`, `render`, `guiding`, `autofocus`, `image`; this file only
 //! registers them.
 
 mod autofocus;
@@ -17,6 +17,7 @@ mod cli;
 mod emission;
 mod error;
 mod glass;
+mod guiding;
 mod image;
 mod lens;
 mod render;
@@ -49,6 +50,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(scene::defaults, m)?)?;
     m.add_function(wrap_pyfunction!(lens::builtin_lenses, m)?)?;
     m.add_function(wrap_pyfunction!(render::render, m)?)?;
+    m.add_function(wrap_pyfunction!(guiding::guide_map, m)?)?;
     m.add_function(wrap_pyfunction!(image::read, m)?)?;
     m.add_function(wrap_pyfunction!(image::write, m)?)?;
     m.add_function(wrap_pyfunction!(image::read_exr, m)?)?;

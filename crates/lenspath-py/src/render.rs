@@ -27,6 +27,19 @@ pub(crate) fn rgb_array<'py>(py: Python<'py>, image: &Image) -> Bound<'py, PyArr
         .into_pyarray(py)
 }
 
+/// The sampler called `name`, if one is named.
+pub(crate) fn sampler_kind(name: Option<&str>) -> PyResult<Option<SamplerKind>> {
+    name.map(|name| {
+        SamplerKind::from_name(name).ok_or_else(|| {
+            value_error(format!(
+                "unknown sampler '{name}'; expected one of: {}",
+                SamplerKind::NAMES.join(", ")
+            ))
+        })
+    })
+    .transpose()
+}
+
 /// Renders `scene` through `camera` (see the stub for the arguments). An
 /// argument left out is the scene file's, else the library's default.
 #[pyfunction]
@@ -62,16 +75,7 @@ pub(crate) fn render<'py>(
             })
         })
         .transpose()?;
-    let sampler = sampler
-        .map(|name| {
-            SamplerKind::from_name(name).ok_or_else(|| {
-                value_error(format!(
-                    "unknown sampler '{name}'; expected one of: {}",
-                    SamplerKind::NAMES.join(", ")
-                ))
-            })
-        })
-        .transpose()?;
+    let sampler = sampler_kind(sampler)?;
     let want_depth = match aovs.as_deref() {
         None | Some([]) => false,
         Some(names) => {

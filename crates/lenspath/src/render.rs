@@ -128,6 +128,14 @@ impl Default for RenderSettings {
 }
 
 impl RenderSettings {
+    /// The pixel that point `(x, y)` of the image lies in, the point given
+    /// as fractions of the image's width and height from its top left (0 to
+    /// 1; a point on the right or bottom edge is in the last pixel).
+    pub fn pixel_at(&self, (x, y): (f64, f64)) -> (u32, u32) {
+        let at = |f: f64, size: u32| ((f.clamp(0.0, 1.0) * f64::from(size)) as u32).min(size.saturating_sub(1));
+        (at(x, self.width), at(y, self.height))
+    }
+
     /// Rejects settings that cannot make an image.
     pub fn validate(&self) -> Result<()> {
         let fail = |m: String| Err(Error::InvalidArgument(m));

@@ -1,0 +1,92 @@
+//! Path guiding: `guide_map`, what a guided render's guide learned at the
+//! surface seen at a point of the image (`lenspath render --guide-map`).
+
+use std::sync::atomic::AtomicBool;
+
+use lenspath::integrator::{guiding_can_help, IntegratorKind};
+use lenspath::render::{guide_map_at_pixel, train_guide};
+use lenspath::setup::{resolve, RenderOverrides};
+use lenspath::Error;
+use numpy::ndarray::Array2;
+use numpy::IntoPyArray;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::camera::Camera;
+use crate::error::{guarded, to_py, value_error, whole_number};
+use crate::render::sampler_kind;
+use crate::scene::Scene;
+
+/// Trains the guide of a guided render of `scene` through `camera` and
+/// returns its density at the surface seen at `at` (see the stub).
+#[pyfunction]
+#[pyo3(signature = (scene, camera = None, *, at, resolution = None, seed = None, max_depth = None,
+                    light_samples = None, threads = None, sampler = None, size = 256))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn guide_map<'py>(
+    py: Python<'py>,
+    scene: &Scene,
+    camera: Option<&Camera>,
+    at: (f64, f64),
+    resolution: Option<(u32, u32)>,
+    seed: Option<i64>,
+    max_depth: Option<i64>,
+    light_samples: Option<i64>,
+    threads: Option<i64>,
+    sampler: Option<&str>,
+    size: u32,
+) -> PyResult<Bound<'py, PyDict>> {
+    if !(0.0..=1.0).contains(&at.0) || !(0.0..=1.0).contains(&at.1) {
+        return Err(value_error(format!(
+            "at must be a point of the image as fractions of its width and height from its top left (0 to 1), got {at:?}"
+        )));
+    }
+    if !(8..=4096).contains(&size) {
+        return Err(value_error(format!("size must be 8 to 4096 pixels, got {size}")));
+    }
+    let overrides = RenderOverrides {
+        resolution,
+        integrator: Some(IntegratorKind::Guided),
+        max_depth: whole_number("max_depth", max_depth)?,
+        light_samples: whole_number("light_samples", light_samples)?,
+        seed: whole_number("seed", seed)?,
+        sampler: sampler_kind(sampler)?,
+        threads: whole_number("threads", threads)?,
+        camera: camera.map(|c| c.description.clone()).unwrap_or_default(),
+        ..RenderOverrides::default()
+    };
+    let setup = resolve(&scene.options, &scene.view()?, &overrides).map_err(to_py)?;
+    let camera = match camera {
+        Some(c) => c.built_for(&setup)?,
+        None => setup.build_camera().map_err(to_py)?,
+    };
+    let settings = setup.settings;
+    let compiled = scene.compiled(py)?;
+    if !guiding_can_help(&compiled) {
+        return Err(value_error(format!(
+            "guiding is off for {} (nothing in it is glass, a mirror or smooth metal), so there is no guide to show",
+            scene.name
+        )));
+    }
+    let pixel = settings.pixel_at(at);
+    let map = py
+        .detach(|| {
+            guarded(|| {
+                let never = AtomicBool::new(false);
+                let guide = train_guide(&compiled, camera.as_ref(), &settings, &never)?
+                    .ok_or_else(|| Error::InvalidArgument("the guide's training was stopped".into()))?;
+                guide_map_at_pixel(&compiled, camera.as_ref(), &settings, &guide, pixel, size)
+            })
+        })?
+        .map_err(to_py)?;
+    let d = PyDict::new(py);
+    let density = Array2::from_shape_vec((size as usize, size as usize), map.density_per_sr)
+        .expect("a density per map pixel")
+        .into_pyarray(py);
+    d.set_item("density_per_sr", density)?;
+    d.set_item("pixel", pixel)?;
+    d.set_item("share_above_surface", map.share_above_surface)?;
+    d.set_item("total_probability", map.total_probability)?;
+    d.set_item("leaves", map.leaves)?;
+    Ok(d)
+}
