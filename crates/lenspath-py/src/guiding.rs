@@ -5,7 +5,7 @@ use std::sync::atomic::AtomicBool;
 
 use lenspath::integrator::{guiding_can_help, IntegratorKind};
 use lenspath::render::{guide_map_at_pixel, train_guide};
-use lenspath::setup::{resolve, RenderOverrides};
+use lenspath::setup::RenderOverrides;
 use lenspath::Error;
 use numpy::ndarray::Array2;
 use numpy::IntoPyArray;
@@ -14,7 +14,7 @@ use pyo3::types::PyDict;
 
 use crate::camera::Camera;
 use crate::error::{guarded, to_py, value_error, whole_number};
-use crate::render::sampler_kind;
+use crate::render::{prepared, sampler_kind};
 use crate::scene::Scene;
 
 /// Trains the guide of a guided render of `scene` through `camera` and
@@ -55,13 +55,8 @@ pub(crate) fn guide_map<'py>(
         camera: camera.map(|c| c.description.clone()).unwrap_or_default(),
         ..RenderOverrides::default()
     };
-    let setup = resolve(&scene.options, &scene.view()?, &overrides).map_err(to_py)?;
-    let camera = match camera {
-        Some(c) => c.built_for(&setup)?,
-        None => setup.build_camera().map_err(to_py)?,
-    };
+    let (setup, camera, compiled) = prepared(py, scene, camera, &overrides)?;
     let settings = setup.settings;
-    let compiled = scene.compiled(py)?;
     if !guiding_can_help(&compiled) {
         return Err(value_error(format!(
             "guiding is off for {} (nothing in it is glass, a mirror or smooth metal), so there is no guide to show",

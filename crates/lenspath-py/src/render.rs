@@ -1,15 +1,18 @@
 //! Rendering: the options map onto `lenspath::setup::RenderOverrides`; the render runs without the GIL.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::Arc;
 use std::time::Duration;
 
+use lenspath::camera::Camera as CameraTrait;
 use lenspath::film::Image;
 use lenspath::film::PixelRect;
 use lenspath::integrator::IntegratorKind;
 use lenspath::render::render as render_scene;
 use lenspath::sampling::SamplerKind;
+use lenspath::scene::CompiledScene;
 use lenspath::sensor::develop::develop;
-use lenspath::setup::{resolve, RenderOverrides};
+use lenspath::setup::{resolve, RenderOverrides, RenderSetup};
 use numpy::ndarray::{Array2, Array3};
 use numpy::{IntoPyArray, PyArray3};
 use pyo3::prelude::*;
@@ -38,6 +41,23 @@ pub(crate) fn sampler_kind(name: Option<&str>) -> PyResult<Option<SamplerKind>> 
         })
     })
     .transpose()
+}
+
+/// What a render of `scene` through `camera` (None: the scene's own) with
+/// `overrides` needs: its resolved setup, the camera built for it and the
+/// compiled scene.
+pub(crate) fn prepared(
+    py: Python<'_>,
+    scene: &Scene,
+    camera: Option<&Camera>,
+    overrides: &RenderOverrides,
+) -> PyResult<(RenderSetup, Arc<dyn CameraTrait>, Arc<CompiledScene>)> {
+    let setup = resolve(&scene.options, &scene.view()?, overrides).map_err(to_py)?;
+    let camera = match camera {
+        Some(c) => c.built_for(&setup)?,
+        None => setup.build_camera().map_err(to_py)?,
+    };
+    Ok((setup, camera, scene.compiled(py)?))
 }
 
 /// Renders `scene` through `camera` (see the stub for the arguments). An
@@ -106,13 +126,8 @@ pub(crate) fn render<'py>(
             "a sensor render gives a raw frame, without AOVs: render the depth without the sensor",
         ));
     }
-    let setup = resolve(&scene.options, &scene.view()?, &overrides).map_err(to_py)?;
-    let camera = match camera {
-        Some(c) => c.built_for(&setup)?,
-        None => setup.build_camera().map_err(to_py)?,
-    };
+    let (setup, camera, compiled) = prepared(py, scene, camera, &overrides)?;
     let settings = setup.settings;
-    let compiled = scene.compiled(py)?;
 
     // Render on a worker thread without the GIL; this thread wakes every
     // 50 ms to report progress and to turn Ctrl-C into a cancelled render,
