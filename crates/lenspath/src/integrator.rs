@@ -138,12 +138,12 @@ impl Integrator {
 /// True when `scene` has light that a guide can find and next-event
 /// estimation cannot: light that reaches a diffuse or rough surface through
 /// glass, off a mirror or off nearly smooth metal (a caustic path), which
-/// only a surface the guide does not steer makes. Where
-/// every surface is diffuse or rough, light samples reach every light a path
-/// can see and a guide only reshapes the indirect bounces: on the Cornell box
-/// with diffuse spheres that cost its training and 3% a sample for no gain
-/// in error at equal samples (BENCHMARKS.md, issue 33), so a guided render
-/// switches itself off there.
+/// only a surface the guide does not steer makes. Where every surface is
+/// diffuse or rough, light samples reach every light a path can see and a
+/// guide only reshapes the indirect bounces: on the Cornell box with diffuse
+/// spheres that cost its training and 3% a sample for no gain in error at
+/// equal samples (BENCHMARKS.md, issue 33), so a guided render switches
+/// itself off there.
 pub fn guiding_can_help(scene: &CompiledScene) -> bool {
     scene.spectral_materials().iter().any(|m| {
         // A material's kind of lobes does not depend on the wavelength.
