@@ -32,10 +32,8 @@ pub fn write_guide_map(path: &Path, map: &DensityMap) -> Result<()> {
             let max = map.max_density_per_sr().max(f32::MIN_POSITIVE);
             let mut rgb = Vec::with_capacity(3 * map.density_per_sr.len());
             for (i, &density) in map.density_per_sr.iter().enumerate() {
-                let (x, y) = ((i as u32 % size) as f32, (i as u32 / size) as f32);
-                // The pixel's place on the disc of radius 2 and one pixel's width there.
-                let rho = ((x + 0.5) / size as f32 * 4.0 - 2.0).hypot((y + 0.5) / size as f32 * 4.0 - 2.0);
-                let pixel = 4.0 / size as f32;
+                let (point, pixel) = map.disc_point(i);
+                let rho = point.length();
                 let srgb = if (rho - 2f32.sqrt()).abs() < 0.75 * pixel {
                     [0.75; 3]
                 } else if rho > 2.0 {

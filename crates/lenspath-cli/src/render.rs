@@ -412,7 +412,7 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
         None => None,
     };
     // Made before the render, so that a pixel it cannot show fails before any output is written.
-    let pixel = args.guide_at.map(|point| settings.pixel_at(point));
+    let pixel = args.guide_at.map(|point| settings.pixel_at(point)).transpose()?;
     let map = match (&guide, pixel) {
         (Some(guide), Some(pixel)) => Some(guide_map_at_pixel(
             &compiled,

@@ -3,6 +3,7 @@
 
 use std::sync::atomic::AtomicBool;
 
+use lenspath::guiding::map::DensityMap;
 use lenspath::integrator::{guiding_can_help, IntegratorKind};
 use lenspath::render::{guide_map_at_pixel, train_guide};
 use lenspath::setup::RenderOverrides;
@@ -36,14 +37,8 @@ pub(crate) fn guide_map<'py>(
     sampler: Option<&str>,
     size: u32,
 ) -> PyResult<Bound<'py, PyDict>> {
-    if !(0.0..=1.0).contains(&at.0) || !(0.0..=1.0).contains(&at.1) {
-        return Err(value_error(format!(
-            "at must be a point of the image as fractions of its width and height from its top left (0 to 1), got {at:?}"
-        )));
-    }
-    if !(8..=4096).contains(&size) {
-        return Err(value_error(format!("size must be 8 to 4096 pixels, got {size}")));
-    }
+    // Before the training, which takes seconds.
+    DensityMap::check_size(size).map_err(to_py)?;
     let overrides = RenderOverrides {
         resolution,
         integrator: Some(IntegratorKind::Guided),
@@ -63,7 +58,7 @@ pub(crate) fn guide_map<'py>(
             scene.name
         )));
     }
-    let pixel = settings.pixel_at(at);
+    let pixel = settings.pixel_at(at).map_err(to_py)?;
     let map = py
         .detach(|| {
             guarded(|| {

@@ -17,7 +17,7 @@ use crate::accel::SHADOW_PACKET;
 use crate::guiding::directional::{to_square, DirectionalTree};
 use crate::guiding::{Guide, PathRecorder, BSDF_SAMPLING_FRACTION};
 use crate::lights::LightSample;
-use crate::materials::Bsdf;
+use crate::materials::{Bsdf, SpectralMaterial};
 use crate::math::{Frame, Rgb};
 use crate::ray::{offset_origin, Ray};
 use crate::sampling::{power_heuristic, Sampler};
@@ -145,11 +145,13 @@ impl Integrator {
 /// equal samples (BENCHMARKS.md, issue 33), so a guided render switches
 /// itself off there.
 pub fn guiding_can_help(scene: &CompiledScene) -> bool {
-    scene.spectral_materials().iter().any(|m| {
-        // A material's kind of lobes does not depend on the wavelength.
-        let mut lambda = SampledWavelengths::single(550.0);
-        !is_guidable(&m.bsdf(&mut lambda))
-    })
+    !scene.spectral_materials().iter().all(material_is_guided)
+}
+
+/// True for a material whose BSDF the guide steers ([`is_guidable`]), at
+/// any wavelength: a material's kind of lobes does not depend on it.
+pub(crate) fn material_is_guided(material: &SpectralMaterial) -> bool {
+    is_guidable(&material.bsdf(&mut SampledWavelengths::single(crate::spectrum::D_LINE_NM)))
 }
 
 impl Integrator {
@@ -286,7 +288,7 @@ impl GuideAt<'_> {
 /// light a path finds depends on where it comes from (not for delta lobes
 /// or nearly smooth metal, whose own sampling is better than any guide).
 #[inline(always)]
-pub(crate) fn is_guidable(bsdf: &Bsdf) -> bool {
+fn is_guidable(bsdf: &Bsdf) -> bool {
     match bsdf {
         Bsdf::Diffuse { .. } => true,
         Bsdf::Conductor { alpha, .. } => *alpha >= GUIDED_MIN_ALPHA,

@@ -14,7 +14,7 @@ use crate::film::{Filter, Image};
 pub use crate::film::{NormalizedRect, PixelRect};
 use crate::guiding::map::DensityMap;
 use crate::guiding::{Guide, GuideRecord, PathRecorder};
-use crate::integrator::{is_guidable, Integrator};
+use crate::integrator::{material_is_guided, Integrator};
 use crate::math::Rgb;
 use crate::parallel::worker_pool;
 use crate::ray::Ray;
@@ -130,10 +130,17 @@ impl Default for RenderSettings {
 impl RenderSettings {
     /// The pixel that point `(x, y)` of the image lies in, the point given
     /// as fractions of the image's width and height from its top left (0 to
-    /// 1; a point on the right or bottom edge is in the last pixel).
-    pub fn pixel_at(&self, (x, y): (f64, f64)) -> (u32, u32) {
-        let at = |f: f64, size: u32| ((f.clamp(0.0, 1.0) * f64::from(size)) as u32).min(size.saturating_sub(1));
-        (at(x, self.width), at(y, self.height))
+    /// 1; a point on the right or bottom edge is in the last pixel). Fails
+    /// for a point outside the image.
+    pub fn pixel_at(&self, (x, y): (f64, f64)) -> Result<(u32, u32)> {
+        if !((0.0..=1.0).contains(&x) && (0.0..=1.0).contains(&y)) {
+            return Err(Error::InvalidArgument(format!(
+                "a point of the image is given as fractions of its width and height from its top left \
+                 (0 to 1), got ({x}, {y})"
+            )));
+        }
+        let at = |f: f64, size: u32| ((f * f64::from(size)) as u32).min(size.saturating_sub(1));
+        Ok((at(x, self.width), at(y, self.height)))
     }
 
     /// Rejects settings that cannot make an image.
@@ -609,9 +616,9 @@ fn centre_ray(camera: &dyn Camera, px: u32, py: u32) -> Option<CameraRay> {
 /// `(px, py)` of a `settings`-sized image through `camera`: its density
 /// over the sphere of directions there, `size` pixels square
 /// ([`DensityMap`]). For a look at the guide when a guided render
-/// misbehaves. Fails for a pixel outside the image, one that sees nothing,
-/// and one that sees a surface the guide does not steer (glass, a mirror,
-/// nearly smooth metal).
+/// misbehaves. Fails for a size outside [`DensityMap::SIZES`], a pixel
+/// outside the image, one that sees nothing, and one that sees a surface
+/// the guide does not steer (glass, a mirror, nearly smooth metal).
 pub fn guide_map_at_pixel(
     scene: &CompiledScene,
     camera: &dyn Camera,
@@ -620,6 +627,7 @@ pub fn guide_map_at_pixel(
     (px, py): (u32, u32),
     size: u32,
 ) -> Result<DensityMap> {
+    DensityMap::check_size(size)?;
     if px >= settings.width || py >= settings.height {
         return Err(Error::InvalidArgument(format!(
             "pixel ({px}, {py}) is outside the {}x{} image",
@@ -632,8 +640,7 @@ pub fn guide_map_at_pixel(
             "pixel ({px}, {py}) sees no surface: nothing for the guide to show"
         )));
     };
-    let mut lambda = SampledWavelengths::single(crate::spectrum::D_LINE_NM);
-    if !is_guidable(&scene.spectral_material(hit.material).bsdf(&mut lambda)) {
+    if !material_is_guided(scene.spectral_material(hit.material)) {
         return Err(Error::InvalidArgument(format!(
             "pixel ({px}, {py}) sees glass, a mirror or smooth metal, which the guide does not steer; \
              pick a pixel on a diffuse or rough surface"

@@ -14,6 +14,7 @@ use glam::{Vec2, Vec3};
 
 use super::directional::to_square;
 use super::Guide;
+use crate::error::{Error, Result};
 use crate::math::Frame;
 
 /// Samples of the guide [`DensityMap::share_above_surface`] is counted over.
@@ -43,6 +44,21 @@ pub struct DensityMap {
 }
 
 impl DensityMap {
+    /// The edges, in pixels, a map may have.
+    pub const SIZES: std::ops::RangeInclusive<u32> = 8..=4096;
+
+    /// Fails for a map edge of `size` pixels outside [`DensityMap::SIZES`].
+    pub fn check_size(size: u32) -> Result<()> {
+        if Self::SIZES.contains(&size) {
+            return Ok(());
+        }
+        Err(Error::InvalidArgument(format!(
+            "a guide map's size must be {} to {} pixels, got {size}",
+            Self::SIZES.start(),
+            Self::SIZES.end()
+        )))
+    }
+
     /// The map of `guide`'s distribution at point `p` of a surface whose
     /// normal on the side the path arrives from is `normal`, with `toward_viewer`
     /// (a direction from `p` to the camera) at the picture's bottom; `size`
@@ -50,17 +66,17 @@ impl DensityMap {
     pub fn at(guide: &Guide, p: Vec3, normal: Vec3, toward_viewer: Vec3, size: u32) -> Self {
         let tree = guide.distribution_at(p, normal);
         let frame = viewer_frame(normal, toward_viewer);
-        let pixel_sr = (4.0 / size as f32).powi(2);
+        let pixel_sr = pixel_width(size).powi(2);
         let mut density_per_sr = vec![0.0f32; (size * size) as usize];
         let mut total = 0.0f64;
         for (i, density) in density_per_sr.iter_mut().enumerate() {
-            let (x, y) = ((i as u32 % size) as f32, (i as u32 / size) as f32);
-            let disc = (Vec2::new(x, y) + 0.5) * (4.0 / size as f32) - 2.0;
-            let Some(local) = from_disc(disc) else { continue };
+            let Some(local) = from_disc(disc_point(size, i)) else {
+                continue;
+            };
             *density = tree.pdf(to_square(frame.from_local(local)));
             total += f64::from(*density * pixel_sr);
         }
-        // Counted from samples, not from the map's pixels: exact however small the leaves.
+        // Counted from samples, not from the map's pixels: right however small the leaves.
         let strata = SHARE_SAMPLES.isqrt();
         let above = (0..strata * strata)
             .filter_map(|i| tree.sample((Vec2::new((i % strata) as f32, (i / strata) as f32) + 0.5) / strata as f32))
@@ -75,10 +91,28 @@ impl DensityMap {
         }
     }
 
+    /// Where pixel `i` (row-major) of the map lies on the disc of radius 2
+    /// (its centre), and one pixel's width there: for drawings over the map.
+    pub fn disc_point(&self, i: usize) -> (Vec2, f32) {
+        (disc_point(self.size, i), pixel_width(self.size))
+    }
+
     /// The largest density on the map, per steradian.
     pub fn max_density_per_sr(&self) -> f32 {
         self.density_per_sr.iter().copied().fold(0.0, f32::max)
     }
+}
+
+/// One pixel's width on the disc of radius 2, for a map `size` pixels square.
+fn pixel_width(size: u32) -> f32 {
+    4.0 / size as f32
+}
+
+/// The centre of pixel `i` (row-major) of a map `size` pixels square, on
+/// the disc of radius 2.
+fn disc_point(size: u32, i: usize) -> Vec2 {
+    let (x, y) = ((i as u32 % size) as f32, (i as u32 / size) as f32);
+    (Vec2::new(x, y) + 0.5) * pixel_width(size) - 2.0
 }
 
 /// The local frame of the map: `n` out of the picture toward whoever looks
@@ -117,9 +151,8 @@ mod tests {
         let size = 400u32;
         let pixel_sr = (4.0 / size as f64).powi(2);
         let (mut all, mut above) = (0.0, 0.0);
-        for i in 0..size * size {
-            let d = (Vec2::new((i % size) as f32, (i / size) as f32) + 0.5) * (4.0 / size as f32) - 2.0;
-            if let Some(v) = from_disc(d) {
+        for i in 0..(size * size) as usize {
+            if let Some(v) = from_disc(disc_point(size, i)) {
                 assert!((v.length() - 1.0).abs() < 1e-5);
                 all += pixel_sr;
                 if v.z > 0.0 {
