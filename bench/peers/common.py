@@ -32,6 +32,19 @@ def in_venv(packages: list[str], install_lenspath: bool = False) -> None:
     os.execv(str(python), [str(python), *sys.argv])
 
 
+def doubling_sweep(measure, longest_s: float) -> list[tuple[int, float, float]]:
+    """(spp, seconds, MSE) at 1, 2, 4, ... samples per pixel, `measure(spp)` giving a render's
+    seconds and MSE, until a render takes longer than `longest_s` (that render included)."""
+    rows, spp = [], 1
+    while True:
+        seconds, mse = measure(spp)
+        rows.append((spp, seconds, mse))
+        print(f"    {spp:6d} spp {seconds:8.3f} s  MSE {mse:.3e}", flush=True)
+        if seconds > longest_s:
+            return rows
+        spp *= 2
+
+
 def at_time(rows: list[tuple[int, float, float]], seconds: float) -> float | None:
     """From a renderer's (spp, seconds, MSE) rows in order of time, the MSE at `seconds` by
     log-log interpolation between the two renders around it (None outside them)."""

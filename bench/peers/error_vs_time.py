@@ -32,7 +32,7 @@ import os
 import sys
 from pathlib import Path
 
-from common import ROOT, at_time, in_venv
+from common import ROOT, at_time, doubling_sweep, in_venv
 from render_vs_mitsuba import SPHERE_WHITE, Job, dragon, newest_libllvm, render_lenspath, render_mitsuba, variant_runs
 
 CACHE = ROOT / "target" / "bench-references"
@@ -60,9 +60,7 @@ def sweep(render, job: Job, reference, budget_s: float, warm_up: bool, runs: int
     median time and the mean MSE of `runs` renders (other seeds) at each sample count."""
     import numpy as np
 
-    rows = []
-    spp = 1
-    while True:
+    def measure(spp: int) -> tuple[float, float]:
         run = Job(job.scene, job.meshes, job.width, job.height, spp, job.max_depth)
         if warm_up:
             render(run, seed=spp + 7)
@@ -71,12 +69,9 @@ def sweep(render, job: Job, reference, budget_s: float, warm_up: bool, runs: int
             image, seconds = render(run, seed=spp + 100_000 * r)
             times.append(seconds)
             errors.append(float(np.mean((image - reference) ** 2)))
-        seconds, mse = float(np.median(times)), float(np.mean(errors))
-        rows.append((spp, seconds, mse))
-        print(f"    {spp:6d} spp {seconds:8.3f} s  MSE {mse:.3e}", flush=True)
-        if seconds > budget_s:
-            return rows
-        spp *= 2
+        return float(np.median(times)), float(np.mean(errors))
+
+    return doubling_sweep(measure, budget_s)
 
 
 def main() -> int:

@@ -42,7 +42,7 @@ import time
 import tomllib
 from pathlib import Path
 
-from common import ROOT, at_time, in_venv
+from common import ROOT, at_time, doubling_sweep, in_venv
 
 LENSPATH = ROOT / "target" / "release" / "lenspath"
 CACHE = ROOT / "target" / "bench-references"
@@ -246,16 +246,12 @@ def sweep(render, reference, longest_s: float, folder: Path) -> list[tuple[int, 
     """(spp, seconds, MSE) at 1, 2, 4, ... spp until a render takes longer than `longest_s`."""
     import numpy as np
 
-    rows, spp = [], 1
-    while True:
+    def measure(spp: int) -> tuple[float, float]:
         out = folder / f"sweep{spp}.exr"
         seconds = render(spp, spp + 11, out)
-        mse = float(np.mean((read_exr(out) - reference) ** 2))
-        rows.append((spp, seconds, mse))
-        print(f"    {spp:6d} spp {seconds:8.3f} s  MSE {mse:.3e}", flush=True)
-        if seconds > longest_s:
-            return rows
-        spp *= 2
+        return seconds, float(np.mean((read_exr(out) - reference) ** 2))
+
+    return doubling_sweep(measure, longest_s)
 
 
 def main() -> int:
