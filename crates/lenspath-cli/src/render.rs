@@ -475,7 +475,7 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
             if let Some(raw) = &args.raw {
                 write_raw(raw, &frame)?;
             }
-            let header = setup.image_header(&scene_name, Some(&frame.exposure()))?;
+            let header = setup.image_header(&scene_name, Some(&frame.exposure))?;
             write_image_with_header(&args.out, &develop(&frame, &development), args.exposure, &header)?;
             eprintln!("{}", exposure_line(&frame));
         }
@@ -548,9 +548,9 @@ fn exposure_line(frame: &RawFrame) -> String {
         .count();
     format!(
         "sensor {}: {} s at ISO {:.0}, median {} DN (black {}, white {}), {:.1}% of pixels clipped, {:.3} e-/DN",
-        frame.sensor_name,
-        exposure_time(frame.exposure_time_s),
-        frame.iso,
+        frame.exposure.sensor_name,
+        exposure_time(frame.exposure.exposure_time_s),
+        frame.exposure.iso,
         median,
         frame.black_level_dn,
         frame.white_level_dn,

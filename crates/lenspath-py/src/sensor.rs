@@ -218,19 +218,19 @@ impl RawFrame {
     /// The spectral response's name.
     #[getter]
     fn sensor_name(&self) -> &str {
-        &self.frame.sensor_name
+        &self.frame.exposure.sensor_name
     }
 
     /// The exposure time, s (metered, with auto exposure).
     #[getter]
     fn exposure_time_s(&self) -> f64 {
-        self.frame.exposure_time_s
+        self.frame.exposure.exposure_time_s
     }
 
     /// The ISO speed (metered, with auto exposure).
     #[getter]
     fn iso(&self) -> f64 {
-        self.frame.iso
+        self.frame.exposure.iso
     }
 
     /// The frame developed (white balance, demosaic, colour matrix, tone
@@ -275,7 +275,7 @@ impl RawFrame {
             "RawFrame({}x{}, {}, {}, black {} DN, white {} DN, {:.4} e-/DN)",
             f.width,
             f.height,
-            f.sensor_name,
+            f.exposure.sensor_name,
             f.cfa.name(),
             f.black_level_dn,
             f.white_level_dn,

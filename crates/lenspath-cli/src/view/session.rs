@@ -161,7 +161,7 @@ impl View {
             spp_requested: film.spp_requested,
             ..develop(&frame, &sensor.development)
         };
-        Ok((image, Some(frame.exposure())))
+        Ok((image, Some(frame.exposure.clone())))
     }
 }
 

@@ -159,7 +159,7 @@ mod tests {
     use glam::DVec3;
 
     use super::*;
-    use crate::sensor::{Cfa, SpectralResponse};
+    use crate::sensor::{Cfa, Exposure, SpectralResponse};
 
     /// A 4 × 4 RGGB frame, black 64, white 1023, of the given digital numbers.
     fn frame(dn: Vec<u16>) -> RawFrame {
@@ -174,9 +174,11 @@ mod tests {
             electrons_per_dn: 1.0,
             xyz_to_camera: ideal.xyz_to_camera(),
             as_shot_neutral: ideal.d65_neutral() / ideal.d65_neutral().max_element(),
-            sensor_name: "ideal".into(),
-            exposure_time_s: 0.01,
-            iso: 100.0,
+            exposure: Exposure {
+                exposure_time_s: 0.01,
+                iso: 100.0,
+                sensor_name: "ideal".into(),
+            },
         }
     }
 

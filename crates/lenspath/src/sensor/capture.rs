@@ -36,12 +36,9 @@ pub struct RawFrame {
     /// The channels' reading of the white the camera was balanced for,
     /// largest 1 (DNG `AsShotNeutral`; [`super::WhiteBalance`]).
     pub as_shot_neutral: DVec3,
-    /// The spectral response's name (DNG `UniqueCameraModel`).
-    pub sensor_name: String,
-    /// The exposure time, s (metered, with auto exposure).
-    pub exposure_time_s: f64,
-    /// The ISO speed (metered, with auto exposure).
-    pub iso: f64,
+    /// How it was taken: exposure time and ISO (metered, with auto
+    /// exposure) and the spectral response's name (DNG `UniqueCameraModel`).
+    pub exposure: Exposure,
 }
 
 /// How a frame was taken: what an image of it records (EXR `expTime`,
@@ -54,17 +51,6 @@ pub struct Exposure {
     pub iso: f64,
     /// The spectral response's name.
     pub sensor_name: String,
-}
-
-impl RawFrame {
-    /// How it was taken.
-    pub fn exposure(&self) -> Exposure {
-        Exposure {
-            exposure_time_s: self.exposure_time_s,
-            iso: self.iso,
-            sensor_name: self.sensor_name.clone(),
-        }
-    }
 }
 
 /// The frame `settings` read out from `film`, a sensor render's film
@@ -155,9 +141,11 @@ pub fn capture(
         electrons_per_dn,
         xyz_to_camera: settings.response.xyz_to_camera(),
         as_shot_neutral: settings.white_balance.neutral(settings.response, image),
-        sensor_name: settings.response.name().to_string(),
-        exposure_time_s: settings.exposure_time_s,
-        iso: settings.iso,
+        exposure: Exposure {
+            exposure_time_s: settings.exposure_time_s,
+            iso: settings.iso,
+            sensor_name: settings.response.name().to_string(),
+        },
     })
 }
 

@@ -115,21 +115,21 @@ fn dng_tags<W: std::io::Write + std::io::Seek, K: tiff::encoder::TiffKind>(
     let mono = frame.cfa == Cfa::Mono;
     tags.write_tag(Tag::NewSubfileType, 0u32)?;
     tags.write_tag(Tag::Make, "lenspath")?;
-    tags.write_tag(Tag::Model, frame.sensor_name.as_str())?;
+    tags.write_tag(Tag::Model, frame.exposure.sensor_name.as_str())?;
     tags.write_tag(Tag::Software, concat!("lenspath ", env!("CARGO_PKG_VERSION")))?;
     tags.write_tag(Tag::Unknown(DNG_VERSION), &[1u8, 4, 0, 0][..])?;
     tags.write_tag(Tag::Unknown(DNG_BACKWARD_VERSION), &[1u8, 1, 0, 0][..])?;
     tags.write_tag(
         Tag::Unknown(UNIQUE_CAMERA_MODEL),
-        format!("lenspath {}", frame.sensor_name).as_str(),
+        format!("lenspath {}", frame.exposure.sensor_name).as_str(),
     )?;
     tags.write_tag(Tag::Unknown(BLACK_LEVEL), frame.black_level_dn)?;
     tags.write_tag(Tag::Unknown(WHITE_LEVEL), frame.white_level_dn)?;
     tags.write_tag(Tag::Unknown(CALIBRATION_ILLUMINANT_1), ILLUMINANT_D65)?;
-    tags.write_tag(Tag::Unknown(EXPOSURE_TIME), rational(frame.exposure_time_s))?;
+    tags.write_tag(Tag::Unknown(EXPOSURE_TIME), rational(frame.exposure.exposure_time_s))?;
     tags.write_tag(
         Tag::Unknown(ISO_SPEED_RATINGS),
-        frame.iso.round().clamp(1.0, 65535.0) as u16,
+        frame.exposure.iso.round().clamp(1.0, 65535.0) as u16,
     )?;
     if mono {
         tags.write_tag(Tag::PhotometricInterpretation, PHOTOMETRIC_LINEAR_RAW)?;

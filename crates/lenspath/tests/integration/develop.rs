@@ -22,7 +22,7 @@ use lenspath::scene::Scene;
 use lenspath::sensor::develop::develop;
 use lenspath::sensor::response::IDEAL_SENSOR;
 use lenspath::sensor::{
-    capture, Cfa, Demosaic, Development, RawFrame, SensorSettings, SpectralResponse, ToneCurve, WhiteBalance,
+    capture, Cfa, Demosaic, Development, Exposure, RawFrame, SensorSettings, SpectralResponse, ToneCurve, WhiteBalance,
 };
 use lenspath::spectrum::{cie, planck};
 
@@ -51,9 +51,11 @@ fn srgb_frame(width: u32, height: u32, cfa: Cfa, rgb: impl Fn(u32, u32) -> Vec3)
         electrons_per_dn: 1.0,
         xyz_to_camera: xyz_to_srgb,
         as_shot_neutral: DVec3::ONE,
-        sensor_name: "srgb".into(),
-        exposure_time_s: 0.01,
-        iso: 100.0,
+        exposure: Exposure {
+            exposure_time_s: 0.01,
+            iso: 100.0,
+            sensor_name: "srgb".into(),
+        },
     }
 }
 

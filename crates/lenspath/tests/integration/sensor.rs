@@ -447,17 +447,21 @@ fn auto_exposure_meters_mid_grey_and_raises_the_iso_only_past_the_longest_time()
         let frame = frame_of(mid_grey * light);
         eprintln!(
             "light ×{light}: {:.5} s at ISO {:.0}, mean green {:.4} of the white level",
-            frame.exposure_time_s,
-            frame.iso,
+            frame.exposure.exposure_time_s,
+            frame.exposure.iso,
             green_fraction(&frame)
         );
         // The film is f32: the metered reading is the intended one to 1e-7.
         assert!(
-            (frame.exposure_time_s / expect_time - 1.0).abs() < 1e-6,
+            (frame.exposure.exposure_time_s / expect_time - 1.0).abs() < 1e-6,
             "{}",
-            frame.exposure_time_s
+            frame.exposure.exposure_time_s
         );
-        assert!((frame.iso / expect_iso - 1.0).abs() < 1e-6, "{}", frame.iso);
+        assert!(
+            (frame.exposure.iso / expect_iso - 1.0).abs() < 1e-6,
+            "{}",
+            frame.exposure.iso
+        );
         if light >= 1.0 / 8.0 {
             // Mid-grey (the highest ISO cannot reach it at 1/1000 of the light).
             let fraction = green_fraction(&frame);
