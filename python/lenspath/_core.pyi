@@ -73,8 +73,10 @@ class Scene:
     @property
     def source(self) -> str | None:
         """The file it was loaded from or the built-in scene's name; None once built or changed in Python."""
-    def compile(self) -> None:
-        """Builds its BVH now; otherwise the first render does. Renders share it until the scene changes."""
+    def compile(self, *, threads: int | None = None) -> None:
+        """Builds its BVH now, on ``threads`` threads (default: all cores); otherwise the first render
+        does, on that render's threads. Renders share it until the scene changes; the tree is the
+        same for any thread count."""
     def __reduce__(self) -> tuple[Any, tuple[Any, ...]]:
         """Pickles as ``Scene.builtin(...)`` or ``load(path)``; TypeError for a scene built in Python."""
     @property

@@ -143,6 +143,22 @@ def test_a_scene_without_a_view_cannot_render() -> None:
         lenspath.render(scene, spp=1, resolution=(8, 8))
 
 
+def test_compile_builds_on_the_threads_asked_and_gives_the_same_image() -> None:
+    """A BVH built on one thread is the one built on every core: the same image, bit for bit."""
+    one = lenspath.Scene.builtin("cornell-spheres")
+    one.compile(threads=1)
+    every = lenspath.Scene.builtin("cornell-spheres")
+    every.compile()
+    settings = {"spp": 2, "resolution": (32, 24), "camera": lenspath.Camera.pinhole()}
+    np.testing.assert_array_equal(lenspath.render(one, **settings), lenspath.render(every, **settings))
+
+
+@pytest.mark.parametrize(("threads", "message"), [(0, "threads must be at least 1"), (100_000, "at most")])
+def test_compile_refuses_a_thread_count_no_pool_can_have(threads: int, message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        lenspath.Scene.builtin("cornell-spheres").compile(threads=threads)
+
+
 def _lit_floor(height: float = 2.0, albedo: float = 0.5) -> lenspath.Scene:
     """A large diffuse floor (y = 0) seen straight down from ``height`` through a 4° pinhole."""
     scene = lenspath.Scene()

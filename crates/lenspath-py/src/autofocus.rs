@@ -123,7 +123,7 @@ pub(crate) fn autofocus(
     let metric = overrides
         .metric
         .unwrap_or_else(|| lenspath::defaults::AUTOFOCUS_METRIC.to_string());
-    let compiled = scene.compiled(py)?;
+    let compiled = scene.compiled(py, search.settings.threads)?;
     let (result, depth_of_focus_mm) = py
         .detach(|| {
             guarded(|| {

@@ -57,7 +57,8 @@ pub(crate) fn prepared(
         Some(c) => c.built_for(&setup)?,
         None => setup.build_camera().map_err(to_py)?,
     };
-    Ok((setup, camera, scene.compiled(py)?))
+    let compiled = scene.compiled(py, setup.settings.threads)?;
+    Ok((setup, camera, compiled))
 }
 
 /// Renders `scene` through `camera` (see the stub for the arguments). An

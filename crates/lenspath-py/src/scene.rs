@@ -86,9 +86,12 @@ impl Scene {
         }
     }
 
-    /// Builds its BVH now; otherwise the first render does. Kept until the scene changes.
-    pub(crate) fn compile(&self, py: Python<'_>) -> PyResult<()> {
-        self.compiled(py).map(|_| ())
+    /// Builds its BVH now, on `threads` threads (default: all cores);
+    /// otherwise the first render does, on that render's threads. Kept
+    /// until the scene changes; the tree is the same for any thread count.
+    #[pyo3(signature = (*, threads = None))]
+    pub(crate) fn compile(&self, py: Python<'_>, threads: Option<usize>) -> PyResult<()> {
+        self.compiled(py, threads).map(|_| ())
     }
 
     /// Pickles as the way to make it again: `Scene.builtin(...)` or `load(path)`.
@@ -402,14 +405,15 @@ impl Scene {
         self.origin = SceneOrigin::Python;
     }
 
-    /// Its compiled form (BVH and lights), built once and shared by later renders.
-    pub(crate) fn compiled(&self, py: Python<'_>) -> PyResult<Arc<CompiledScene>> {
+    /// Its compiled form (BVH and lights), built once (on `threads` threads,
+    /// default all cores) and shared by later renders.
+    pub(crate) fn compiled(&self, py: Python<'_>, threads: Option<usize>) -> PyResult<Arc<CompiledScene>> {
         if let Some(c) = self.compiled.get() {
             return Ok(c.clone());
         }
         let scene = self.scene.clone();
         let compiled = Arc::new(
-            py.detach(|| guarded(|| scene.compile(&BvhSettings::default())))?
+            py.detach(|| guarded(|| scene.compile_on(&BvhSettings::default(), threads)))?
                 .map_err(to_py)?,
         );
         Ok(self.compiled.get_or_init(|| compiled).clone())
