@@ -30,24 +30,20 @@ import time
 from pathlib import Path
 
 import numpy as np
-import OpenEXR
 from guiding import WEIGHTS, fireflies, interpolate
+
+import lenspath
 
 
 def read(path: Path) -> np.ndarray:
-    """The RGB channels of an EXR lenspath wrote."""
-    with OpenEXR.File(str(path)) as f:
-        return np.asarray(f.channels()["RGB"].pixels, dtype=np.float32)
+    """The RGB channels of an image lenspath wrote."""
+    return np.asarray(lenspath.read(path))[..., :3]
 
 
 def highlights(reference: np.ndarray) -> np.ndarray:
-    """The reference's pixels of luminance above 1, grown by one pixel."""
-    bright = reference @ WEIGHTS > 1.0
-    grown = bright.copy()
-    for dy in (-1, 0, 1):
-        for dx in (-1, 0, 1):
-            grown |= np.roll(np.roll(bright, dy, 0), dx, 1)
-    return grown
+    """The reference's pixels of luminance above 1, grown by one pixel (not across the edges)."""
+    bright = np.pad(reference @ WEIGHTS > 1.0, 1)
+    return np.lib.stride_tricks.sliding_window_view(bright, (3, 3)).any(axis=(-1, -2))
 
 
 def main() -> int:
