@@ -5,7 +5,7 @@ Mrays/s on 1 M coherent camera rays and 1 M incoherent random rays, on one threa
 and on all cores; the bytes a triangle each holds; and whether the two agree on
 every hit distance.
 
-    python3 bench/peers/bvh_vs_embree.py [--rays 1000000] [--rounds 3] [--json out.json]
+    python3 bench/peers/bvh_vs_embree.py [--rays 1000000] [--rounds 3] [--repeat 1] [--json out.json]
 
 Makes its virtual environment in bench/.venv-peers (numpy, embreex) the first
 time and reruns itself there; builds lenspath with cargo. The meshes are
@@ -17,8 +17,9 @@ calls, one ray at a time on one thread (its per-ray Python-free overhead is
 included; lenspath's timing is of its own loop). That loop holds the GIL, so
 Embree's all-cores figure runs one process a core, each with its own copy of the
 scene, tracing an equal share of the rays from a common start (wall time until
-the last finishes); lenspath's uses its thread pool. Embree's build uses its
-default (multi-threaded TBB) builder; lenspath's build is single-threaded.
+the last finishes); lenspath's uses its thread pool. Every figure is the best of
+`--rounds` runs, for both (each lenspath run a process of its own). Embree's build
+uses its default (multi-threaded TBB) builder; lenspath's build is single-threaded.
 """
 
 from __future__ import annotations
@@ -207,10 +208,15 @@ def main() -> int:
     parser.add_argument("--rounds", type=int, default=3, help="best of this many timings each")
     parser.add_argument("--json", type=Path, help="also write every figure here")
     parser.add_argument("--meshes", nargs="*", help="only these (dragon_100k, lucy_100k, knot_1m)")
+    parser.add_argument(
+        "--repeat",
+        type=int,
+        default=1,
+        help="run the whole comparison this many times and end with each ratio's median and range "
+        "(the runs' rows go to --json one after another, each with its run number)",
+    )
     args = parser.parse_args()
     in_venv(["numpy", "embreex"])
-    import numpy as np
-
     subprocess.run(["cargo", "build", "--release", "--quiet"], cwd=ROOT, check=True)
     binary = ROOT / "target" / "release" / "lenspath"
     meshes = [m for m in [*MESHES, PROCEDURAL] if not args.meshes or m[0] in args.meshes]
@@ -218,52 +224,93 @@ def main() -> int:
         print(f"{SHARED} is absent: only the procedural mesh", file=sys.stderr)
         meshes = [m for m in meshes if m is PROCEDURAL]
     rows = []
-    for name, mesh_args in meshes:
-        with tempfile.TemporaryDirectory() as tmp:
-            out = Path(tmp)
-            ours = [
-                lenspath_bench(binary, mesh_args, args.rays, 1, out if r == 0 else None) for r in range(args.rounds)
-            ]
-            ours_all = lenspath_bench(binary, mesh_args, args.rays, None, None)
-            vertices, faces = read_binary_ply(out / "mesh.ply")
-            ray_sets = {}
-            for kind in ("coherent", "incoherent"):
-                raw = np.fromfile(out / f"{kind}_rays.f32", np.float32).reshape(-1, 6)
-                t = np.fromfile(out / f"{kind}_t.f32", np.float32)
-                ray_sets[kind] = (np.ascontiguousarray(raw[:, :3]), np.ascontiguousarray(raw[:, 3:]), t)
-            embree = embree_measure(vertices, faces, ray_sets, args.rounds)
-            for kind, (origins, directions, _) in ray_sets.items():
-                embree[f"{kind}_closest_all_cores_mrays_s"] = embree_all_cores(
-                    vertices, faces, origins, directions, ours_all["threads"], args.rounds
-                )
-            checks = {k: agreement(embree["scene"], o, d, t) for k, (o, d, t) in ray_sets.items()}
-
-        def best(key: str, runs: list[dict] = ours) -> float:
-            return max(r[key] for r in runs)
-
-        row = {
-            "mesh": name,
-            "triangles": len(faces),
-            "vertices": len(vertices),
-            "lenspath_build_ms": min(r["build_ms"] for r in ours),
-            "embree_build_ms": embree["build_ms"],
-            "agreement": checks,
-            "lenspath_threads": ours_all["threads"],
-            "lenspath_memory_bytes": ours[0]["memory_bytes"],
-            "embree_memory_bytes": embree_memory_bytes(vertices, faces),
-        }
-        for kind in ("coherent", "incoherent"):
-            row[f"{kind}_closest"] = (best(f"{kind}_mrays_s"), embree[f"{kind}_closest_mrays_s"])
-            row[f"{kind}_any_hit"] = (best(f"{kind}_any_hit_mrays_s"), embree[f"{kind}_any_hit_mrays_s"])
-            row[f"{kind}_closest_all_threads"] = (
-                ours_all[f"{kind}_mrays_s"],
-                embree[f"{kind}_closest_all_cores_mrays_s"],
-            )
-        rows.append(row)
-        print_row(row)
+    for run in range(args.repeat):
+        if args.repeat > 1:
+            print(f"\nrun {run + 1} of {args.repeat}")
+        for name, mesh_args in meshes:
+            row = compare(binary, name, mesh_args, args)
+            row["run"] = run
+            rows.append(row)
+            print_row(row)
+    if args.repeat > 1:
+        print_medians(rows)
     if args.json:
         args.json.write_text(json.dumps(rows, indent=2))
     return 0
+
+
+def compare(binary: Path, name: str, mesh_args: list[str], args: argparse.Namespace) -> dict:
+    """One mesh's row: both BVHs built and traced, their figures side by side."""
+    import numpy as np
+
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp)
+        ours = [lenspath_bench(binary, mesh_args, args.rays, 1, out if r == 0 else None) for r in range(args.rounds)]
+        # Best of as many runs as Embree's all-cores figure, as for one thread.
+        ours_all_runs = [lenspath_bench(binary, mesh_args, args.rays, None, None) for _ in range(args.rounds)]
+        ours_all = ours_all_runs[0]
+        vertices, faces = read_binary_ply(out / "mesh.ply")
+        ray_sets = {}
+        for kind in ("coherent", "incoherent"):
+            raw = np.fromfile(out / f"{kind}_rays.f32", np.float32).reshape(-1, 6)
+            t = np.fromfile(out / f"{kind}_t.f32", np.float32)
+            ray_sets[kind] = (np.ascontiguousarray(raw[:, :3]), np.ascontiguousarray(raw[:, 3:]), t)
+        embree = embree_measure(vertices, faces, ray_sets, args.rounds)
+        for kind, (origins, directions, _) in ray_sets.items():
+            embree[f"{kind}_closest_all_cores_mrays_s"] = embree_all_cores(
+                vertices, faces, origins, directions, ours_all["threads"], args.rounds
+            )
+        checks = {k: agreement(embree["scene"], o, d, t) for k, (o, d, t) in ray_sets.items()}
+
+    def best(key: str, runs: list[dict] = ours) -> float:
+        return max(r[key] for r in runs)
+
+    row = {
+        "mesh": name,
+        "triangles": len(faces),
+        "vertices": len(vertices),
+        "lenspath_build_ms": min(r["build_ms"] for r in ours),
+        "embree_build_ms": embree["build_ms"],
+        "agreement": checks,
+        "lenspath_threads": ours_all["threads"],
+        "lenspath_memory_bytes": ours[0]["memory_bytes"],
+        "embree_memory_bytes": embree_memory_bytes(vertices, faces),
+    }
+    for kind in ("coherent", "incoherent"):
+        row[f"{kind}_closest"] = (best(f"{kind}_mrays_s"), embree[f"{kind}_closest_mrays_s"])
+        row[f"{kind}_any_hit"] = (best(f"{kind}_any_hit_mrays_s"), embree[f"{kind}_any_hit_mrays_s"])
+        row[f"{kind}_closest_all_threads"] = (
+            best(f"{kind}_mrays_s", ours_all_runs),
+            embree[f"{kind}_closest_all_cores_mrays_s"],
+        )
+    return row
+
+
+RATIOS = [
+    "coherent_closest",
+    "incoherent_closest",
+    "coherent_any_hit",
+    "incoherent_any_hit",
+    "coherent_closest_all_threads",
+    "incoherent_closest_all_threads",
+]
+
+
+def print_medians(rows: list[dict]) -> None:
+    """Each mesh's ratios (lenspath's speed over Embree's) over the runs: median and range."""
+    import statistics
+
+    runs = 1 + max(row["run"] for row in rows)
+    print(f"\nmedians of {runs} runs (lenspath's speed over Embree's; range in brackets)")
+    for mesh in dict.fromkeys(row["mesh"] for row in rows):
+        print(f"  {mesh}")
+        for key in ["build", *RATIOS]:
+            ratios = [
+                row["embree_build_ms"] / row["lenspath_build_ms"] if key == "build" else row[key][0] / row[key][1]
+                for row in rows
+                if row["mesh"] == mesh
+            ]
+            print(f"    {key:<31}{statistics.median(ratios):5.2f}  ({min(ratios):.2f}-{max(ratios):.2f})")
 
 
 def print_row(row: dict) -> None:

@@ -196,6 +196,15 @@ pub struct Bvh<T> {
 /// culls a box the ray touches, e.g. the flat box of an axis-aligned quad.
 const SLAB_SAFETY: f32 = 1.0 + 2.0 * 3.0 * f32::EPSILON * 0.5 / (1.0 - 3.0 * f32::EPSILON * 0.5);
 
+/// A child on the wide traversal's stack: a wide node (`count` 0) or a
+/// leaf (its first pack and primitive count), and where the ray enters it.
+#[derive(Clone, Copy)]
+struct Visit {
+    child: u32,
+    count: u16,
+    t_near: f32,
+}
+
 /// Per-ray traversal constants.
 struct TraversalRay {
     origin: Vec3A,
@@ -417,11 +426,15 @@ impl<T: Copy> Bvh<T> {
         self.traverse_wide::<ANY, true>(ray, t_max)
     }
 
-    /// The wide traversal: one slab test for a node's children; the
-    /// leaves among the hit ones are intersected at once (shrinking `t_max`),
-    /// then the interior ones are visited nearest first, the others pushed
-    /// with their entry distance so a pop beyond the closest hit is dropped
-    /// unvisited.
+    /// The wide traversal: one slab test for a node's children; the nearest
+    /// one the ray enters, node or leaf, is visited next (for any hit, the
+    /// first in lane order), the others pushed with their entry distance
+    /// (for closest hits sorted, see [`sort_nearest_last`]) so a pop beyond
+    /// the closest hit is dropped unvisited. Visiting leaves in that order
+    /// too, rather than a node's leaves before its interior children,
+    /// measured +2 to +4% on incoherent and coherent closest hits
+    /// (interleaved rounds, one thread, 15 rounds, medians over the dragon,
+    /// Lucy and the 1 M knot), any-hit unchanged.
     #[inline(always)]
     fn traverse_wide<const ANY: bool, const AVX2: bool>(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         if self.wide.is_empty() {
@@ -430,53 +443,77 @@ impl<T: Copy> Bvh<T> {
         let tr = TraversalRay::new(ray);
         let mut t_max = t_max;
         let mut closest: Option<Hit> = None;
-        // Left uninitialised: zeroing its 1.5 KB cost a coherent ray about a
-        // sixth of its time. Only entries below `sp` are read, all written.
-        let mut stack = [const { MaybeUninit::<(u32, f32)>::uninit() }; WIDE_STACK];
+        // Left uninitialised: zeroing it (1.5 KB then, 5 KB now) cost a
+        // coherent ray about a sixth of its time. Only entries below `sp`
+        // are read, all written.
+        let mut stack = [const { MaybeUninit::<Visit>::uninit() }; WIDE_STACK];
         let mut sp = 0usize;
-        let mut current = 0usize;
+        let mut current = Visit {
+            child: 0,
+            count: 0,
+            t_near: 0.0,
+        };
         loop {
-            let node = &self.wide[current];
-            let (mut mask, t_near) = tr.entries::<AVX2>(node, t_max);
-            // Everything the ray enters is fetched at once, overlapping the
-            // cache misses that otherwise come one after another.
-            self.prefetch_children(node, mask);
-            // Leaves first: their hits shrink t_max for the interior children.
-            let mut leaves = mask & u32::from(node.leaves);
-            while leaves != 0 {
-                let lane = leaves.trailing_zeros() as usize;
-                leaves &= leaves - 1;
-                if let Some(hit) = self.intersect_leaf::<ANY, AVX2>(&tr, ray, node, lane, t_max) {
+            if current.count != 0 {
+                if let Some(hit) = self.intersect_leaf::<ANY, AVX2>(&tr, ray, current.child, current.count, t_max) {
                     if ANY {
                         return Some(hit);
                     }
                     t_max = hit.t;
                     closest = Some(hit);
                 }
-            }
-            mask &= !u32::from(node.leaves);
-            // Interior children the ray still enters before the closest hit, nearest first.
-            let mut next: Option<(u32, f32)> = None;
-            while mask != 0 {
-                let lane = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                let entry = (node.child[lane], t_near[lane]);
-                if entry.1 > t_max {
-                    continue;
-                }
-                match next {
-                    None => next = Some(entry),
-                    Some(best) => {
-                        let (near, far) = if entry.1 < best.1 { (entry, best) } else { (best, entry) };
-                        stack[sp].write(far);
-                        sp += 1;
-                        next = Some(near);
+            } else {
+                let node = &self.wide[current.child as usize];
+                let (mut mask, t_near) = tr.entries::<AVX2>(node, t_max);
+                // Everything the ray enters is fetched at once, overlapping the
+                // cache misses that otherwise come one after another.
+                self.prefetch_children(node, mask);
+                // Children, leaves or not, visited nearest first (with
+                // `ANY`, the first in lane order).
+                let mut next: Option<Visit> = None;
+                let pushed = sp;
+                while mask != 0 {
+                    let lane = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let entry = Visit {
+                        child: node.child[lane],
+                        count: node.count[lane],
+                        t_near: t_near[lane],
+                    };
+                    match next {
+                        None => next = Some(entry),
+                        // Any hit ends the search: the order of the rest
+                        // matters less than the compares (as in Embree's
+                        // any-hit traversal). Measured against nearest
+                        // first, 2 × 15 rounds: incoherent any-hit +1 to
+                        // +5%, coherent −3 to 0%.
+                        Some(_) if ANY => {
+                            stack[sp].write(entry);
+                            sp += 1;
+                        }
+                        Some(best) => {
+                            let (near, far) = if entry.t_near < best.t_near {
+                                (entry, best)
+                            } else {
+                                (best, entry)
+                            };
+                            stack[sp].write(far);
+                            sp += 1;
+                            next = Some(near);
+                        }
                     }
                 }
-            }
-            if let Some((node, _)) = next {
-                current = node as usize;
-                continue;
+                if !ANY {
+                    // SAFETY: the entries from `pushed` to `sp` were written just now.
+                    let siblings = unsafe {
+                        std::slice::from_raw_parts_mut(stack[pushed..sp].as_mut_ptr().cast::<Visit>(), sp - pushed)
+                    };
+                    sort_nearest_last(siblings);
+                }
+                if let Some(next) = next {
+                    current = next;
+                    continue;
+                }
             }
             loop {
                 if sp == 0 {
@@ -484,20 +521,13 @@ impl<T: Copy> Bvh<T> {
                 }
                 sp -= 1;
                 // SAFETY: every entry below the stack pointer was written by a push.
-                let (node, t_near) = unsafe { stack[sp].assume_init() };
-                if t_near <= t_max {
-                    current = node as usize;
+                let entry = unsafe { stack[sp].assume_init() };
+                if entry.t_near <= t_max {
+                    current = entry;
                     break;
                 }
             }
         }
-    }
-
-    /// The packs of the leaf in `node`'s lane `lane`.
-    #[inline(always)]
-    fn leaf_packs(&self, node: &WideNode, lane: usize) -> &[TrianglePack] {
-        let first = node.child[lane] as usize;
-        &self.packs[first..first + (node.count[lane] as usize).div_ceil(PACK)]
     }
 
     /// Asks for the children of `node` in `lanes` (nodes, or a leaf's
@@ -572,14 +602,15 @@ impl<T: Copy> Bvh<T> {
         &self,
         tr: &TraversalRay,
         ray: &Ray,
-        node: &WideNode,
-        lane: usize,
+        first_pack: u32,
+        count: u16,
         t_max: f32,
     ) -> Option<Hit> {
-        let packs = self.leaf_packs(node, lane);
-        let first_slot = node.child[lane] * PACK as u32;
+        let first = first_pack as usize;
+        let packs = &self.packs[first..first + (count as usize).div_ceil(PACK)];
+        let first_slot = first_pack * PACK as u32;
         // Bit `k` for the leaf's primitive in slot `first_slot + k`.
-        let used = (1u32 << node.count[lane]) - 1;
+        let used = (1u32 << count) - 1;
         #[cfg(target_arch = "x86_64")]
         if AVX2 {
             if let [low, high] = packs {
@@ -716,6 +747,26 @@ impl<T: Copy> Bvh<T> {
             }
         }
         closest
+    }
+}
+
+/// Sorts a node's pushed children so the nearest is popped first: a closest-hit
+/// ray then drops more of them unvisited once it has a hit (Embree sorts them
+/// too). Insertion sort: there are at most `WIDTH - 1`. Measured against
+/// leaving them in lane order (interleaved rounds, one thread, 15 rounds,
+/// medians): incoherent closest hits +3% on the dragon and Lucy, +6% on the
+/// 1 M knot, coherent ones unchanged; any-hit rays, whose `t_max` never
+/// shrinks, gain nothing and skip it.
+#[inline(always)]
+fn sort_nearest_last(siblings: &mut [Visit]) {
+    for i in 1..siblings.len() {
+        let entry = siblings[i];
+        let mut j = i;
+        while j > 0 && siblings[j - 1].t_near < entry.t_near {
+            siblings[j] = siblings[j - 1];
+            j -= 1;
+        }
+        siblings[j] = entry;
     }
 }
 

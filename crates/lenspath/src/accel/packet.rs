@@ -93,7 +93,13 @@ impl<T: Copy> Bvh<T> {
                     let i = testing.trailing_zeros() as usize;
                     testing &= testing - 1;
                     if self
-                        .intersect_leaf::<true, AVX2>(&traversal[i], &rays[i], node, lane, t_max)
+                        .intersect_leaf::<true, AVX2>(
+                            &traversal[i],
+                            &rays[i],
+                            node.child[lane],
+                            node.count[lane],
+                            t_max,
+                        )
                         .is_some()
                     {
                         unresolved &= !(1 << i);
