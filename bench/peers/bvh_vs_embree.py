@@ -213,7 +213,7 @@ def main() -> int:
         type=int,
         default=1,
         help="run the whole comparison this many times and end with each ratio's median and range "
-        "(the runs' rows go to --json one after another, each with its run number)",
+        "(the runs' rows go to --json one after another, each with its run number; plot_ratios.py draws their medians)",
     )
     args = parser.parse_args()
     in_venv(["numpy", "embreex"])

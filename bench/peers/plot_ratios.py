@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import statistics
 import sys
 from pathlib import Path
 
@@ -29,14 +30,17 @@ def bars(paths: list[Path]) -> list[tuple[str, float, float | None]]:
     out = []
     for path in paths:
         data = json.loads(path.read_text())
-        if isinstance(data, list):  # bvh_vs_embree: one row per mesh
-            for row in data:
-                mesh = row["mesh"]
-                out.append((f"{mesh} build", row["embree_build_ms"] / row["lenspath_build_ms"], TARGETS["build"]))
+        if isinstance(data, list):  # bvh_vs_embree: one row per mesh (and run, with --repeat)
+            meshes = dict.fromkeys(row["mesh"] for row in data)
+            for mesh in meshes:
+                runs = [row for row in data if row["mesh"] == mesh]
+                build = statistics.median(r["embree_build_ms"] / r["lenspath_build_ms"] for r in runs)
+                out.append((f"{mesh} build", build, TARGETS["build"]))
                 for key in ("coherent_closest", "incoherent_closest", "coherent_any_hit", "incoherent_any_hit"):
-                    ours, theirs = row[key]
+                    # The median over the runs: one bar a comparison.
+                    ratio = statistics.median(r[key][0] / r[key][1] for r in runs)
                     label = key.replace("_", " ")
-                    out.append((f"{mesh} {label}", ours / theirs, TARGETS.get(label)))
+                    out.append((f"{mesh} {label}", ratio, TARGETS.get(label)))
         else:  # render_vs_mitsuba: one scene
             for variant, seconds in data["mitsuba_s"].items():
                 ratio = seconds / data["lenspath_s"]
