@@ -19,12 +19,10 @@ import subprocess
 import sys
 from pathlib import Path
 
-SHARED = Path(__file__).resolve().parent.parent.parent / "shared" / "meshes"
-MESHES = {
-    "dragon": [str(SHARED / "dragon_100k.ply")],
-    "lucy": [str(SHARED / "lucy_100k.obj")],
-    "knot": ["--procedural", "1000000"],
-}
+# The meshes of the Embree comparison (bench/peers/bvh_vs_embree.py), by its names.
+sys.path.insert(0, str(Path(__file__).resolve().parent / "peers"))
+from bvh_vs_embree import MESHES, PROCEDURAL, SHARED  # noqa: E402
+
 RATES = [
     "incoherent_mrays_s",
     "coherent_mrays_s",
@@ -45,7 +43,7 @@ def main() -> int:
     parser.add_argument("--rounds", type=int, default=15)
     parser.add_argument("--rays", type=int, default=300_000)
     args = parser.parse_args()
-    meshes = MESHES if SHARED.is_dir() else {"knot": MESHES["knot"]}
+    meshes = dict([*MESHES, PROCEDURAL]) if SHARED.is_dir() else dict([PROCEDURAL])
     if not SHARED.is_dir():
         print(f"{SHARED} is absent: only the procedural knot", file=sys.stderr)
     ratios: dict[str, dict[str, list[float]]] = {mesh: {rate: [] for rate in RATES} for mesh in meshes}
@@ -64,7 +62,7 @@ def main() -> int:
             f"{rate.removesuffix('_mrays_s')} {statistics.median(r):.3f} ({min(r):.3f}-{max(r):.3f})"
             for rate, r in by_rate.items()
         ]
-        print(f"  {mesh:<7}" + "   ".join(cells))
+        print(f"  {mesh:<12}" + "   ".join(cells))
     return 0
 
 

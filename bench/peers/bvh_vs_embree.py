@@ -296,20 +296,27 @@ RATIOS = [
 ]
 
 
+def ratios_by_mesh(rows: list[dict]) -> dict[str, dict[str, list[float]]]:
+    """Each mesh's ratios (lenspath's speed over Embree's: "build" and each of
+    `RATIOS`), one a row: a run's with --repeat."""
+    out: dict[str, dict[str, list[float]]] = {}
+    for row in rows:
+        ratios = out.setdefault(row["mesh"], {key: [] for key in ["build", *RATIOS]})
+        ratios["build"].append(row["embree_build_ms"] / row["lenspath_build_ms"])
+        for key in RATIOS:
+            ratios[key].append(row[key][0] / row[key][1])
+    return out
+
+
 def print_medians(rows: list[dict]) -> None:
-    """Each mesh's ratios (lenspath's speed over Embree's) over the runs: median and range."""
+    """Each mesh's ratios over the runs: median and range."""
     import statistics
 
     runs = 1 + max(row["run"] for row in rows)
     print(f"\nmedians of {runs} runs (lenspath's speed over Embree's; range in brackets)")
-    for mesh in dict.fromkeys(row["mesh"] for row in rows):
+    for mesh, by_key in ratios_by_mesh(rows).items():
         print(f"  {mesh}")
-        for key in ["build", *RATIOS]:
-            ratios = [
-                row["embree_build_ms"] / row["lenspath_build_ms"] if key == "build" else row[key][0] / row[key][1]
-                for row in rows
-                if row["mesh"] == mesh
-            ]
+        for key, ratios in by_key.items():
             print(f"    {key:<31}{statistics.median(ratios):5.2f}  ({min(ratios):.2f}-{max(ratios):.2f})")
 
 

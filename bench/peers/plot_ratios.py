@@ -19,6 +19,7 @@ import statistics
 import sys
 from pathlib import Path
 
+from bvh_vs_embree import ratios_by_mesh
 from common import in_venv
 
 # Issue 8's targets, as lenspath speed / peer speed.
@@ -31,16 +32,12 @@ def bars(paths: list[Path]) -> list[tuple[str, float, float | None]]:
     for path in paths:
         data = json.loads(path.read_text())
         if isinstance(data, list):  # bvh_vs_embree: one row per mesh (and run, with --repeat)
-            meshes = dict.fromkeys(row["mesh"] for row in data)
-            for mesh in meshes:
-                runs = [row for row in data if row["mesh"] == mesh]
-                build = statistics.median(r["embree_build_ms"] / r["lenspath_build_ms"] for r in runs)
-                out.append((f"{mesh} build", build, TARGETS["build"]))
+            # The median over the runs: one bar a comparison.
+            for mesh, by_key in ratios_by_mesh(data).items():
+                out.append((f"{mesh} build", statistics.median(by_key["build"]), TARGETS["build"]))
                 for key in ("coherent_closest", "incoherent_closest", "coherent_any_hit", "incoherent_any_hit"):
-                    # The median over the runs: one bar a comparison.
-                    ratio = statistics.median(r[key][0] / r[key][1] for r in runs)
                     label = key.replace("_", " ")
-                    out.append((f"{mesh} {label}", ratio, TARGETS.get(label)))
+                    out.append((f"{mesh} {label}", statistics.median(by_key[key]), TARGETS.get(label)))
         else:  # render_vs_mitsuba: one scene
             for variant, seconds in data["mitsuba_s"].items():
                 ratio = seconds / data["lenspath_s"]
