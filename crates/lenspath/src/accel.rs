@@ -595,8 +595,8 @@ impl<T: Copy> Bvh<T> {
     }
 
     /// The closest hit before `t_max` (with `ANY`, the first found) in the
-    /// leaf of `count` primitives whose packs start at `first_pack`. With `AVX2`, a leaf of two packs has
-    /// its eight triangles tested in one step.
+    /// leaf of `count` primitives whose packs start at `first_pack`. With
+    /// `AVX2`, a leaf of two packs has its eight triangles tested in one step.
     #[inline(always)]
     fn intersect_leaf<const ANY: bool, const AVX2: bool>(
         &self,
