@@ -33,7 +33,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from common import ROOT, in_venv, read_binary_ply
+from common import ROOT, in_venv, machine, read_binary_ply
 
 SHARED = ROOT.parent / "shared" / "meshes"
 MESHES = [("dragon_100k", [str(SHARED / "dragon_100k.ply")]), ("lucy_100k", [str(SHARED / "lucy_100k.obj")])]
@@ -223,6 +223,7 @@ def main() -> int:
     if not SHARED.is_dir():
         print(f"{SHARED} is absent: only the procedural mesh", file=sys.stderr)
         meshes = [m for m in meshes if m is PROCEDURAL]
+    print(machine())
     rows = []
     for run in range(args.repeat):
         if args.repeat > 1:
@@ -230,6 +231,7 @@ def main() -> int:
         for name, mesh_args in meshes:
             row = compare(binary, name, mesh_args, args)
             row["run"] = run
+            row["machine"] = machine()
             rows.append(row)
             print_row(row)
     if args.repeat > 1:

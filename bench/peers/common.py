@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import platform
 import subprocess
 import sys
 from pathlib import Path
@@ -30,6 +31,29 @@ def in_venv(packages: list[str], install_lenspath: bool = False) -> None:
     if install_lenspath:
         subprocess.run([str(python), "-m", "pip", "install", "-q", str(ROOT)], check=True)
     os.execv(str(python), [str(python), *sys.argv])
+
+
+def machine() -> str:
+    """The CPU the figures are taken on and the widest vector extension it has. The peers'
+    kernels (Embree's, Mitsuba's LLVM JIT) pick theirs at run time and use AVX-512 where it
+    is; lenspath's stop at AVX2. So a ratio holds for that kind of machine (BENCHMARKS.md,
+    forty-sixth session: Mitsuba gained far more than lenspath on an AVX-512 machine)."""
+    model, flags = platform.processor() or "unknown CPU", set()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            key, _, value = line.partition(":")
+            if key.strip() == "model name":
+                model = value.strip()
+            elif key.strip() == "flags":
+                flags = set(value.split())
+    except OSError:
+        pass
+    widest = next((name for flag, name in _VECTOR_EXTENSIONS if flag in flags), "no AVX")
+    return f"{model}, {os.cpu_count()} CPUs, {widest}"
+
+
+# Widest first: /proc/cpuinfo's flag, and the name printed.
+_VECTOR_EXTENSIONS = [("avx512f", "AVX-512"), ("avx2", "AVX2"), ("avx", "AVX")]
 
 
 def doubling_sweep(measure, longest_s: float) -> list[tuple[int, float, float]]:

@@ -32,7 +32,7 @@ import os
 import sys
 from pathlib import Path
 
-from common import ROOT, at_time, doubling_sweep, in_venv
+from common import ROOT, at_time, doubling_sweep, in_venv, machine
 from render_vs_mitsuba import SPHERE_WHITE, Job, dragon, newest_libllvm, render_lenspath, render_mitsuba, variant_runs
 
 CACHE = ROOT / "target" / "bench-references"
@@ -92,6 +92,7 @@ def main() -> int:
     extra = [(*dragon(), SPHERE_WHITE)] if args.scene == "cornell-dragon" else []
     job = Job(args.scene, extra, *args.res, 1, args.max_depth)
     print(f"{job.scene}, {job.width}x{job.height}, max depth {job.max_depth}, pinhole; Mitsuba {variant}")
+    print(machine())
     ref = reference(job, variant, args.ref_spp)
     longest = max(args.budgets)
     curves = {}
@@ -114,7 +115,11 @@ def main() -> int:
         ratios[budget] = {"sobol": ours / theirs, "independent": ours_independent / theirs}
         print(f"  {budget:6.1f} s  {ours / theirs:6.3f}                   ({ours_independent / theirs:.3f})")
     if args.json:
-        args.json.write_text(json.dumps({"scene": job.scene, "variant": variant, "curves": curves, "ratios": ratios}))
+        args.json.write_text(
+            json.dumps(
+                {"scene": job.scene, "variant": variant, "machine": machine(), "curves": curves, "ratios": ratios}
+            )
+        )
     if args.plot:
         import matplotlib
 

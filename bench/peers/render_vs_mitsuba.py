@@ -46,7 +46,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from common import ROOT, in_venv, read_binary_ply
+from common import ROOT, in_venv, machine, read_binary_ply
 
 SHARED = ROOT.parent / "shared"
 
@@ -270,12 +270,14 @@ def main() -> int:
         f"{job.scene}, {job.width}x{job.height}, {job.spp} spp, max depth {job.max_depth} "
         f"(lenspath's; Mitsuba's {job.max_depth + 1}), pinhole"
     )
+    print(machine())
     ours = min(render_lenspath(job)[1] for _ in range(args.rounds))
     sobol = min(render_lenspath(job, "sobol")[1] for _ in range(args.rounds))
     print(f"  lenspath independent  {ours:7.2f} s")
     print(f"  lenspath sobol        {sobol:7.2f} s")
     figures: dict = {
         "scene": job.scene,
+        "machine": machine(),
         "lenspath_s": ours,
         "lenspath_sobol_s": sobol,
         "mitsuba_s": {},
