@@ -223,7 +223,8 @@ def main() -> int:
     if not SHARED.is_dir():
         print(f"{SHARED} is absent: only the procedural mesh", file=sys.stderr)
         meshes = [m for m in meshes if m is PROCEDURAL]
-    print(machine())
+    cpu = machine()
+    print(cpu)
     rows = []
     for run in range(args.repeat):
         if args.repeat > 1:
@@ -231,7 +232,7 @@ def main() -> int:
         for name, mesh_args in meshes:
             row = compare(binary, name, mesh_args, args)
             row["run"] = run
-            row["machine"] = machine()
+            row["machine"] = cpu
             rows.append(row)
             print_row(row)
     if args.repeat > 1:

@@ -33,6 +33,10 @@ def in_venv(packages: list[str], install_lenspath: bool = False) -> None:
     os.execv(str(python), [str(python), *sys.argv])
 
 
+# Widest first: /proc/cpuinfo's flag, and the name printed.
+_VECTOR_EXTENSIONS = [("avx512f", "AVX-512"), ("avx2", "AVX2"), ("avx", "AVX")]
+
+
 def machine() -> str:
     """The CPU the figures are taken on and the widest vector extension it has. The peers'
     kernels (Embree's, Mitsuba's LLVM JIT) pick theirs at run time and use AVX-512 where it
@@ -50,10 +54,6 @@ def machine() -> str:
         pass
     widest = next((name for flag, name in _VECTOR_EXTENSIONS if flag in flags), "no AVX")
     return f"{model}, {os.cpu_count()} CPUs, {widest}"
-
-
-# Widest first: /proc/cpuinfo's flag, and the name printed.
-_VECTOR_EXTENSIONS = [("avx512f", "AVX-512"), ("avx2", "AVX2"), ("avx", "AVX")]
 
 
 def doubling_sweep(measure, longest_s: float) -> list[tuple[int, float, float]]:

@@ -92,7 +92,8 @@ def main() -> int:
     extra = [(*dragon(), SPHERE_WHITE)] if args.scene == "cornell-dragon" else []
     job = Job(args.scene, extra, *args.res, 1, args.max_depth)
     print(f"{job.scene}, {job.width}x{job.height}, max depth {job.max_depth}, pinhole; Mitsuba {variant}")
-    print(machine())
+    cpu = machine()
+    print(cpu)
     ref = reference(job, variant, args.ref_spp)
     longest = max(args.budgets)
     curves = {}
@@ -116,9 +117,7 @@ def main() -> int:
         print(f"  {budget:6.1f} s  {ours / theirs:6.3f}                   ({ours_independent / theirs:.3f})")
     if args.json:
         args.json.write_text(
-            json.dumps(
-                {"scene": job.scene, "variant": variant, "machine": machine(), "curves": curves, "ratios": ratios}
-            )
+            json.dumps({"scene": job.scene, "variant": variant, "machine": cpu, "curves": curves, "ratios": ratios})
         )
     if args.plot:
         import matplotlib

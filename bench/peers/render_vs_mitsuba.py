@@ -270,14 +270,15 @@ def main() -> int:
         f"{job.scene}, {job.width}x{job.height}, {job.spp} spp, max depth {job.max_depth} "
         f"(lenspath's; Mitsuba's {job.max_depth + 1}), pinhole"
     )
-    print(machine())
+    cpu = machine()
+    print(cpu)
     ours = min(render_lenspath(job)[1] for _ in range(args.rounds))
     sobol = min(render_lenspath(job, "sobol")[1] for _ in range(args.rounds))
     print(f"  lenspath independent  {ours:7.2f} s")
     print(f"  lenspath sobol        {sobol:7.2f} s")
     figures: dict = {
         "scene": job.scene,
-        "machine": machine(),
+        "machine": cpu,
         "lenspath_s": ours,
         "lenspath_sobol_s": sobol,
         "mitsuba_s": {},
