@@ -16,7 +16,8 @@ pub fn hash_u32(mut x: u32) -> u32 {
     x
 }
 
-/// The most samples per pixel the Sobol sampler supports (a sobol_burley limit).
+/// The most samples per pixel the Sobol sampler supports: its tables hold
+/// 16 bits of the sample index, as `sobol_burley`'s do.
 pub const MAX_SAMPLES_PER_PIXEL: u32 = 1 << 16;
 
 /// Which sample sequence a render draws from (pbrt-v4's `Sampler` types
@@ -53,11 +54,11 @@ impl SamplerKind {
 }
 
 /// The sample stream of one pixel sample: Owen-scrambled Sobol samples
-/// (Burley, "Practical Hash-based Owen Scrambling", JCGT 2020, via the
-/// `sobol_burley` crate) or independent PCG32 numbers. The stream depends
-/// only on the kind, the pixel, the sample index and the seed, never on the
-/// thread or tile that draws it, which makes renders bit-identical for any
-/// thread count.
+/// (Burley, "Practical Hash-based Owen Scrambling", JCGT 2020; the points
+/// are the `sobol_burley` crate's, bit for bit) or independent PCG32
+/// numbers. The stream depends only on the kind, the pixel, the sample
+/// index and the seed, never on the thread or tile that draws it, which
+/// makes renders bit-identical for any thread count.
 ///
 /// Sobol dimensions are drawn four at a time, padded (Burley 2020, §4):
 /// every 4D set is the first four Sobol dimensions, the best stratified,
@@ -85,8 +86,8 @@ impl Sampler {
                 seed: pixel_seed,
                 index,
                 next_set: 0,
-                buffer: [0.0; 4],
-                used: 4,
+                buffer: [[0.0; 4]; SETS_DRAWN_TOGETHER],
+                used: 4 * SETS_DRAWN_TOGETHER,
             }),
             // As Mitsuba's independent sampler: one PCG32 stream per pixel,
             // each sample starting at a hashed state (2^64 of them: runs of
@@ -114,8 +115,8 @@ impl Sampler {
         match &mut self.0 {
             Source::Sobol(sobol) => {
                 // Keep pairs inside one 4D set so they stay jointly stratified.
-                if sobol.used == 3 {
-                    sobol.used = 4;
+                if sobol.used % 4 == 3 {
+                    sobol.used += 1;
                 }
                 Vec2::new(sobol.next(), sobol.next())
             }
@@ -130,22 +131,33 @@ struct SobolStream {
     index: u32,
     /// The next 4D dimension set to draw.
     next_set: u32,
-    /// The set drawn last, and how many of its dimensions are used.
-    buffer: [f32; 4],
+    /// The sets drawn last, and how many of their dimensions are used.
+    buffer: [[f32; 4]; SETS_DRAWN_TOGETHER],
     used: usize,
 }
 
+/// How many 4D sets a Sobol stream draws at once: two fill one AVX2 lane
+/// set, and computed together their long chains of dependent multiplies
+/// overlap (a path's vertex uses two sets: its light sample, and its
+/// scattering and roulette).
+const SETS_DRAWN_TOGETHER: usize = 2;
+
 impl SobolStream {
     /// The next dimension.
-    #[inline]
+    // Inlined into every copy of the path loop (see `render::render_tile`):
+    // out of line it is compiled for baseline x86-64 only, where a lane
+    // multiply and a bit reverse take several instructions each.
+    #[inline(always)]
     fn next(&mut self) -> f32 {
-        if self.used == 4 {
-            let seed = hash_u32(self.seed ^ self.next_set.wrapping_mul(0x632BE5AB));
-            self.next_set += 1;
-            self.buffer = sobol_4d(self.index, seed);
+        if self.used == 4 * SETS_DRAWN_TOGETHER {
+            let first = self.next_set;
+            let seeds: [u32; SETS_DRAWN_TOGETHER] =
+                std::array::from_fn(|k| hash_u32(self.seed ^ (first + k as u32).wrapping_mul(0x632B_E5AB)));
+            self.next_set += SETS_DRAWN_TOGETHER as u32;
+            self.buffer = sobol_4d_sets(self.index, seeds);
             self.used = 0;
         }
-        let v = self.buffer[self.used];
+        let v = self.buffer[self.used / 4][self.used % 4];
         self.used += 1;
         v
     }
@@ -206,25 +218,69 @@ const fn sobol_byte_sums() -> [[[u32; 4]; 256]; 2] {
 }
 
 /// The first four Owen-scrambled Sobol dimensions of sample `index` under
-/// `seed`: bit for bit `sobol_burley::sample_4d(index, 0, seed)` (Burley
-/// 2020: the index shuffled by a nested uniform scramble, each dimension
-/// scrambled after), with its loop over the index's bits replaced by
-/// [`SOBOL_BYTE_SUMS`]. The padded sampler draws every set here.
+/// each of `seeds`: for each, bit for bit `sobol_burley::sample_4d(index,
+/// 0, seed)` (Burley 2020: the index shuffled by a nested uniform scramble,
+/// each dimension scrambled after), with its loop over the index's bits
+/// replaced by [`SOBOL_BYTE_SUMS`]. The padded stream draws its sets here,
+/// several at once.
+///
+/// Written over plain `[u32; 4]` lanes rather than the crate's `Int4`: the
+/// crate is compiled for baseline x86-64, where its lane multiply is a
+/// six-instruction SSE2 emulation even inside the path loop's AVX2 copy;
+/// plain lanes let that copy use `vpmulld` and a byte-shuffle bit reverse.
 #[inline(always)]
-fn sobol_4d(index: u32, seed: u32) -> [f32; 4] {
-    use sobol_burley::parts::{hash, hash_int4, owen_scramble_int4_rev, owen_scramble_rev, Int4};
-    let shuffled_rev = owen_scramble_rev(index.reverse_bits(), hash(seed ^ 0x79c6_8e4a));
-    let (high, low) = ((shuffled_rev >> 24) as usize, ((shuffled_rev >> 16) & 0xff) as usize);
-    let sobol_rev = Int4::from(SOBOL_BYTE_SUMS[0][high]) ^ Int4::from(SOBOL_BYTE_SUMS[1][low]);
+fn sobol_4d_sets<const SETS: usize>(index: u32, seeds: [u32; SETS]) -> [[f32; 4]; SETS] {
+    let index_rev = index.reverse_bits();
     // The per-dimension scrambles, as the crate makes them for dimension set 0.
-    let seed = seed.wrapping_mul(0x9c8f_2d3b);
-    let scramble = hash_int4(Int4::from([
-        seed ^ 0x912f_69ba,
-        seed ^ 0x174f_18ab,
-        seed ^ 0x691e_72ca,
-        seed ^ 0xb40c_c1b8,
-    ]));
-    owen_scramble_int4_rev(sobol_rev, scramble).reverse_bits().to_f32_norm()
+    let salts = [0x912f_69ba, 0x174f_18ab, 0x691e_72ca, 0xb40c_c1b8];
+    let mut sobol_rev = [[0u32; 4]; SETS];
+    let mut scrambles = [[0u32; 4]; SETS];
+    for (set, seed) in seeds.into_iter().enumerate() {
+        let shuffled_rev = owen_scramble_rev(index_rev, burley_hash(seed ^ 0x79c6_8e4a));
+        let high = &SOBOL_BYTE_SUMS[0][(shuffled_rev >> 24) as usize];
+        let low = &SOBOL_BYTE_SUMS[1][((shuffled_rev >> 16) & 0xff) as usize];
+        let seed = seed.wrapping_mul(0x9c8f_2d3b);
+        for d in 0..4 {
+            sobol_rev[set][d] = high[d] ^ low[d];
+            scrambles[set][d] = burley_hash(seed ^ salts[d]);
+        }
+    }
+    let mut points = [[0.0; 4]; SETS];
+    for set in 0..SETS {
+        for d in 0..4 {
+            let scrambled_rev = owen_scramble_rev(sobol_rev[set][d], scrambles[set][d]);
+            points[set][d] = u32_to_unit_f32(scrambled_rev.reverse_bits());
+        }
+    }
+    points
+}
+
+/// Burley's (2020) hash-based nested uniform scramble of a bit-reversed
+/// integer: one of the Owen scrambles, picked by `scramble` (which must be
+/// well mixed already). The constants are his, from
+/// <https://psychopath.io/post/2021_01_30_building_a_better_lk_hash>.
+#[inline(always)]
+fn owen_scramble_rev(mut n_rev: u32, scramble: u32) -> u32 {
+    n_rev ^= n_rev.wrapping_mul(0x3d20_adea);
+    n_rev = n_rev.wrapping_add(scramble);
+    n_rev = n_rev.wrapping_mul((scramble >> 16) | 1);
+    n_rev ^= n_rev.wrapping_mul(0x0552_6c56);
+    n_rev ^= n_rev.wrapping_mul(0x53a2_2864);
+    n_rev
+}
+
+/// The hash Burley's sampler makes its scrambles with: [`hash_u32`] with
+/// its input offset, so that 0 does not map to 0.
+#[inline(always)]
+fn burley_hash(n: u32) -> u32 {
+    hash_u32(n ^ 0xe6fe_3beb)
+}
+
+/// The top 23 bits of `n` as a float in [0, 1), exactly (as the crate's
+/// `u32_to_f32_norm`): they become the mantissa of a number in [1, 2).
+#[inline(always)]
+fn u32_to_unit_f32(n: u32) -> f32 {
+    f32::from_bits((n >> 9) | 0x3f80_0000) - 1.0
 }
 
 /// SplitMix64's finalizer (Steele et al. 2014): a bijective 64-bit hash.
@@ -533,18 +589,22 @@ mod tests {
         assert!(seen.iter().all(|&n| n == 1));
     }
 
-    /// The table-driven point is the crate's, bit for bit, over every index
-    /// the sampler allows and several seeds.
+    /// The table-driven points are the crate's, bit for bit, over every
+    /// index the sampler allows and several seeds, drawn as the stream draws
+    /// them ([`SETS_DRAWN_TOGETHER`] seeds at once).
     #[test]
     fn table_sobol_matches_the_crate() {
-        for seed in [0, 1, 0x1234_5678, u32::MAX, hash_u32(7), hash_u32(8)] {
+        for first_seed in [0, 1, 0x1234_5678, u32::MAX, hash_u32(7), hash_u32(8)] {
+            let seeds: [u32; SETS_DRAWN_TOGETHER] = std::array::from_fn(|k| first_seed ^ hash_u32(k as u32));
             for index in 0..MAX_SAMPLES_PER_PIXEL {
-                let (ours, crate_) = (sobol_4d(index, seed), sobol_burley::sample_4d(index, 0, seed));
-                assert_eq!(
-                    ours.map(f32::to_bits),
-                    crate_.map(f32::to_bits),
-                    "index {index}, seed {seed}"
-                );
+                let sets = sobol_4d_sets(index, seeds);
+                for (set, seed) in sets.into_iter().zip(seeds) {
+                    assert_eq!(
+                        set.map(f32::to_bits),
+                        sobol_burley::sample_4d(index, 0, seed).map(f32::to_bits),
+                        "index {index}, seed {seed}"
+                    );
+                }
             }
         }
     }
