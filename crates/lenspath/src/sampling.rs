@@ -136,10 +136,10 @@ struct SobolStream {
     used: usize,
 }
 
-/// How many 4D sets a Sobol stream draws at once: two fill one AVX2 lane
-/// set, and computed together their long chains of dependent multiplies
-/// overlap (a path's vertex uses two sets: its light sample, and its
-/// scattering and roulette).
+/// How many 4D sets a Sobol stream draws at once: two fill one AVX2
+/// register, so one pass of vector instructions makes both (a path's vertex
+/// uses two sets: its light sample, and its scattering and roulette). Four
+/// measured no faster (BENCHMARKS.md, issue 34).
 const SETS_DRAWN_TOGETHER: usize = 2;
 
 impl SobolStream {
