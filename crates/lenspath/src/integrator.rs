@@ -11,12 +11,12 @@
 //! [`crate::guiding::BSDF_SAMPLING_FRACTION`]) and weighs light samples
 //! against that mixture's density.
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
 use crate::accel::SHADOW_PACKET;
 use crate::guiding::directional::{to_square, DirectionalTree};
 use crate::guiding::{Guide, PathRecorder, BSDF_SAMPLING_FRACTION};
-use crate::lights::LightSample;
+use crate::lights::SampleLight;
 use crate::materials::{Bsdf, SpectralMaterial};
 use crate::math::{Frame, Rgb};
 use crate::ray::{offset_origin, Ray};
@@ -613,13 +613,13 @@ fn direct_lighting(
     let mut sum = SampledSpectrum::ZERO;
     let samples = settings.light_samples;
     for (i, light) in scene.area_lights().iter().enumerate() {
-        sum += shading.light_sum(LightRef::Area(i), &light.emission, samples, |p, u| light.sample(p, u));
+        sum += shading.light_sum(LightRef::Area(i), &light.emission, samples, light);
     }
     for (i, (light, emission)) in scene.lights_with_emission().enumerate() {
         // A point, spot or directional light's samples would all be one
         // ray: it takes one, as in the CS184 renderer.
         let samples = if light.is_delta() { 1 } else { samples };
-        sum += shading.light_sum(LightRef::Other(i), emission, samples, |p, u| light.sample(p, u));
+        sum += shading.light_sum(LightRef::Other(i), emission, samples, light);
     }
     sum
 }
@@ -722,8 +722,8 @@ struct Shading<'a> {
 }
 
 impl Shading<'_> {
-    /// `light`'s `samples` shadow rays, its samples drawn by
-    /// `sample_light`, what it emits `emission`. From [`PACKET_MIN_RAYS`]
+    /// `light`'s `samples` shadow rays, its samples drawn from `source`
+    /// (the light itself), what it emits `emission`. From [`PACKET_MIN_RAYS`]
     /// on, the samples' contributions are found first, then their shadow
     /// rays traced together (see [`Shading::blocked`]) and the unblocked
     /// ones summed in order; fewer are traced one by one as they come.
@@ -733,13 +733,13 @@ impl Shading<'_> {
         light: LightRef,
         emission: &Spectrum,
         samples: u32,
-        sample_light: impl Fn(Vec3, Vec2) -> Option<LightSample>,
+        source: &impl SampleLight,
     ) -> SampledSpectrum {
         let n_light = samples as f32;
         let mut sum = SampledSpectrum::ZERO;
         if (samples as usize) < PACKET_MIN_RAYS {
             for _ in 0..samples {
-                if let Some(sample) = self.unblocked_sample(light, emission, n_light, &sample_light) {
+                if let Some(sample) = self.unblocked_sample(light, emission, n_light, source) {
                     if !self.blocked_alone(&sample) {
                         sum += sample.contribution;
                     }
@@ -754,7 +754,7 @@ impl Shading<'_> {
             let mut found = [UnblockedSample::NONE; SHADOW_PACKET];
             let mut count = 0;
             for _ in 0..batch {
-                if let Some(sample) = self.unblocked_sample(light, emission, n_light, &sample_light) {
+                if let Some(sample) = self.unblocked_sample(light, emission, n_light, source) {
                     found[count] = sample;
                     count += 1;
                 }
@@ -769,19 +769,20 @@ impl Shading<'_> {
         sum
     }
 
-    /// One sample of `light` (one of `n_light`) and what it contributes if
-    /// nothing blocks it; `None` when it contributes nothing anyway.
+    /// One sample of `light` (one of `n_light`, drawn from `source`) and
+    /// what it contributes if nothing blocks it; `None` when it contributes
+    /// nothing anyway.
     #[inline(always)]
     fn unblocked_sample(
         &mut self,
         light: LightRef,
         emission: &Spectrum,
         n_light: f32,
-        sample_light: &impl Fn(Vec3, Vec2) -> Option<LightSample>,
+        source: &impl SampleLight,
     ) -> Option<UnblockedSample> {
         let (hit, bsdf, wo) = (self.hit, self.bsdf, self.wo);
         let u = self.sampler.get_2d();
-        let ls = sample_light(hit.p, u)?;
+        let ls = source.sample(hit.p, u)?;
         if ls.pdf <= 0.0 || ls.scale == 0.0 {
             return None;
         }
@@ -900,6 +901,7 @@ mod tests {
     use crate::guiding::Guide;
     use crate::io::load_scene;
     use crate::sampling::{uniform_sphere, SamplerKind};
+    use glam::Vec2;
 
     /// The x86-64-v3 copy of the path loop gives the same radiance, bit for
     /// bit, as the baseline one, on diffuse, glass and rough gold: the

@@ -127,6 +127,11 @@ impl AreaLight {
     }
 
     /// A point on the light, uniform by area: position and outward normal.
+    // Inlined into `SampleLight::sample`: called, it returns the pair through
+    // memory, and the path loop's 8-byte reload of the 4-byte stores stalled
+    // store forwarding (a tenth of the fat-LTO path loop on the dragon,
+    // BENCHMARKS.md).
+    #[inline(always)]
     fn sample_point(&self, u: Vec2) -> (Vec3, Vec3) {
         match &self.shape {
             AreaShape::Triangles {
@@ -152,11 +157,32 @@ impl AreaLight {
         }
     }
 
-    /// Samples the light as seen from `p`, uniformly by area (pbrt-v4 §12.2).
-    // Inlined into every copy of the path loop (see `render::render_tile`),
-    // which the compiler does not do by itself once there are several.
+    /// Density per solid angle of sampling the point at `distance` along a
+    /// direction meeting the light's normal with cosine `cos_light`, from `p`.
+    pub fn pdf(&self, distance: f32, cos_light: f32) -> f32 {
+        if cos_light <= 0.0 {
+            return 0.0;
+        }
+        distance * distance / (cos_light * self.area)
+    }
+}
+
+/// A light sampled from a shading point, as the path loop's direct lighting
+/// does: [`AreaLight`] and [`Light`] alike.
+// A trait, statically dispatched, rather than a closure around the call: once
+// `AreaLight::sample_point` inlined, the compiler left such a closure out of
+// line, where it runs as baseline x86-64 code instead of in the path loop's
+// AVX2 copy (a fifth of the dragon's render; BENCHMARKS.md).
+pub trait SampleLight {
+    /// A direction from `p` toward the light for `u` in [0, 1)², with what
+    /// arrives along it and its density; `None` when nothing does.
+    fn sample(&self, p: Vec3, u: Vec2) -> Option<LightSample>;
+}
+
+impl SampleLight for AreaLight {
+    /// Uniform by area (pbrt-v4 §12.2).
     #[inline(always)]
-    pub fn sample(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
+    fn sample(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
         let (q, n) = self.sample_point(u);
         let to_light = q - p;
         let dist2 = to_light.length_squared();
@@ -177,14 +203,61 @@ impl AreaLight {
             delta: false,
         })
     }
+}
 
-    /// Density per solid angle of sampling the point at `distance` along a
-    /// direction meeting the light's normal with cosine `cos_light`, from `p`.
-    pub fn pdf(&self, distance: f32, cos_light: f32) -> f32 {
-        if cos_light <= 0.0 {
-            return 0.0;
+impl SampleLight for Light {
+    #[inline(always)]
+    fn sample(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
+        let delta = self.is_delta();
+        match self {
+            Light::Point { position, .. } => {
+                let to_light = *position - p;
+                let dist2 = to_light.length_squared();
+                (dist2 > 0.0).then(|| LightSample {
+                    wi: to_light / dist2.sqrt(),
+                    scale: 1.0 / dist2,
+                    pdf: 1.0,
+                    distance: dist2.sqrt(),
+                    delta,
+                })
+            }
+            Light::Spot {
+                position,
+                direction,
+                cos_cutoff,
+                exponent,
+                ..
+            } => {
+                let to_light = *position - p;
+                let dist2 = to_light.length_squared();
+                if dist2 <= 0.0 {
+                    return None;
+                }
+                let wi = to_light / dist2.sqrt();
+                let cos_axis = -wi.dot(*direction);
+                (cos_axis >= *cos_cutoff && cos_axis > 0.0).then(|| LightSample {
+                    wi,
+                    scale: cos_axis.powf(*exponent) / dist2,
+                    pdf: 1.0,
+                    distance: dist2.sqrt(),
+                    delta,
+                })
+            }
+            Light::Directional { direction, .. } => Some(LightSample {
+                wi: -*direction,
+                scale: 1.0,
+                pdf: 1.0,
+                distance: f32::INFINITY,
+                delta,
+            }),
+            Light::Environment { .. } => Some(LightSample {
+                wi: uniform_sphere(u.x, u.y),
+                scale: 1.0,
+                pdf: UNIFORM_SPHERE_PDF,
+                distance: f32::INFINITY,
+                delta,
+            }),
         }
-        distance * distance / (cos_light * self.area)
     }
 }
 
@@ -273,60 +346,6 @@ impl Light {
         })
     }
 
-    /// Samples the light from point `p`.
-    pub fn sample(&self, p: Vec3, u: Vec2) -> Option<LightSample> {
-        let delta = self.is_delta();
-        match self {
-            Light::Point { position, .. } => {
-                let to_light = *position - p;
-                let dist2 = to_light.length_squared();
-                (dist2 > 0.0).then(|| LightSample {
-                    wi: to_light / dist2.sqrt(),
-                    scale: 1.0 / dist2,
-                    pdf: 1.0,
-                    distance: dist2.sqrt(),
-                    delta,
-                })
-            }
-            Light::Spot {
-                position,
-                direction,
-                cos_cutoff,
-                exponent,
-                ..
-            } => {
-                let to_light = *position - p;
-                let dist2 = to_light.length_squared();
-                if dist2 <= 0.0 {
-                    return None;
-                }
-                let wi = to_light / dist2.sqrt();
-                let cos_axis = -wi.dot(*direction);
-                (cos_axis >= *cos_cutoff && cos_axis > 0.0).then(|| LightSample {
-                    wi,
-                    scale: cos_axis.powf(*exponent) / dist2,
-                    pdf: 1.0,
-                    distance: dist2.sqrt(),
-                    delta,
-                })
-            }
-            Light::Directional { direction, .. } => Some(LightSample {
-                wi: -*direction,
-                scale: 1.0,
-                pdf: 1.0,
-                distance: f32::INFINITY,
-                delta,
-            }),
-            Light::Environment { .. } => Some(LightSample {
-                wi: uniform_sphere(u.x, u.y),
-                scale: 1.0,
-                pdf: UNIFORM_SPHERE_PDF,
-                distance: f32::INFINITY,
-                delta,
-            }),
-        }
-    }
-
     /// True for lights at a point or direction (point, spot, directional):
     /// every sample of one is the same ray.
     pub fn is_delta(&self) -> bool {
@@ -334,7 +353,7 @@ impl Light {
     }
 
     /// For a light seen along escaping rays (the environment), the density
-    /// with which [`Light::sample`] picks a direction; what is seen is its
+    /// with which [`SampleLight::sample`] picks a direction; what is seen is its
     /// emission.
     pub fn escaped_pdf(&self) -> Option<f32> {
         match *self {
