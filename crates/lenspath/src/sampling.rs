@@ -377,14 +377,18 @@ pub fn concentric_disk(u: Vec2) -> Vec2 {
     // The angle from the major axis is π/4 · minor/major, within ±π/4, where
     // two short polynomials give its sine and cosine (no libm call: that
     // was 3% of a render).
-    if o.x.abs() > o.y.abs() {
-        let (sin, cos) = sin_cos_quarter_turn(FRAC_PI_4 * (o.y / o.x));
-        o.x * Vec2::new(cos, sin)
+    // Selects, not branches: which axis is major is a coin toss per sample,
+    // and a mispredicted branch costs more than the selects.
+    let x_major = o.x.abs() > o.y.abs();
+    let (major, minor) = if x_major { (o.x, o.y) } else { (o.y, o.x) };
+    let (sin, cos) = sin_cos_quarter_turn(FRAC_PI_4 * (minor / major));
+    // With y major, θ = π/2 − φ: cos θ = sin φ and sin θ = cos φ.
+    let direction = if x_major {
+        Vec2::new(cos, sin)
     } else {
-        // θ = π/2 − φ: cos θ = sin φ and sin θ = cos φ.
-        let (sin, cos) = sin_cos_quarter_turn(FRAC_PI_4 * (o.x / o.y));
-        o.y * Vec2::new(sin, cos)
-    }
+        Vec2::new(sin, cos)
+    };
+    major * direction
 }
 
 /// `(sin x, cos x)` for |x| ≤ π/4, without range reduction: the minimax
