@@ -69,6 +69,34 @@ def doubling_sweep(measure, longest_s: float) -> list[tuple[int, float, float]]:
         spp *= 2
 
 
+def interleaved_sweeps(
+    measures: dict[str, object], longest_s: float, runs: int
+) -> dict[str, list[tuple[int, float, float]]]:
+    """`doubling_sweep` for several renderers at once, their renders interleaved: at 1, 2, 4,
+    ... samples per pixel each renderer still sweeping renders once in turn, `runs` times
+    round (`measures[name](spp, run)` gives a render's seconds and MSE), so a slower or faster
+    stretch of a shared machine falls on all of them alike rather than on whichever renderer's
+    sweep it met. A renderer's row at each count is its median time and mean MSE; it stops
+    after the count whose median took longer than `longest_s`."""
+    import statistics
+
+    rows: dict[str, list[tuple[int, float, float]]] = {name: [] for name in measures}
+    active, spp = list(measures), 1
+    while active:
+        taken: dict[str, list[tuple[float, float]]] = {name: [] for name in active}
+        for run in range(runs):
+            for name in active:
+                taken[name].append(measures[name](spp, run))
+        for name in active:
+            seconds = statistics.median(t for t, _ in taken[name])
+            mse = statistics.fmean(e for _, e in taken[name])
+            rows[name].append((spp, seconds, mse))
+            print(f"    {name:24s} {spp:6d} spp {seconds:8.3f} s  MSE {mse:.3e}", flush=True)
+        active = [name for name in active if rows[name][-1][1] <= longest_s]
+        spp *= 2
+    return rows
+
+
 def at_time(rows: list[tuple[int, float, float]], seconds: float) -> float | None:
     """From a renderer's (spp, seconds, MSE) rows in order of time, the MSE at `seconds` by
     log-log interpolation between the two renders around it (None outside them)."""

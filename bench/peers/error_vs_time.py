@@ -10,15 +10,18 @@ The scene and both renderers' settings are render_vs_mitsuba.py's (same numbers,
 all threads, box filter; Mitsuba's `path` integrator in `llvm_ad_rgb`, or `scalar_rgb` where
 its JIT cannot run). Each renderer renders at 1, 2, 4, ... samples per pixel until a render
 takes longer than the largest budget (`--runs` renders at each count, other seeds: the
-median time and the mean error); each render is timed from scene construction to the
-finished image (Mitsuba's JIT kernels are compiled by an untimed render at the same sample
-count first), and its mean squared error is taken over every pixel and channel against a
-converged reference: the mean of the two renderers' own `--ref-spp` renders (other seeds), so
-neither is measured against itself; the reference's own variance adds the same small amount
-to both renderers' errors. lenspath renders with its defaults (scrambled Sobol) and with the
-`independent` sampler, Mitsuba's. At each budget the error is read off each curve by
-log-log interpolation, and the ratio lenspath / Mitsuba printed (below 1: lenspath's image is
-closer to converged at that time). `--plot` draws the curves (log-log) as SVG.
+median time and the mean error), the three renderers' renders interleaved at each count so
+that a slow stretch of a shared machine falls on all of them (`common.interleaved_sweeps`;
+before the forty-ninth session each renderer swept alone, one after the other); each render
+is timed from scene construction to the finished image (Mitsuba's JIT kernels are compiled
+by an untimed render at the same sample count first), and its mean squared error is taken
+over every pixel and channel against a converged reference: the mean of the two renderers'
+own `--ref-spp` renders (other seeds), so neither is measured against itself; the
+reference's own variance adds the same small amount to both renderers' errors. lenspath
+renders with its defaults (scrambled Sobol) and with the `independent` sampler, Mitsuba's.
+At each budget the error is read off each curve by log-log interpolation, and the ratio
+lenspath / Mitsuba printed (below 1: lenspath's image is closer to converged at that
+time). `--plot` draws the curves (log-log) as SVG.
 
 Runs in bench/.venv-peers (numpy, mitsuba, matplotlib, and this lenspath by `pip install .`,
 a release build), as render_vs_mitsuba.py does.
@@ -32,7 +35,7 @@ import os
 import sys
 from pathlib import Path
 
-from common import ROOT, at_time, doubling_sweep, in_venv, machine
+from common import ROOT, at_time, in_venv, interleaved_sweeps, machine
 from render_vs_mitsuba import SPHERE_WHITE, Job, dragon, newest_libllvm, render_lenspath, render_mitsuba, variant_runs
 
 CACHE = ROOT / "target" / "bench-references"
@@ -55,23 +58,20 @@ def reference(job: Job, variant: str, ref_spp: int):
     return image
 
 
-def sweep(render, job: Job, reference, budget_s: float, warm_up: bool, runs: int) -> list[tuple[int, float, float]]:
-    """(spp, seconds, MSE) at 1, 2, 4, ... spp until a render takes longer than `budget_s`: the
-    median time and the mean MSE of `runs` renders (other seeds) at each sample count."""
+def measure_with(render, job: Job, reference, warm_up: bool):
+    """`interleaved_sweeps`' measure for one renderer: a render at `spp` with the seed of
+    `run` (the first run at a count preceded, with `warm_up`, by an untimed render at it),
+    its seconds and its mean squared error against `reference`."""
     import numpy as np
 
-    def measure(spp: int) -> tuple[float, float]:
-        run = Job(job.scene, job.meshes, job.width, job.height, spp, job.max_depth)
-        if warm_up:
-            render(run, seed=spp + 7)
-        times, errors = [], []
-        for r in range(runs):
-            image, seconds = render(run, seed=spp + 100_000 * r)
-            times.append(seconds)
-            errors.append(float(np.mean((image - reference) ** 2)))
-        return float(np.median(times)), float(np.mean(errors))
+    def measure(spp: int, run: int) -> tuple[float, float]:
+        at = Job(job.scene, job.meshes, job.width, job.height, spp, job.max_depth)
+        if warm_up and run == 0:
+            render(at, seed=spp + 7)
+        image, seconds = render(at, seed=spp + 100_000 * run)
+        return seconds, float(np.mean((image - reference) ** 2))
 
-    return doubling_sweep(measure, budget_s)
+    return measure
 
 
 def main() -> int:
@@ -96,14 +96,15 @@ def main() -> int:
     print(cpu)
     ref = reference(job, variant, args.ref_spp)
     longest = max(args.budgets)
-    curves = {}
-    for name, render, warm_up in [
-        ("lenspath", lambda j, seed: render_lenspath(j, "sobol", seed=seed), False),
-        ("lenspath independent", lambda j, seed: render_lenspath(j, "independent", seed=seed), False),
-        (f"Mitsuba {variant}", lambda j, seed: render_mitsuba(variant, j, seed=seed), True),
-    ]:
-        print(f"  {name}", flush=True)
-        curves[name] = sweep(render, job, ref, longest, warm_up, args.runs)
+    measures = {
+        name: measure_with(render, job, ref, warm_up)
+        for name, render, warm_up in [
+            ("lenspath", lambda j, seed: render_lenspath(j, "sobol", seed=seed), False),
+            ("lenspath independent", lambda j, seed: render_lenspath(j, "independent", seed=seed), False),
+            (f"Mitsuba {variant}", lambda j, seed: render_mitsuba(variant, j, seed=seed), True),
+        ]
+    }
+    curves = interleaved_sweeps(measures, longest, args.runs)
     ratios = {}
     mitsuba = curves[f"Mitsuba {variant}"]
     print("  budget   lenspath / Mitsuba MSE   (independent sampler)")
