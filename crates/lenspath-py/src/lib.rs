@@ -2,10 +2,10 @@
 //! crate, wrapped by the pure-Python package `lenspath` (python/lenspath),
 //! whose `.pyi` stub documents it for users.
 //!
-//! Library errors become Python exceptions ([`error::to_py`]): bad arguments
+//! Library errors become Python exceptions (`error::to_py`): bad arguments
 //! `ValueError`, broken scene files `lenspath.SceneError`, broken lens tables
 //! `lenspath.LensError`, I/O failures `OSError`. Renders release the GIL and
-//! poll for Ctrl-C (see [`render::render`]).
+//! poll for Ctrl-C (see `render::render`).
 //!
 //! One module per concept, as the library: `error` (exceptions), `cli` (the `lenspath` command), `scene`,
 //! `emission` (light spectra), `glass`, `lens`, `camera`, `sensor`, `render`, `guiding`, `autofocus`, `image`; this file only

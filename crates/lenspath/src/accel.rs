@@ -1,5 +1,5 @@
 //! The bounding volume hierarchy: a binned SAH binary tree (built in
-//! parallel, see [`build`]) collapsed to 8 children a node with leaves of up
+//! parallel, in `accel/build.rs`) collapsed to 8 children a node with leaves of up
 //! to 8 primitives in packs of four triangles, and closest-hit / any-hit
 //! traversal of the wide tree (one SIMD slab test for eight boxes, AVX2
 //! where the CPU has it, one SIMD watertight test for four triangles),

@@ -131,7 +131,7 @@ impl Sampler {
 struct SobolStream {
     seed: u32,
     index: u32,
-    /// The next 4D dimension set to draw.
+    /// The first 4D set of the draw after `ahead`'s.
     next_set: u32,
     /// The sets drawn last, and how many of their dimensions are used.
     buffer: [[f32; 4]; SETS_DRAWN_TOGETHER],

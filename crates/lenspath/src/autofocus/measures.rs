@@ -40,25 +40,25 @@ impl<'a> Patch<'a> {
 /// A focus measure.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FocusMeasure {
-    /// Grey-level variance [GLVA]: Σ_c (1/N) Σ (I − μ_c)².
+    /// Grey-level variance \[GLVA\]: Σ_c (1/N) Σ (I − μ_c)².
     Variance,
-    /// Normalised variance [GLVN]: the variance of each channel over its mean, σ_c² / μ_c,
+    /// Normalised variance \[GLVN\]: the variance of each channel over its mean, σ_c² / μ_c,
     /// so a brighter patch does not look sharper.
     NormalizedVariance,
-    /// Sum-modified Laplacian [LAPM] (Nayar & Nakagawa 1994):
+    /// Sum-modified Laplacian \[LAPM\] (Nayar & Nakagawa 1994):
     /// ML = |2I(x,y) − I(x−s,y) − I(x+s,y)| + |2I(x,y) − I(x,y−s) − I(x,y+s)|,
     /// summed over the 3×3 window around each pixel, then over the patch; `step` is s.
     SumModifiedLaplacian {
         /// Distance s, in pixels, of the Laplacian's neighbours.
         step: usize,
     },
-    /// Tenengrad [TENG]: Σ (Gx² + Gy²) with the 3×3 Sobel operators.
+    /// Tenengrad \[TENG\]: Σ (Gx² + Gy²) with the 3×3 Sobel operators.
     Tenengrad,
-    /// Brenner's gradient [BREN]: Σ max(I(x+2,y) − I(x,y), I(x,y+2) − I(x,y))².
+    /// Brenner's gradient \[BREN\]: Σ max(I(x+2,y) − I(x,y), I(x,y+2) − I(x,y))².
     Brenner,
-    /// Energy of Laplacian [LAPE]: Σ (ΔI)², Δ the 3×3 kernel [0 1 0; 1 −4 1; 0 1 0].
+    /// Energy of Laplacian \[LAPE\]: Σ (ΔI)², Δ the 3×3 kernel [0 1 0; 1 −4 1; 0 1 0].
     EnergyOfLaplacian,
-    /// Vollath's F4 autocorrelation [VOLA]: Σ I(x,y)·I(x+1,y) − Σ I(x,y)·I(x+2,y).
+    /// Vollath's F4 autocorrelation \[VOLA\]: Σ I(x,y)·I(x+1,y) − Σ I(x,y)·I(x+2,y).
     Vollath,
 }
 
@@ -116,7 +116,7 @@ impl FocusMeasure {
     /// taken on the mean of the groups. One group is [`FocusMeasure::evaluate`].
     ///
     /// Where the pair sum is a symmetric bilinear form B of the two images
-    /// ([`FocusMeasure::is_bilinear`]) the mean over pairs takes G + 1 pair
+    /// (`FocusMeasure::is_bilinear`) the mean over pairs takes G + 1 pair
     /// sums instead of G(G − 1)/2: Σ_{a<b} B(a, b) = (B(S, S) − Σ_a B(a, a)) / 2
     /// with S = Σ_a a, the sum of the groups.
     pub fn evaluate_groups(&self, groups: &[Patch]) -> f64 {

@@ -65,7 +65,7 @@ impl Focuser<'_> {
     /// most of the patch sees, robust to a background peeking past an edge)
     /// and its median; and the best-contrast sensor position of up to nine
     /// probes spread through that window, from the lens's through-focus
-    /// modulation at their actual positions ([`Focuser::point_best_focus_z`]),
+    /// modulation at their actual positions (`Focuser::point_best_focus_z`),
     /// and their median. `None` when no probe hits anything.
     pub fn range_focus(&mut self) -> Result<Option<RangeFocus>> {
         let mut probes: Vec<(f64, Vec3)> = self

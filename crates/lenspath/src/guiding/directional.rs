@@ -249,7 +249,7 @@ impl DirectionalTree {
     }
 
     /// The tree to sample next: this one's energy, on a structure
-    /// subdivided where a quadrant holds more than [`SUBDIVIDE_SHARE`] of
+    /// subdivided where a quadrant holds more than `SUBDIVIDE_SHARE` of
     /// the total and merged where it holds less (Müller et al. 2017, §3.3).
     /// A quadrant that was a leaf and is subdivided spreads its energy
     /// evenly over its four children.

@@ -56,7 +56,7 @@ enum SpatialNode {
 /// see the same light from different sides, do not share one.
 const ORIENTATIONS: usize = 6;
 
-/// Which of the [`ORIENTATIONS`] a surface with normal `n` has.
+/// Which of the `ORIENTATIONS` a surface with normal `n` has.
 #[inline(always)]
 pub fn orientation(n: Vec3) -> u8 {
     let a = n.abs();

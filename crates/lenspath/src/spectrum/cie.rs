@@ -192,7 +192,7 @@ impl CieTables {
     /// norm's colour variance for D65 white and 0.4× at the median over random
     /// smooth reflectances under D65 (`bench/wavelength_density.py`;
     /// BENCHMARKS.md also measures the renders). pbrt-v4's luminance-shaped density (∝ 1 / cosh²(0.0072
-    /// (λ − 538))) is further off still. The floor of [`WavelengthCells`]
+    /// (λ − 538))) is further off still. The floor of `WavelengthCells`
     /// keeps every wavelength of 360–830 nm possible (a dispersive path
     /// carries what it is given).
     ///
