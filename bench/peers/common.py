@@ -1,4 +1,5 @@
-"""What the peer benchmarks share: their virtual environment and a PLY reader."""
+"""What the peer benchmarks share: their virtual environment, the machine they run on, the
+sample-count sweeps and their reading at a time, and a PLY reader."""
 
 from __future__ import annotations
 
@@ -6,6 +7,7 @@ import os
 import platform
 import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 # numpy's OpenBLAS threads spin after each call, taking a core from the
@@ -70,7 +72,7 @@ def doubling_sweep(measure, longest_s: float) -> list[tuple[int, float, float]]:
 
 
 def interleaved_sweeps(
-    measures: dict[str, object], longest_s: float, runs: int
+    measures: dict[str, Callable[[int, int], tuple[float, float]]], longest_s: float, runs: int
 ) -> dict[str, list[tuple[int, float, float]]]:
     """`doubling_sweep` for several renderers at once, their renders interleaved: at 1, 2, 4,
     ... samples per pixel each renderer still sweeping renders once in turn, `runs` times
