@@ -60,15 +60,9 @@ def machine() -> str:
 
 def doubling_sweep(measure, longest_s: float) -> list[tuple[int, float, float]]:
     """(spp, seconds, MSE) at 1, 2, 4, ... samples per pixel, `measure(spp)` giving a render's
-    seconds and MSE, until a render takes longer than `longest_s` (that render included)."""
-    rows, spp = [], 1
-    while True:
-        seconds, mse = measure(spp)
-        rows.append((spp, seconds, mse))
-        print(f"    {spp:6d} spp {seconds:8.3f} s  MSE {mse:.3e}", flush=True)
-        if seconds > longest_s:
-            return rows
-        spp *= 2
+    seconds and MSE, until a render takes longer than `longest_s` (that render included):
+    `interleaved_sweeps` for one renderer and one run."""
+    return interleaved_sweeps({"": lambda spp, _run: measure(spp)}, longest_s, 1)[""]
 
 
 def interleaved_sweeps(
@@ -93,7 +87,8 @@ def interleaved_sweeps(
             seconds = statistics.median(t for t, _ in taken[name])
             mse = statistics.fmean(e for _, e in taken[name])
             rows[name].append((spp, seconds, mse))
-            print(f"    {name:24s} {spp:6d} spp {seconds:8.3f} s  MSE {mse:.3e}", flush=True)
+            label = f"{name:24s} " if name else ""
+            print(f"    {label}{spp:6d} spp {seconds:8.3f} s  MSE {mse:.3e}", flush=True)
         active = [name for name in active if rows[name][-1][1] <= longest_s]
         spp *= 2
     return rows

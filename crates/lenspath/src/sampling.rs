@@ -79,6 +79,8 @@ enum Source {
 
 impl Sampler {
     /// The sampler of sample `index` of pixel `(x, y)` under `seed`.
+    // Inlined, as `SobolStream::next`, so its first sets are made in the
+    // path loop's AVX2 copy rather than in baseline x86-64 code.
     #[inline(always)]
     pub fn new(kind: SamplerKind, x: u32, y: u32, index: u32, seed: u32) -> Self {
         let pixel_seed = hash_u32(x.wrapping_mul(0x9E3779B1) ^ hash_u32(y ^ hash_u32(seed.wrapping_add(0x85EBCA6B))));
