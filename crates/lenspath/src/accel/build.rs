@@ -13,7 +13,7 @@
 use glam::{Vec3A, Vec4};
 use rayon::prelude::*;
 
-use super::{BvhSettings, PrimGeometry, TrianglePack, WideNode, PACK, QUADS, WIDTH};
+use super::{BvhSettings, LeafPack, PrimGeometry, TrianglePack, WideNode, PACK, QUADS, WIDTH};
 use crate::math::Bounds3;
 
 /// A binary node: 32 bytes. The nodes lie in depth-first order, each
@@ -643,7 +643,6 @@ pub(super) fn collapse<T: Copy + Send + Sync>(
         return WideTree {
             wide: Vec::new(),
             packs: Vec::new(),
-            tags: Vec::new(),
             pack_ranges: Vec::new(),
         };
     }
@@ -676,15 +675,14 @@ pub(super) fn collapse<T: Copy + Send + Sync>(
         .map(|&(l, (link_offset, pack_offset))| l.node(nodes, link_offset, pack_offset))
         .collect_into_vec(&mut wide);
     let pack_ranges: Vec<(u32, u32)> = shapes().flat_map(|shape| shape.pack_ranges.iter().copied()).collect();
-    let (mut packs, mut tags) = (huge_vec(pack_ranges.len()), Vec::new());
+    let mut packs = huge_vec(pack_ranges.len());
     pack_ranges
         .par_iter()
         .map(|&(first, end)| pack(prims, &order[first as usize..end as usize]))
-        .unzip_into_vecs(&mut packs, &mut tags);
+        .collect_into_vec(&mut packs);
     WideTree {
         wide,
         packs,
-        tags,
         pack_ranges,
     }
 }
@@ -692,9 +690,8 @@ pub(super) fn collapse<T: Copy + Send + Sync>(
 /// What [`collapse`] makes.
 pub(super) struct WideTree<T> {
     pub(super) wide: Vec<WideNode>,
-    pub(super) packs: Vec<TrianglePack>,
-    /// The packs' lanes' tags.
-    pub(super) tags: Vec<[T; PACK]>,
+    /// The leaves' packs with their lanes' tags.
+    pub(super) packs: Vec<LeafPack<T>>,
     /// Each pack's range of the binary tree's order `k`.
     pub(super) pack_ranges: Vec<(u32, u32)>,
 }
@@ -858,7 +855,7 @@ impl Candidate {
 
 /// A pack of the wide leaves holding the primitives `prims[i]` for `i` in
 /// `members` (one to four), and its lanes' tags.
-fn pack<T: Copy>(prims: &[(PrimGeometry, T)], members: &[u32]) -> (TrianglePack, [T; PACK]) {
+fn pack<T: Copy>(prims: &[(PrimGeometry, T)], members: &[u32]) -> LeafPack<T> {
     let mut pack = TrianglePack {
         corners: [[Vec4::ZERO; 3]; 3],
     };
@@ -883,7 +880,7 @@ fn pack<T: Copy>(prims: &[(PrimGeometry, T)], members: &[u32]) -> (TrianglePack,
             }
         }
     }
-    (pack, tags)
+    LeafPack { geometry: pack, tags }
 }
 
 /// An empty vector with room for `capacity` elements whose memory Linux may
@@ -1176,7 +1173,7 @@ mod tests {
         let corners = |b: &Bvh<u32>| {
             b.packs
                 .iter()
-                .flat_map(|p| p.corners.iter().flatten().flat_map(|q| q.to_array()))
+                .flat_map(|p| p.geometry.corners.iter().flatten().flat_map(|q| q.to_array()))
                 .collect::<Vec<f32>>()
         };
         let links = |b: &Bvh<u32>| {
@@ -1189,7 +1186,8 @@ mod tests {
         assert_eq!(bytes(&boxes(&one)), bytes(&boxes(&four)));
         assert_eq!(bytes(&corners(&one)), bytes(&corners(&four)));
         assert_eq!(links(&one), links(&four));
-        assert_eq!(one.tags, four.tags);
+        let tags = |b: &Bvh<u32>| b.packs.iter().map(|p| p.tags).collect::<Vec<_>>();
+        assert_eq!(tags(&one), tags(&four));
         assert_eq!(one.stats().sah_cost.to_bits(), four.stats().sah_cost.to_bits());
         assert_eq!(one.stats().nodes, four.stats().nodes);
     }
