@@ -1,9 +1,11 @@
 """Makes the README's pictures with the Python package: the default scene through
 the 50 mm lens, the four built-in lenses' layouts, and the contact sheet of the
-CS184 course scenes (when ../shared is beside the repository).
+CS184 course scenes. Needs ../shared beside the repository for the contact sheet
+only (its scenes/cs184/; without it the sheet is skipped, saying so).
 
     pip install .[notebook]        # lenspath, with matplotlib for the labels
     python examples/readme_pictures.py [--out-dir docs] [--spp 512] [--sheet-spp 128]
+                                       [--shared ../shared]
 
 It writes OUT_DIR/images/cornell-spheres.png (the same image as
 `lenspath render --spp 512 --out ...`, bit for bit), OUT_DIR/lenses/NAME.svg (as
@@ -23,7 +25,6 @@ import numpy as np
 import lenspath
 
 REPO = Path(__file__).resolve().parent.parent
-CS184 = REPO.parent / "shared" / "scenes" / "cs184"
 TILE = (192, 144)  # contact-sheet tiles, pixels
 LABEL_PX = 16
 
@@ -67,17 +68,18 @@ def srgb8(linear: np.ndarray) -> np.ndarray:
     return values
 
 
-def contact_sheet(out_dir: Path, spp: int, columns: int = 6) -> Path | None:
-    """Every CS184 scene through its own camera (pinhole, the course renderer's view), labelled."""
-    if not CS184.is_dir():
-        print(f"skipping the contact sheet: {CS184} is absent (../shared beside the repository)")
+def contact_sheet(out_dir: Path, shared: Path, spp: int, columns: int = 6) -> Path | None:
+    """Every CS184 scene in `shared` through its own camera (pinhole, the course renderer's view), labelled."""
+    cs184 = shared / "scenes" / "cs184"
+    if not cs184.is_dir():
+        print(f"skipping the contact sheet: {cs184} is absent (../shared beside the repository)")
         return None
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    scenes = sorted(CS184.glob("*/*.dae"))
+    scenes = sorted(cs184.glob("*/*.dae"))
     (w, h), rows = TILE, (len(scenes) + columns - 1) // columns
     sheet = np.full((rows * (h + LABEL_PX), columns * w, 3), 255, np.uint8)
     dpi = 100
@@ -104,10 +106,11 @@ def main() -> int:
     parser.add_argument("--spp", type=int, default=512, help="samples per pixel of the main picture")
     parser.add_argument("--sheet-spp", type=int, default=128, help="samples per pixel of each contact-sheet tile")
     parser.add_argument("--resolution", type=int, nargs=2, metavar=("W", "H"), help="of the main picture")
+    parser.add_argument("--shared", type=Path, default=REPO.parent / "shared", help="the shared assets' folder")
     args = parser.parse_args()
     made = [main_image(args.out_dir, args.spp, tuple(args.resolution) if args.resolution else None)]
     made += lens_layouts(args.out_dir)
-    sheet = contact_sheet(args.out_dir, args.sheet_spp)
+    sheet = contact_sheet(args.out_dir, args.shared, args.sheet_spp)
     made += [sheet] if sheet else []
     for path in made:
         print(path)

@@ -4,12 +4,28 @@ from __future__ import annotations
 
 import os
 import shutil
+from collections.abc import Mapping
 from pathlib import Path
 
 import pytest
 
 REPO = Path(__file__).resolve().parents[2]
-SHARED = REPO.parent / "shared"
+
+#: Set to 1, the tests behave as on a fresh clone with no ../shared beside the repository, even
+#: where there is one (CI's second pass over the tests that read it: .ci/run).
+WITHOUT_SHARED_SWITCH = "LENSPATH_TESTS_WITHOUT_SHARED"
+
+
+def shared_folder(environ: Mapping[str, str] = os.environ) -> Path:
+    """../shared beside the repository, or a folder that does not exist when the switch hides it."""
+    if environ.get(WITHOUT_SHARED_SWITCH) == "1":
+        return REPO / "target" / f"no-shared-{WITHOUT_SHARED_SWITCH}"
+    return REPO.parent / "shared"
+
+
+#: What the tests read ../shared as: every test that needs it checks `SHARED.is_dir()` or asks
+#: for the `shared` fixture, and passes this path (not its own) to the scripts it runs.
+SHARED = shared_folder()
 
 
 @pytest.fixture(scope="session")
@@ -29,5 +45,13 @@ def cli() -> Path:
 def shared() -> Path:
     """../shared beside the repository (lens tables, CS184 scenes, meshes)."""
     if not SHARED.is_dir():
-        pytest.skip(f"{SHARED} is absent: the shared assets are only beside the repository in CI")
+        pytest.skip(absent_shared_reason())
     return SHARED
+
+
+def absent_shared_reason() -> str:
+    """Why a test that needs ../shared is skipped: the folder it looked for, and why it is not there."""
+    beside = REPO.parent / "shared"
+    if SHARED != beside:
+        return f"../shared ({beside}) is hidden by {WITHOUT_SHARED_SWITCH}=1"
+    return f"../shared ({beside}) is absent: the shared assets are only beside the repository in CI"

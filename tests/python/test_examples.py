@@ -17,6 +17,7 @@ from .conftest import REPO, SHARED
 def test_readme_pictures_match_the_clis(cli, tmp_path: Path) -> None:
     out = tmp_path / "docs"
     args = ["--out-dir", str(out), "--spp", "2", "--sheet-spp", "1", "--resolution", "64", "48"]
+    args += ["--shared", str(SHARED)]
     subprocess.run([sys.executable, str(REPO / "examples" / "readme_pictures.py"), *args], check=True)
 
     theirs = tmp_path / "cli.png"

@@ -17,7 +17,7 @@ import pytest
 import lenspath
 from lenspath import Camera
 
-from .conftest import REPO, SHARED
+from .conftest import REPO, SHARED, absent_shared_reason
 from .test_viewer import Viewer, find_chromium, playwright_api, wait_for_spp
 
 distributed = pytest.importorskip("distributed")
@@ -139,7 +139,7 @@ def test_every_front_end_gives_the_same_image(
     cli: Path, client: Any, chromium: Any, scene: str, overrides: dict[str, Any], tmp_path: Path
 ) -> None:
     if needs_shared(scene) and not SHARED.is_dir():
-        pytest.skip(f"{scene} needs {SHARED}, absent here")
+        pytest.skip(f"{scene} needs ../shared: {absent_shared_reason()}")
     reference = cli_render(cli, scene, cli_flags(overrides), tmp_path / "cli.exr")
     assert reference.shape == (RESOLUTION[1], RESOLUTION[0], 3)
     assert reference.mean() > 0

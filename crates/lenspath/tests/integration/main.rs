@@ -19,3 +19,4 @@ mod render_analytic;
 mod scene_import;
 mod sensor;
 mod shared_assets;
+mod shared_folder;

@@ -19,19 +19,7 @@ use lenspath::render::{render, RenderSettings};
 use lenspath::sampling::SamplerKind;
 use lenspath::setup::{realistic_settings, RealisticDescription};
 
-fn repo(path: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..").join(path)
-}
-
-fn shared(path: &str) -> Option<PathBuf> {
-    let p = repo("../shared").join(path);
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!("skipping: {} not found (../shared is absent)", p.display());
-        None
-    }
-}
+use crate::shared_folder::{repo, shared};
 
 /// A small pinhole render of a loaded scene through its own view.
 fn quick_render(loaded: LoadedScene, width: u32, height: u32, spp: u32) -> Image {

@@ -1,5 +1,5 @@
 //! Tests on the third-party meshes and lens tables in ../shared (see ../shared/ASSETS.md).
-//! They skip, saying so, when ../shared is not beside the repository.
+//! They skip, saying so, when ../shared is not beside the repository (`shared_folder`).
 
 use std::path::PathBuf;
 
@@ -9,17 +9,7 @@ use lenspath::io::load_mesh;
 use lenspath::raysets::{coherent_rays, incoherent_rays};
 use lenspath::shapes::{intersect_triangle, TriangleRay};
 
-fn shared(path: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared")
-        .join(path);
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!("skipping: {} not found (../shared is absent)", p.display());
-        None
-    }
-}
+use crate::shared_folder::shared;
 
 /// Vertex and triangle counts from ASSETS.md, for ASCII and binary PLY and OBJ.
 #[test]
