@@ -30,7 +30,7 @@ import tempfile
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 VENV = ROOT / "bench" / ".venv-bokeh"
-LENSPATH = ROOT / "target" / "release" / "lenspath"
+LENSPATH = ROOT / "target" / "dist" / "lenspath"
 
 
 def venv_python() -> pathlib.Path:
@@ -159,7 +159,7 @@ def main() -> None:
     if args.worker:
         worker(args.repeat)
         return
-    subprocess.run(["cargo", "build", "--release", "--quiet"], cwd=ROOT, check=True)
+    subprocess.run(["cargo", "build", "--profile", "dist", "--quiet"], cwd=ROOT, check=True)
     python = venv_python()
     subprocess.run([str(python), __file__, "--worker", "--repeat", str(args.repeat)], check=True)
 

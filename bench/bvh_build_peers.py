@@ -51,8 +51,8 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=5)
     args = parser.parse_args()
 
-    subprocess.run(["cargo", "build", "--release", "--quiet"], cwd=ROOT, check=True)
-    lenspath = ROOT / "target" / "release" / "lenspath"
+    subprocess.run(["cargo", "build", "--profile", "dist", "--quiet"], cwd=ROOT, check=True)
+    lenspath = ROOT / "target" / "dist" / "lenspath"
     with tempfile.TemporaryDirectory() as tmp:
         work = pathlib.Path(tmp)
         header = tiny_bvh_header(work)

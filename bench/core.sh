@@ -3,8 +3,8 @@
 # and full Cornell-box renders. Run from the repository root on an idle machine.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cargo build --release --quiet
-bin=target/release/lenspath
+cargo build --profile dist --quiet
+bin=target/dist/lenspath
 dragon=../shared/meshes/dragon_100k.ply
 
 for threads in 1 2; do

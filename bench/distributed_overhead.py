@@ -39,7 +39,7 @@ def timed(run):  # type: ignore[no-untyped-def]
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--spp", type=int, default=64)
-    parser.add_argument("--cli", default=str(REPO / "target" / "release" / "lenspath"))
+    parser.add_argument("--cli", default=str(REPO / "target" / "dist" / "lenspath"))
     args = parser.parse_args()
     cores = len(os.sched_getaffinity(0))
 

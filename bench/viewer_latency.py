@@ -1,6 +1,6 @@
 """How soon `lenspath view` shows the first preview of a change, at 480x360.
 
-Starts `target/release/lenspath view` on a free loopback port, opens the page
+Starts `target/dist/lenspath view` on a free loopback port, opens the page
 in Debian's headless Chromium (Playwright, from the test extras), and makes
 changes the way a person does: f-stops and the focus slider (which build the
 camera again) and orbits (which move it). For each it records:
@@ -14,7 +14,7 @@ camera again) and orbits (which move it). For each it records:
   request, the WebSocket and decoding.
 
 Usage: target/python-venv/bin/python bench/viewer_latency.py [--changes 30] [--json FILE]
-(`cargo build --release` and `bash scripts/test.sh`, which makes the venv, first.)
+(`cargo build --profile dist` and `bash scripts/test.sh`, which makes the venv, first.)
 """
 
 from __future__ import annotations
@@ -80,7 +80,7 @@ def main() -> None:
     parser.add_argument("--json", type=Path, help="write the results here")
     args = parser.parse_args()
 
-    binary = ROOT / "target/release/lenspath"
+    binary = ROOT / "target/dist/lenspath"
     viewer = subprocess.Popen([str(binary), "view", "--port", "0"], stdout=subprocess.PIPE, text=True)
     url = re.search(r"http://[\d.]+:\d+/", viewer.stdout.readline()).group(0)
     server_ms: dict[str, dict[str, list[float]]] = {}

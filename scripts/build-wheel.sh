@@ -14,7 +14,7 @@ fi
 rm -rf dist
 # maturin finds zig through the ziglang package of the interpreter on PATH.
 PATH="$PWD/$venv/bin:$PATH" CARGO_TARGET_DIR=target/release-wheel \
-    "$venv/bin/maturin" build --release --locked --zig --out dist
+    "$venv/bin/maturin" build --profile dist --locked --zig --out dist
 "$venv/bin/maturin" sdist --out dist
 "$venv/bin/twine" check --strict dist/*
 ls -l dist

@@ -217,8 +217,8 @@ def main() -> int:
     )
     args = parser.parse_args()
     in_venv(["numpy", "embreex"])
-    subprocess.run(["cargo", "build", "--release", "--quiet"], cwd=ROOT, check=True)
-    binary = ROOT / "target" / "release" / "lenspath"
+    subprocess.run(["cargo", "build", "--profile", "dist", "--quiet"], cwd=ROOT, check=True)
+    binary = ROOT / "target" / "dist" / "lenspath"
     meshes = [m for m in [*MESHES, PROCEDURAL] if not args.meshes or m[0] in args.meshes]
     if not SHARED.is_dir():
         print(f"{SHARED} is absent: only the procedural mesh", file=sys.stderr)

@@ -24,7 +24,7 @@ lenspath / Mitsuba printed (below 1: lenspath's image is closer to converged at 
 time). `--plot` draws the curves (log-log) as SVG.
 
 Runs in bench/.venv-peers (numpy, mitsuba, matplotlib, and this lenspath by `pip install .`,
-a release build), as render_vs_mitsuba.py does.
+the `dist` profile's build), as render_vs_mitsuba.py does.
 """
 
 from __future__ import annotations

@@ -12,7 +12,7 @@ only, glass as the Glass BSDF (roughness 0), a conductor as the Metallic BSDF wi
 conductor Fresnel (GGX roughness = sqrt(alpha); a measured metal by its RGB n and k at 650, 550
 and 450 nm). Both render through a pinhole camera with the file's `fov_y_deg`, a one-pixel box
 filter, the file's max depth, on every core, no denoising, no adaptive sampling, no clamping.
-lenspath renders with the CLI (`target/release/lenspath`, built here by cargo) and its render
+lenspath renders with the CLI (`target/dist/lenspath`, built here by cargo) and its render
 time (guide training included); Cycles through `bpy` and the wall time of
 `bpy.ops.render.render` after an untimed warm-up render (its guide trains during the render),
 with path guiding on and, for comparison, off.
@@ -44,7 +44,7 @@ from pathlib import Path
 
 from common import ROOT, at_time, doubling_sweep, in_venv
 
-LENSPATH = ROOT / "target" / "release" / "lenspath"
+LENSPATH = ROOT / "target" / "dist" / "lenspath"
 CACHE = ROOT / "target" / "bench-references"
 # Gold's n and k at 650, 550 and 450 nm, as scenes/glass-and-gold.toml gives them: what Cycles
 # gets for `metal = "Au"` (it takes RGB).
@@ -265,7 +265,7 @@ def main() -> int:
     in_venv(["numpy", "bpy", "OpenEXR"])
     import numpy as np
 
-    subprocess.run(["cargo", "build", "--release", "--locked", "-p", "lenspath-cli"], cwd=ROOT, check=True)
+    subprocess.run(["cargo", "build", "--profile", "dist", "--locked", "-p", "lenspath-cli"], cwd=ROOT, check=True)
     scene_path = (ROOT / args.scene) if not Path(args.scene).is_absolute() else Path(args.scene)
     scene_file = tomllib.loads(scene_path.read_text())
     max_depth = int(scene_file.get("integrator", {}).get("max_depth", 16))

@@ -29,7 +29,7 @@ relative difference of the blocks must be under 2% for the two to render the sam
 scene with unbiased integrators.
 
 Makes its virtual environment in bench/.venv-peers (numpy, mitsuba) on first use
-and installs lenspath there with `pip install .` (a release build). The walls are
+and installs lenspath there with `pip install .` (the `dist` profile's build). The walls are
 handed to Mitsuba as OBJ files in a temporary folder, loaded inside the timing.
 """
 

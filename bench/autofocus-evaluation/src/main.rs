@@ -21,7 +21,8 @@ use lenspath::builtin::builtin_scene;
 use lenspath::camera::CameraPose;
 use lenspath::defaults;
 use lenspath::film::NormalizedRect;
-use lenspath::io::{check_writable, load_scene_in, write_text, ReadScope};
+use lenspath::fs::{check_writable, write_text};
+use lenspath::io::{load_scene_in, ReadScope};
 use lenspath::lens::LensPrescription;
 use lenspath::options::SceneOptions;
 use lenspath::scene::CompiledScene;
@@ -227,7 +228,7 @@ impl EarlierTruths {
             path: path.to_path_buf(),
             message,
         };
-        let text = lenspath::io::read_text(path, lenspath::FileKind::Other)?;
+        let text = lenspath::fs::read_text(path, lenspath::FileKind::Other)?;
         let file: serde_json::Value = serde_json::from_str(&text).map_err(|e| bad(e.to_string()))?;
         let (their_metric, their_spp, their_size) = (&file["metric"], &file["spp"], &file["resolution"]);
         if their_metric != metric || their_spp != spp || *their_size != json!([size.0, size.1]) {

@@ -6,8 +6,8 @@
 use std::path::PathBuf;
 
 use clap::Args;
+use lenspath::fs::write_text;
 use lenspath::glass::{self, Glass, FRAUNHOFER_LINES};
-use lenspath::io::write_text;
 use lenspath::lens::LensPrescription;
 use lenspath::{Error, Result};
 

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use clap::Args;
 use glam::{Vec2, Vec3};
 use lenspath::camera::{CameraPose, LensFocus, RealisticCamera, RealisticCameraSettings};
-use lenspath::io::write_text;
+use lenspath::fs::write_text;
 use lenspath::lens::chromatic::ChromaticAnalysis;
 use lenspath::lens::plot::{focal_shift_svg, layout_svg};
 use lenspath::lens::{AnalysisSettings, LensAnalysis, LensPrescription, LensSystem};

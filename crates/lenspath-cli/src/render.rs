@@ -289,7 +289,7 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
     check_output_path(&args.out)?;
     if let Some(raw) = &args.raw {
         RawFormat::of(raw)?;
-        lenspath::io::check_writable(raw)?;
+        lenspath::fs::check_writable(raw)?;
     }
     if !args.exposure.is_finite() {
         return Err(Error::InvalidArgument("--exposure must be a finite number".into()));
@@ -318,7 +318,7 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
         }
     }
     if let Some(path) = &args.checkpoint {
-        lenspath::io::check_writable(path)?;
+        lenspath::fs::check_writable(path)?;
     }
     if let Some(path) = &args.guide_map {
         check_output_path(path)?;
@@ -388,7 +388,7 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
     let mut save;
     let checkpoints = match &checkpointing {
         Some((path, fingerprint)) => {
-            lenspath::io::remove_stale_temporaries(path);
+            lenspath::fs::remove_stale_temporaries(path);
             // A failed save (a full disk, a folder gone) costs the checkpoint,
             // not the render: it goes on and writes its image.
             save = |state: &Accumulation| {

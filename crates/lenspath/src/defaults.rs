@@ -28,10 +28,7 @@ pub const SEED: u32 = 0;
 pub const SAMPLER: SamplerKind = SamplerKind::Sobol;
 /// Edge of the square tiles a render is cut into, pixels.
 pub const TILE_SIZE: u32 = 16;
-/// Most worker threads a render, autofocus or lens analysis may ask for:
-/// far more than any machine's cores, far fewer than what makes the
-/// operating system stall starting them (100 000 did).
-pub const MAX_THREADS: usize = 1024;
+pub use crate::parallel::MAX_THREADS;
 
 // Cameras.
 

@@ -38,6 +38,7 @@ pub mod color;
 pub mod defaults;
 pub mod error;
 pub mod film;
+pub mod fs;
 pub mod glass;
 pub mod guiding;
 pub mod integrator;

@@ -58,7 +58,7 @@ pub struct ViewArgs {
 pub fn run(args: ViewArgs) -> Result<Outcome> {
     let (scene_name, scene, options) = args.scene.load()?;
     let base = match (args.scene.builtin(), &args.scene.file) {
-        (None, Some(path)) => SceneBase::File(path.canonicalize().map_err(|e| lenspath::io::io_error(path, e))?),
+        (None, Some(path)) => SceneBase::File(path.canonicalize().map_err(|e| lenspath::fs::io_error(path, e))?),
         _ => SceneBase::Builtin {
             name: scene_name.clone(),
             mesh_triangles: args.scene.mesh_triangles,

@@ -281,7 +281,7 @@ impl Session {
         }
         for file in lens_files {
             LensPrescription::load(&file.display().to_string())?;
-            allowed_lens_paths.push(file.canonicalize().map_err(|e| lenspath::io::io_error(file, e))?);
+            allowed_lens_paths.push(file.canonicalize().map_err(|e| lenspath::fs::io_error(file, e))?);
         }
         let (width, height) = resolution;
         let settings = initial_settings(&options, &view, (width, height))?;

@@ -11,11 +11,10 @@
 //! field's groups) share that exposure's time, so every strategy collects
 //! one exposure's light per position and pays the read noise once per frame.
 
-use super::search::Focuser;
 use crate::camera::FilmRadiometry;
 use crate::color::luminance;
 use crate::error::Result;
-use crate::film::Image;
+use crate::film::{Image, PixelRect};
 use crate::sampling::mix64;
 use crate::sensor::develop::develop;
 use crate::sensor::{by_name, capture, name_in, Development, RawFrame, SensorSettings, ToneCurve};
@@ -103,24 +102,35 @@ pub struct FocusSensor {
     pub signal: SensorSignal,
 }
 
-impl Focuser<'_> {
-    /// `film`, a patch image of film readings through a camera of radiometry
-    /// `optics`, as the search sees it: itself without a sensor; with one,
-    /// the signal of one of `frames` frames taken at this lens position
-    /// (they share the held exposure's time), `key` telling the frames of a
-    /// search apart (their temporal noise is independent).
-    pub(super) fn seen(
+/// A search's sensor exposure: none until its first frame, then that frame's
+/// (metered, with auto exposure) held for the rest of the search, as a camera
+/// locks its exposure while it focuses.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(super) struct HeldExposure(Option<SensorSettings>);
+
+impl HeldExposure {
+    /// The exposure held, once a frame has been taken.
+    pub(super) fn held(&self) -> Option<&SensorSettings> {
+        self.0.as_ref()
+    }
+
+    /// `film`, a `patch` image of film readings through a camera of
+    /// radiometry `optics`, as the search sees it: itself without a sensor;
+    /// with one, the signal of one of `frames` frames taken at this lens
+    /// position (they share the held exposure's time), `key` telling the
+    /// frames of a search apart (their temporal noise is independent).
+    pub(super) fn see(
         &mut self,
+        sensor: Option<&FocusSensor>,
+        patch: PixelRect,
         film: Vec<f32>,
         optics: Option<FilmRadiometry>,
-        frames: u32,
-        key: u64,
+        (frames, key): (u32, u64),
     ) -> Result<Vec<f32>> {
-        let Some(focus_sensor) = &self.settings.sensor else {
+        let Some(focus_sensor) = sensor else {
             return Ok(film);
         };
         let optics = optics.ok_or_else(crate::sensor::needs_a_lens)?;
-        let patch = self.settings.patch;
         let image = Image {
             width: patch.width,
             height: patch.height,
@@ -131,7 +141,7 @@ impl Focuser<'_> {
         };
         // The first frame meters (with auto exposure); the search holds it.
         let held = self
-            .held_exposure
+            .0
             .get_or_insert_with(|| SensorSettings {
                 auto_exposure: None,
                 ..focus_sensor.sensor.metered(&image, &optics)

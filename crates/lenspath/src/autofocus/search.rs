@@ -12,7 +12,7 @@
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 
-use super::frames::{frame_key, FocusSensor};
+use super::frames::{frame_key, FocusSensor, HeldExposure};
 use super::light_field::{FilmRegion, LightField, Recording, Splat};
 use super::measures::{FocusMeasure, Patch};
 use super::signal::{interior_peak_index, log_parabola_peak, stream_seed, Detail};
@@ -26,7 +26,6 @@ use crate::lens::{AnalysisSettings, LensAnalysis, LensSystem};
 use crate::render::{render, FilmResponse, RenderSettings};
 use crate::sampling::SamplerKind;
 use crate::scene::CompiledScene;
-use crate::sensor::SensorSettings;
 
 /// The spatial frequency, cycles per pixel, at which the lens's best focus is
 /// found for the range finder: where the band-passed Tenengrad responds most
@@ -228,8 +227,8 @@ pub struct Focuser<'a> {
     pub(super) observer: Option<EvaluationObserver<'a>>,
     pub(super) light_fields: usize,
     pub(super) camera_rays: u64,
-    /// The sensor exposure of the running search, from its first frame ([`Focuser::seen`]).
-    pub(super) held_exposure: Option<SensorSettings>,
+    /// The sensor exposure of the running search, from its first frame.
+    pub(super) held_exposure: HeldExposure,
     /// What the running search could not do ([`AutofocusResult::fallbacks`]).
     pub(super) fallbacks: Vec<String>,
 }
@@ -277,7 +276,7 @@ impl<'a> Focuser<'a> {
             observer: None,
             light_fields: 0,
             camera_rays: 0,
-            held_exposure: None,
+            held_exposure: HeldExposure::default(),
             fallbacks: Vec::new(),
         })
     }
@@ -422,11 +421,12 @@ impl<'a> Focuser<'a> {
             let Some(rgb) = field.refocus(z, patch, Splat::Bilinear) else {
                 return Ok(None);
             };
-            let seen = self.seen(
+            let seen = self.held_exposure.see(
+                self.settings.sensor.as_ref(),
+                patch,
                 rgb,
                 field.camera().film_radiometry(),
-                fields.len() as u32,
-                frame_key(z, seed, k),
+                (fields.len() as u32, frame_key(z, seed, k)),
             )?;
             images.push(Detail::Fine.band_pass(&seen, width));
         }
@@ -452,7 +452,7 @@ impl<'a> Focuser<'a> {
     }
 
     /// The patch rendered through `camera` at `spp` samples with `seed`, as
-    /// the search sees it ([`Focuser::seen`]: through a sensor, one of
+    /// the search sees it (`HeldExposure::see`: through a sensor, one of
     /// `frames.0` frames at this position, its key `frames.1`), band-passed
     /// at the scale of `detail`.
     pub(super) fn render_patch(
@@ -464,7 +464,13 @@ impl<'a> Focuser<'a> {
         (frames, key): (u32, u64),
     ) -> Result<Vec<f32>> {
         let film = self.render_film(camera, spp, seed)?;
-        let seen = self.seen(film, camera.film_radiometry(), frames, key)?;
+        let seen = self.held_exposure.see(
+            self.settings.sensor.as_ref(),
+            self.settings.patch,
+            film,
+            camera.film_radiometry(),
+            (frames, key),
+        )?;
         Ok(detail.band_pass(&seen, self.settings.patch.width as usize))
     }
 
@@ -534,7 +540,7 @@ impl<'a> Focuser<'a> {
         self.evaluations.clear();
         self.light_fields = 0;
         self.camera_rays = 0;
-        self.held_exposure = None;
+        self.held_exposure = HeldExposure::default();
         self.fallbacks.clear();
         let z = match strategy {
             Strategy::Sweep => self.sweep(None)?,
@@ -551,8 +557,8 @@ impl<'a> Focuser<'a> {
             light_fields: self.light_fields,
             camera_rays: self.camera_rays,
             seconds: started.elapsed().as_secs_f64(),
-            exposure_time_s: self.held_exposure.as_ref().map(|e| e.exposure_time_s),
-            iso: self.held_exposure.as_ref().map(|e| e.iso),
+            exposure_time_s: self.held_exposure.held().map(|e| e.exposure_time_s),
+            iso: self.held_exposure.held().map(|e| e.iso),
             fallbacks: std::mem::take(&mut self.fallbacks),
         })
     }

@@ -25,9 +25,9 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use super::{io_error, write_atomically};
 use crate::error::{Error, Result};
 use crate::film::PixelRect;
+use crate::fs::{io_error, write_atomically};
 use crate::render::Accumulation;
 
 const MAGIC: &[u8; 20] = b"lenspath checkpoint\n";

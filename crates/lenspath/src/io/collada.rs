@@ -62,7 +62,7 @@ const MAX_NODE_VISITS: usize = 1_000_000;
 
 /// Reads a COLLADA file.
 pub fn load_collada(path: &Path) -> Result<LoadedScene> {
-    let text = super::read_text(path, crate::FileKind::Scene)?;
+    let text = crate::fs::read_text(path, crate::FileKind::Scene)?;
     parse_collada(&text, path)
 }
 

@@ -14,8 +14,8 @@ use std::path::Path;
 use exr::math::Vec2;
 use exr::meta::attribute::{AttributeValue, Chromaticities, IntegerBounds, Text};
 
-use super::{io_error, write_atomically};
 use crate::error::{Error, Result};
+use crate::fs::{io_error, write_atomically};
 
 /// A header attribute's value: the OpenEXR types lenspath reads and writes.
 #[derive(Clone, Debug, PartialEq)]

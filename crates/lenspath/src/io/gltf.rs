@@ -44,7 +44,7 @@ const MAX_NODE_VISITS: usize = 1_000_000;
 
 /// Reads a `.gltf` or `.glb` file; external buffers are read from beside it.
 pub fn load_gltf(path: &Path, scope: &super::ReadScope) -> Result<LoadedScene> {
-    let bytes = std::fs::read(path).map_err(|e| super::io_error(path, e))?;
+    let bytes = std::fs::read(path).map_err(|e| crate::fs::io_error(path, e))?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     parse_gltf(&bytes, path, &|uri| {
         let file = scope.check(&dir.join(uri)).map_err(|e| e.to_string())?;

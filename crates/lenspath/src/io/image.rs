@@ -8,10 +8,10 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use super::exr::{encode_exr, read_exr_image, ExrImage, HeaderValue};
-use super::{io_error, write_atomically};
 use crate::color::{srgb_to_linear, to_srgb8};
 use crate::error::{Error, Result};
 use crate::film::Image;
+use crate::fs::{io_error, write_atomically};
 
 /// EXR attribute: the samples per pixel every pixel reached.
 pub const SPP_ATTRIBUTE: &str = "lenspath/spp";
@@ -141,7 +141,7 @@ fn decode(path: &Path) -> Result<::image::DynamicImage> {
 /// or its directory cannot be written.
 pub fn check_output_path(path: &Path) -> Result<ImageFormat> {
     let format = ImageFormat::from_path(path)?;
-    super::check_writable(path)?;
+    crate::fs::check_writable(path)?;
     Ok(format)
 }
 

@@ -33,7 +33,7 @@ use crate::spectrum::Emission;
 
 /// Reads an OBJ file and the MTL files it names (beside it, within `scope`).
 pub fn load_obj(path: &Path, scope: &super::ReadScope) -> Result<LoadedScene> {
-    let text = super::read_text(path, crate::FileKind::Scene)?;
+    let text = crate::fs::read_text(path, crate::FileKind::Scene)?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     // tobj's error for a library cannot say why; a refused one is told in a warning.
     let refused = std::cell::RefCell::new(None);

@@ -11,8 +11,8 @@ use ply_rs_bw::parser::Parser;
 use ply_rs_bw::ply::{Encoding, Header, Property, PropertyAccess, PropertyType, ScalarType};
 
 use super::import::{MeshBuilder, Warnings};
-use super::{io_error, write_atomically};
 use crate::error::{Error, Result};
+use crate::fs::{io_error, write_atomically};
 use crate::shapes::TriangleMesh;
 
 #[derive(Default)]

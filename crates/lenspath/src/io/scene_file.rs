@@ -385,9 +385,9 @@ fn load_included(path: &Path, including: &[PathBuf], scope: &super::ReadScope) -
     if including.len() >= MAX_INCLUDE_DEPTH {
         return Err(Error::InvalidScene(too_deep(&including[0], path)));
     }
-    let text = super::read_text(path, crate::FileKind::Scene)?;
+    let text = crate::fs::read_text(path, crate::FileKind::Scene)?;
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
-    let canonical = path.canonicalize().map_err(|e| super::io_error(path, e))?;
+    let canonical = path.canonicalize().map_err(|e| crate::fs::io_error(path, e))?;
     let mut chain = including.to_vec();
     chain.push(canonical);
     parse_scene_file(&text, path, &|file: &Path| {

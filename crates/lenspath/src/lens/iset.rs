@@ -25,7 +25,7 @@ use crate::glass::{C_LINE_NM, D_LINE_NM, F_LINE_NM};
 
 /// Reads the ISET lens file at `path`.
 pub fn load(path: &Path) -> Result<LensPrescription> {
-    let text = crate::io::read_text(path, crate::FileKind::Lens)?;
+    let text = crate::fs::read_text(path, crate::FileKind::Lens)?;
     parse(&text, &path.to_string_lossy())
 }
 

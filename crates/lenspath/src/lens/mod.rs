@@ -9,15 +9,54 @@ pub mod plot;
 pub mod prescription;
 pub mod surface;
 pub mod system;
+pub mod table;
 pub mod through_focus;
 pub mod zemax;
 
-pub use prescription::{LensPrescription, LensSurface, TableConvention, BUILTIN_LENSES};
+pub use prescription::{LensPrescription, LensSurface, BUILTIN_LENSES};
 pub use surface::{CylinderAxis, EvenAsphere, Meridian, SurfaceShape};
 pub use system::{Direction, LensRay, LensSystem, ParaxialData};
+pub use table::TableConvention;
 pub use through_focus::SpotBundle;
 
-use crate::error::Result;
+use std::path::Path;
+
+use crate::error::{Error, Result};
+
+// Where a lens comes from, by its name's form: one rule for every front end, here above the
+// formats so that none of them depends on another.
+impl LensPrescription {
+    /// A built-in lens by name, an entry of the lentil database
+    /// (`lentil:0004`, [`lentil`]), or else the file at `name_or_path`:
+    /// a Zemax `.zmx` ([`zemax`]), an ISET `.json` ([`iset`])
+    /// or a lens table.
+    pub fn load(name_or_path: &str) -> Result<LensPrescription> {
+        if let Some(id) = name_or_path.strip_prefix(lentil::PREFIX) {
+            return lentil::load(id);
+        }
+        let extension = Path::new(name_or_path)
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase());
+        if let Some((name, table)) = BUILTIN_LENSES.iter().find(|(n, _)| *n == name_or_path) {
+            return LensPrescription::parse(table, name, TableConvention::ThicknessToNext);
+        }
+        let path = Path::new(name_or_path);
+        if !path.exists() {
+            let names: Vec<&str> = BUILTIN_LENSES.iter().map(|(n, _)| *n).collect();
+            return Err(Error::InvalidArgument(format!(
+                "unknown lens '{name_or_path}': not a built-in lens ({}) nor an existing file",
+                names.join(", ")
+            )));
+        }
+        match extension.as_deref() {
+            Some("zmx") => return zemax::load(path),
+            Some("json") => return iset::load(path),
+            _ => {}
+        }
+        let text = crate::fs::read_text(path, crate::FileKind::Lens)?;
+        LensPrescription::parse(&text, name_or_path, TableConvention::Auto)
+    }
+}
 
 /// Choices behind the real-ray figures of [`LensAnalysis`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -186,5 +225,42 @@ impl LensAnalysis {
             rear_vertex_mm: system.rear_z(),
             anamorphic,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn builtins_parse_with_one_stop() {
+        for (name, table) in BUILTIN_LENSES {
+            let lens = LensPrescription::load(name).unwrap();
+            // Every row read (the cemented achromat has four, the others seven or more).
+            let rows = table
+                .lines()
+                .filter(|l| !l.trim().is_empty() && !l.trim().starts_with('#'))
+                .count();
+            assert!(lens.surfaces.len() == rows && rows >= 4, "{name}");
+            assert!(lens.surfaces[lens.stop_index()].is_stop());
+        }
+    }
+
+    #[test]
+    fn a_lens_file_that_is_not_text_is_named_in_the_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("binary.dat");
+        std::fs::write(&path, b"50.0 5.0 1.5 20.0\n\xff\xfe 1 1 8\n").unwrap();
+        let err = LensPrescription::load(path.to_str().unwrap()).unwrap_err().to_string();
+        assert!(
+            err.contains("binary.dat") && err.contains("not UTF-8 text (byte 18"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn unknown_lens_name_lists_the_builtins() {
+        let err = LensPrescription::load("no-such-lens").unwrap_err().to_string();
+        assert!(err.contains("dgauss50") && err.contains("fisheye10"), "{err}");
     }
 }

@@ -888,7 +888,8 @@ fn refract(d: DVec3, normal: DVec3, eta: f64) -> Option<DVec3> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lens::prescription::{TableConvention, BUILTIN_LENSES};
+    use crate::lens::prescription::BUILTIN_LENSES;
+    use crate::lens::TableConvention;
 
     fn builtin(name: &str) -> LensSystem {
         LensSystem::new(&LensPrescription::load(name).unwrap())

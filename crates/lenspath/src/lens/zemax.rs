@@ -62,7 +62,7 @@ struct ZSurface {
 
 /// Reads the `.zmx` file at `path`.
 pub fn load(path: &Path) -> Result<LensPrescription> {
-    let bytes = std::fs::read(path).map_err(|e| crate::io::io_error(path, e))?;
+    let bytes = std::fs::read(path).map_err(|e| crate::fs::io_error(path, e))?;
     parse(&bytes, &path.to_string_lossy())
 }
 

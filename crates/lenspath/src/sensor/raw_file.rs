@@ -10,7 +10,7 @@ use tiff::encoder::{colortype, Rational, SRational, TiffEncoder};
 use tiff::tags::Tag;
 
 use super::{Cfa, RawFrame};
-use crate::io::write_bytes;
+use crate::fs::write_bytes;
 use crate::{Error, Result};
 
 /// DNG tags (Adobe DNG Specification 1.4.0.0, ch. 4), by number.

@@ -6,12 +6,8 @@ use glam::{Vec2, Vec3};
 
 use super::*;
 use crate::camera::{CameraRay, CameraSample};
-use crate::lens::{Direction, LensRay};
+use crate::lens::LensRay;
 use crate::spectrum::SampledWavelengths;
-
-/// A sample's ray from the film and, unless the lens blocks it, the ray
-/// leaving the lens with its unnormalised weight.
-pub(super) type TracedSample = (LensRay, Option<(LensRay, f64)>);
 
 /// A camera sample as a record of the light field inside the camera: the
 /// line it follows from the film to the rear plane, and the ray it becomes
@@ -27,19 +23,6 @@ pub struct LensSample {
 }
 
 impl RealisticCamera {
-    /// `sample` followed through the lens: the ray from the film and, unless
-    /// blocked, the ray out of the lens; `None` when the film point has no
-    /// open pupil.
-    pub(super) fn traced_sample(&self, sample: CameraSample) -> Option<TracedSample> {
-        let p_film = self.film_point(sample.film);
-        let system = self.system_at(sample.wavelengths.hero_nm());
-        if let Some((aperture, maps)) = &self.shaped {
-            return self.shaped_ray(system, aperture, maps, p_film, sample.lens);
-        }
-        let (ray, weight) = self.lens_ray(p_film, sample.lens)?;
-        Some((ray, system.trace(&ray, Direction::ToScene).map(|out| (out, weight))))
-    }
-
     /// [`Camera::generate_ray`] with the line the sample follows inside the
     /// camera, for recording a light field. A film point with no open pupil
     /// gives a blocked sample whose line stays where it is.

@@ -31,7 +31,6 @@ mod pupil;
 mod settings;
 
 pub use light_field::LensSample;
-use light_field::TracedSample;
 use pupil::*;
 pub use settings::{sensor_for_image, LensFocus, Radiometry, RealisticCameraSettings};
 
@@ -141,7 +140,24 @@ pub struct RealisticCamera {
     whole_sensor: bool,
 }
 
+/// A sample's ray from the film and, unless the lens blocks it, the ray
+/// leaving the lens with its unnormalised weight.
+pub(super) type TracedSample = (LensRay, Option<(LensRay, f64)>);
+
 impl RealisticCamera {
+    /// `sample` followed through the lens: the ray from the film and, unless
+    /// blocked, the ray out of the lens; `None` when the film point has no
+    /// open pupil.
+    pub(super) fn traced_sample(&self, sample: CameraSample) -> Option<TracedSample> {
+        let p_film = self.film_point(sample.film);
+        let system = self.system_at(sample.wavelengths.hero_nm());
+        if let Some((aperture, maps)) = &self.shaped {
+            return self.shaped_ray(system, aperture, maps, p_film, sample.lens);
+        }
+        let (ray, weight) = self.lens_ray(p_film, sample.lens)?;
+        Some((ray, system.trace(&ray, Direction::ToScene).map(|out| (out, weight))))
+    }
+
     /// Sets up the lens, focuses it and bounds its exit pupil.
     pub fn new(pose: CameraPose, width: u32, height: u32, settings: &RealisticCameraSettings) -> Result<Self> {
         Self::build(pose, width, height, settings, None)
