@@ -1,4 +1,4 @@
-"""No new import circle between the library's files (scripts/module_graph.py finds them)."""
+"""No import circle between the library's files (scripts/module_graph.py finds them)."""
 
 from __future__ import annotations
 
@@ -10,16 +10,9 @@ from .conftest import REPO
 sys.path.insert(0, str(REPO / "scripts"))
 from module_graph import Graph, circles  # noqa: E402
 
-#: The circles on main when the check came (issue 71 removes them): this list may only shrink.
-KNOWN = [
-    ["defaults", "sensor", "sensor::capture", "sensor::develop"],
-]
 
-
-def test_the_library_has_no_import_circle_but_the_known_ones() -> None:
-    found = circles(Graph(REPO / "crates/lenspath/src"))
-    assert [c for c in found if c not in KNOWN] == [], "a new import circle between the library's files"
-    assert [c for c in KNOWN if c not in found] == [], "a known circle is gone: take it off KNOWN"
+def test_the_library_has_no_import_circle() -> None:
+    assert circles(Graph(REPO / "crates/lenspath/src")) == [], "an import circle between the library's files"
 
 
 def crate(tmp_path: Path, files: dict[str, str]) -> Graph:

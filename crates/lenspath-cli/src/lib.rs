@@ -89,7 +89,7 @@ fn command() -> clap::Command {
             "sensor_model",
             scene_file_else(format!("{} when another sensor flag is given", d::SENSOR_RESPONSE)),
         ),
-        ("cfa", d::SENSOR_CFA.name().to_string()),
+        ("cfa", lenspath::sensor::Cfa::default().name().to_string()),
         ("exposure_time", format!("1/{:.0} s", 1.0 / d::SENSOR_EXPOSURE_TIME_S)),
         (
             "iso",
@@ -104,9 +104,9 @@ fn command() -> clap::Command {
         ("bit_depth", d::SENSOR_BIT_DEPTH.to_string()),
         ("black_level", d::SENSOR_BLACK_LEVEL_DN.to_string()),
         ("peak_qe", d::SENSOR_PEAK_QE.to_string()),
-        ("white_balance", d::SENSOR_WHITE_BALANCE.spelling()),
-        ("demosaic", d::SENSOR_DEMOSAIC.name().to_string()),
-        ("tone_curve", d::SENSOR_TONE_CURVE.name().to_string()),
+        ("white_balance", lenspath::sensor::WhiteBalance::default().spelling()),
+        ("demosaic", lenspath::sensor::Demosaic::default().name().to_string()),
+        ("tone_curve", lenspath::sensor::ToneCurve::default().name().to_string()),
         (
             "max_exposure_time",
             format!("1/{:.0} s", 1.0 / d::SENSOR_MAX_EXPOSURE_TIME_S),

@@ -1,7 +1,10 @@
-//! Every default of a render, written once. A value the caller leaves out
+//! Every default of a render, in one table. A value the caller leaves out
 //! and the scene file does not give comes from here ([`crate::setup`]
 //! applies the precedence caller > scene file > default); the CLI's help,
 //! the Python signatures and the viewer show these, never their own copies.
+//! Defaults that belong to a lower layer's type live beside it and are
+//! re-exported here (the sensor's in [`crate::sensor::preset`], the thread
+//! limit in [`crate::parallel`]), so that no module below reads this one.
 
 use crate::integrator::IntegratorKind;
 use crate::sampling::SamplerKind;
@@ -70,60 +73,12 @@ pub const AUTOFOCUS_STRATEGY: &str = "fast";
 /// pixels, as a camera's AF does before any development.
 pub const AUTOFOCUS_SENSOR_SIGNAL: &str = "raw-green";
 
-// The sensor (`lenspath::sensor`): ISETCam's model of the Sony IMX363
-// (`sensorCreate('IMX363')`, a 1.4 µm-pixel phone sensor; ISETCam, MIT
-// licence), its per-pixel figures turned into per-µm² ones where a
-// render's pixel is another size.
-
-/// The spectral response: the measured Sony α7 III (ILCE-7M3) channels.
-pub const SENSOR_RESPONSE: &str = "sony_ilce_7m3";
-/// Peak quantum efficiency of the most sensitive channel. An assumption
-/// (typical of a back-side illuminated CMOS sensor behind Bayer filters):
-/// the measured curves are relative and ISETCam's IMX363 curves are not at
-/// hand.
-pub const SENSOR_PEAK_QE: f64 = 0.5;
-/// The colour filter array.
-pub const SENSOR_CFA: crate::sensor::Cfa = crate::sensor::Cfa::Rggb;
-/// Exposure time, s (IMX363: 1/60).
-pub const SENSOR_EXPOSURE_TIME_S: f64 = 1.0 / 60.0;
-/// ISO speed: the IMX363's base, analogue gain 1 (ISETCam's model
-/// defaults to 270, which overexposes a 100 cd/m² white by two stops at
-/// f/2 and 1/60 s).
-pub const SENSOR_ISO: f64 = 55.0;
-/// ISO speed at analogue gain 1, where the full well reaches the white
-/// level (IMX363: 55; 6000 e⁻ over 1023 DN).
-pub const SENSOR_UNITY_GAIN_ISO: f64 = 55.0;
-/// Full-well capacity per µm² (IMX363: 6000 e⁻ in a 1.4 µm pixel).
-pub const SENSOR_FULL_WELL_E_PER_UM2: f64 = 6000.0 / (1.4 * 1.4);
-/// Read noise, e⁻ RMS (IMX363: 5).
-pub const SENSOR_READ_NOISE_E: f64 = 5.0;
-/// Dark current per µm², e⁻/s (IMX363: 0).
-pub const SENSOR_DARK_CURRENT_E_PER_S_UM2: f64 = 0.0;
-/// Dark signal non-uniformity, e⁻ RMS (IMX363: 0).
-pub const SENSOR_DSNU_E: f64 = 0.0;
-/// Photo-response non-uniformity, RMS gain (IMX363: 0.7%).
-pub const SENSOR_PRNU: f64 = 0.007;
-/// Bits per digital number (IMX363: 10).
-pub const SENSOR_BIT_DEPTH: u32 = 10;
-/// Black level, DN (IMX363: 64).
-pub const SENSOR_BLACK_LEVEL_DN: u32 = 64;
-/// Luminance of a white emitter of value 1, cd/m² (ISETCam's scenes
-/// default to a mean luminance of 100 cd/m²).
-pub const SENSOR_WHITE_LUMINANCE_CD_M2: f64 = 100.0;
-/// The light the camera is balanced for: daylight, the scenes' own white
-/// (an RGB emitter's white is D65).
-pub const SENSOR_WHITE_BALANCE: crate::sensor::WhiteBalance = crate::sensor::WhiteBalance::Daylight;
-/// Whether the exposure time and ISO are metered from the film (a
-/// camera's program mode; off: the given ones).
-pub const SENSOR_AUTO_EXPOSURE: bool = false;
-/// Auto exposure's longest exposure time, s: 1/30, a phone camera's
-/// preview and autofocus frame rate.
-pub const SENSOR_MAX_EXPOSURE_TIME_S: f64 = 1.0 / 30.0;
-/// Auto exposure's highest ISO: 64× the base gain (an assumption of a
-/// phone sensor's range; ISETCam's IMX363 model gives none).
-pub const SENSOR_MAX_ISO: f64 = 3520.0;
-/// The development's demosaicking: Malvar–He–Cutler, the best linear one.
-pub const SENSOR_DEMOSAIC: crate::sensor::Demosaic = crate::sensor::Demosaic::MalvarHeCutler;
-/// The development's tone curve: none, so developed values stay
-/// proportional to the light (as a render's image is).
-pub const SENSOR_TONE_CURVE: crate::sensor::ToneCurve = crate::sensor::ToneCurve::Linear;
+// The sensor's defaults live beside it (`sensor::preset`, and its enums' `#[default]` variants).
+pub use crate::sensor::preset::{
+    AUTO_EXPOSURE as SENSOR_AUTO_EXPOSURE, BIT_DEPTH as SENSOR_BIT_DEPTH, BLACK_LEVEL_DN as SENSOR_BLACK_LEVEL_DN,
+    DARK_CURRENT_E_PER_S_UM2 as SENSOR_DARK_CURRENT_E_PER_S_UM2, DSNU_E as SENSOR_DSNU_E,
+    EXPOSURE_TIME_S as SENSOR_EXPOSURE_TIME_S, FULL_WELL_E_PER_UM2 as SENSOR_FULL_WELL_E_PER_UM2, ISO as SENSOR_ISO,
+    MAX_EXPOSURE_TIME_S as SENSOR_MAX_EXPOSURE_TIME_S, MAX_ISO as SENSOR_MAX_ISO, PEAK_QE as SENSOR_PEAK_QE,
+    PRNU as SENSOR_PRNU, READ_NOISE_E as SENSOR_READ_NOISE_E, RESPONSE as SENSOR_RESPONSE,
+    UNITY_GAIN_ISO as SENSOR_UNITY_GAIN_ISO, WHITE_LUMINANCE_CD_M2 as SENSOR_WHITE_LUMINANCE_CD_M2,
+};

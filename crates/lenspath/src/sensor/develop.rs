@@ -26,14 +26,16 @@ use crate::spectrum::cie;
 use crate::Result;
 
 /// How the mosaic's missing channels are filled in.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Demosaic {
     /// Each missing channel the mean of the nearest pixels that read it.
     Bilinear,
     /// Malvar, He and Cutler, "High-quality linear interpolation for
     /// demosaicing of Bayer-patterned color images", ICASSP 2004: bilinear
     /// corrected by the Laplacian of the channel the pixel reads (5 × 5
-    /// kernels; about 5.5 dB better than bilinear on the Kodak set).
+    /// kernels; about 5.5 dB better than bilinear on the Kodak set). The
+    /// default: the best linear method.
+    #[default]
     MalvarHeCutler,
 }
 
@@ -57,10 +59,12 @@ impl Demosaic {
 }
 
 /// The curve from linear sRGB to the developed image's values.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum ToneCurve {
     /// None: the image stays linear (its file's encoding, such as the sRGB
-    /// transfer function of a PNG, is the writer's).
+    /// transfer function of a PNG, is the writer's). The default, so that
+    /// developed values stay proportional to the light, as a render's are.
+    #[default]
     Linear,
     /// A filmic shoulder and toe: Narkowicz's fit of the ACES reference
     /// rendering transform ("ACES Filmic Tone Mapping Curve", 2016), per
@@ -95,22 +99,13 @@ impl ToneCurve {
     }
 }
 
-/// How a raw frame is developed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// How a raw frame is developed (by default, each method's default).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Development {
     /// The demosaicking method.
     pub demosaic: Demosaic,
     /// The tone curve.
     pub tone_curve: ToneCurve,
-}
-
-impl Default for Development {
-    fn default() -> Self {
-        Development {
-            demosaic: crate::defaults::SENSOR_DEMOSAIC,
-            tone_curve: crate::defaults::SENSOR_TONE_CURVE,
-        }
-    }
 }
 
 /// `frame` developed `how`, linear sRGB 1 at the white level before the

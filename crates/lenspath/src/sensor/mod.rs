@@ -25,10 +25,11 @@
 //! over the same fixed pattern.
 //!
 //! Every default is a real sensor's: ISETCam's model of the Sony IMX363
-//! (`sensorCreate('IMX363')`, MIT licence), see [`crate::defaults`].
+//! (`sensorCreate('IMX363')`, MIT licence), see [`preset`].
 
 mod capture;
 pub mod develop;
+pub mod preset;
 pub mod raw_file;
 pub mod response;
 mod white_balance;
@@ -39,7 +40,6 @@ pub use response::SpectralResponse;
 pub use white_balance::WhiteBalance;
 
 use crate::camera::FilmRadiometry;
-use crate::defaults;
 use crate::film::Image;
 use crate::spectrum::cie;
 use crate::{Error, Result};
@@ -49,9 +49,10 @@ pub const LUMINOUS_EFFICACY_LM_W: f64 = 683.0;
 
 /// The colour filter array: which channel each pixel of a 2 × 2 block
 /// reads, named by its first row then its second.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Cfa {
-    /// Bayer: red, green / green, blue.
+    /// Bayer: red, green / green, blue (the default).
+    #[default]
     Rggb,
     /// Bayer: blue, green / green, red.
     Bggr,
@@ -169,27 +170,27 @@ impl AutoExposure {
 }
 
 impl SensorSettings {
-    /// The default sensor (every value [`crate::defaults`]'s) with the
+    /// The default sensor (every value [`preset`]'s, or its type's default) with the
     /// spectral response `response`.
     pub fn new(response: &'static SpectralResponse) -> SensorSettings {
         SensorSettings {
             response,
-            peak_qe: defaults::SENSOR_PEAK_QE,
-            cfa: defaults::SENSOR_CFA,
-            exposure_time_s: defaults::SENSOR_EXPOSURE_TIME_S,
-            iso: defaults::SENSOR_ISO,
-            unity_gain_iso: defaults::SENSOR_UNITY_GAIN_ISO,
-            full_well_e_per_um2: defaults::SENSOR_FULL_WELL_E_PER_UM2,
-            read_noise_e: defaults::SENSOR_READ_NOISE_E,
-            dark_current_e_per_s_um2: defaults::SENSOR_DARK_CURRENT_E_PER_S_UM2,
-            dsnu_e: defaults::SENSOR_DSNU_E,
-            prnu: defaults::SENSOR_PRNU,
-            bit_depth: defaults::SENSOR_BIT_DEPTH,
-            black_level_dn: defaults::SENSOR_BLACK_LEVEL_DN,
-            white_luminance_cd_m2: defaults::SENSOR_WHITE_LUMINANCE_CD_M2,
+            peak_qe: preset::PEAK_QE,
+            cfa: Cfa::default(),
+            exposure_time_s: preset::EXPOSURE_TIME_S,
+            iso: preset::ISO,
+            unity_gain_iso: preset::UNITY_GAIN_ISO,
+            full_well_e_per_um2: preset::FULL_WELL_E_PER_UM2,
+            read_noise_e: preset::READ_NOISE_E,
+            dark_current_e_per_s_um2: preset::DARK_CURRENT_E_PER_S_UM2,
+            dsnu_e: preset::DSNU_E,
+            prnu: preset::PRNU,
+            bit_depth: preset::BIT_DEPTH,
+            black_level_dn: preset::BLACK_LEVEL_DN,
+            white_luminance_cd_m2: preset::WHITE_LUMINANCE_CD_M2,
             fixed_pattern_seed: 0,
             frame_seed: 0,
-            white_balance: defaults::SENSOR_WHITE_BALANCE,
+            white_balance: WhiteBalance::default(),
             development: Development::default(),
             auto_exposure: None,
         }
@@ -286,9 +287,9 @@ impl SensorSettings {
             auto_exposure: Some(self.auto_exposure.is_some()),
             max_exposure_time_s: Some(
                 self.auto_exposure
-                    .map_or(defaults::SENSOR_MAX_EXPOSURE_TIME_S, |a| a.max_exposure_time_s),
+                    .map_or(preset::MAX_EXPOSURE_TIME_S, |a| a.max_exposure_time_s),
             ),
-            max_iso: Some(self.auto_exposure.map_or(defaults::SENSOR_MAX_ISO, |a| a.max_iso)),
+            max_iso: Some(self.auto_exposure.map_or(preset::MAX_ISO, |a| a.max_iso)),
         }
     }
 
@@ -360,7 +361,7 @@ impl SensorSettings {
 }
 
 /// An image sensor as a caller or a scene file describes it: each field
-/// left `None` is the default's ([`crate::defaults`], ISETCam's Sony
+/// left `None` is the default's ([`preset`], ISETCam's Sony
 /// IMX363). Every front end maps its own spelling onto this.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct SensorDescription {
@@ -439,7 +440,7 @@ impl SensorDescription {
 
     /// The sensor it describes, defaults filled in and checked.
     pub fn resolve(&self) -> Result<SensorSettings> {
-        let response = SpectralResponse::named(self.model.as_deref().unwrap_or(defaults::SENSOR_RESPONSE))?;
+        let response = SpectralResponse::named(self.model.as_deref().unwrap_or(preset::RESPONSE))?;
         let d = SensorSettings::new(response);
         let sensor = SensorSettings {
             peak_qe: self.peak_qe.unwrap_or(d.peak_qe),
@@ -463,10 +464,10 @@ impl SensorDescription {
             },
             auto_exposure: self
                 .auto_exposure
-                .unwrap_or(defaults::SENSOR_AUTO_EXPOSURE)
+                .unwrap_or(preset::AUTO_EXPOSURE)
                 .then(|| AutoExposure {
-                    max_exposure_time_s: self.max_exposure_time_s.unwrap_or(defaults::SENSOR_MAX_EXPOSURE_TIME_S),
-                    max_iso: self.max_iso.unwrap_or(defaults::SENSOR_MAX_ISO),
+                    max_exposure_time_s: self.max_exposure_time_s.unwrap_or(preset::MAX_EXPOSURE_TIME_S),
+                    max_iso: self.max_iso.unwrap_or(preset::MAX_ISO),
                 }),
             ..d
         };

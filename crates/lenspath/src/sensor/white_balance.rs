@@ -11,9 +11,11 @@ use crate::spectrum::planck;
 use crate::{Error, Result};
 
 /// What light the camera is balanced for.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum WhiteBalance {
-    /// CIE D65 daylight (the colour matrix's own white).
+    /// CIE D65 daylight (the colour matrix's own white): the default, the
+    /// scenes' own white (an RGB emitter's white is D65).
+    #[default]
     Daylight,
     /// A black body at this temperature, K (tungsten is about 2856 K,
     /// CIE illuminant A).
