@@ -44,11 +44,12 @@ def code_of(text: str) -> str:
 
 def expand(tree: str) -> Iterator[list[str]]:
     """The paths of a `use` tree: `a::{b, c::{d, e as f}}` gives a::b, a::c::d, a::c::e."""
-    tree = re.sub(r"\s+", "", tree)
+    # An alias renames the last segment only: what it names is the path before it.
+    tree = re.sub(r"\s+", "", re.sub(r"\s+as\s+\w+", "", tree))
     depth, start, parts = 0, 0, []
     brace = tree.find("{")
     if brace < 0:
-        yield [p for p in re.sub(r"as\w+$", "", tree.replace("::as", "as")).split("::") if p]
+        yield [p for p in tree.split("::") if p]
         return
     head = [p for p in tree[:brace].split("::") if p]
     inner = tree[brace + 1 : tree.rindex("}")]

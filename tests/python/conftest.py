@@ -55,3 +55,9 @@ def absent_shared_reason() -> str:
     if SHARED != beside:
         return f"../shared ({beside}) is hidden by {WITHOUT_SHARED_SWITCH}=1"
     return f"../shared ({beside}) is absent: the shared assets are only beside the repository in CI"
+
+
+def scene_needs_shared(scene: str | Path) -> bool:
+    """Whether a scene argument is a TOML scene file naming files in ../shared (cbdragon, cblucy)."""
+    path = Path(scene)
+    return path.suffix == ".toml" and "shared/" in path.read_text()

@@ -17,7 +17,7 @@ import pytest
 import lenspath
 from lenspath import Camera
 
-from .conftest import REPO, SHARED, absent_shared_reason
+from .conftest import REPO, SHARED, absent_shared_reason, scene_needs_shared
 from .test_viewer import Viewer, find_chromium, playwright_api, wait_for_spp
 
 distributed = pytest.importorskip("distributed")
@@ -35,11 +35,6 @@ SCENES: list[str] = [str(p) for p in SCENE_FILES] + lenspath.builtin_scenes()
 
 def scene_id(scene: str) -> str:
     return Path(scene).stem
-
-
-def needs_shared(scene: str) -> bool:
-    """Whether the scene file names files in ../shared."""
-    return scene.endswith(".toml") and "shared/" in Path(scene).read_text()
 
 
 #: Two sets of overrides: only the size and samples (everything else the
@@ -75,7 +70,7 @@ def python_args(o: dict[str, Any]) -> tuple[Camera | None, dict[str, Any]]:
 
 def where(scene: str) -> list[str]:
     """The CLI's arguments naming `scene` (those reading ../shared allowed to)."""
-    if needs_shared(scene):
+    if scene_needs_shared(scene):
         return [scene, "--allow-read", str(SHARED)]
     if scene.endswith(".toml"):
         return [scene]
@@ -83,7 +78,7 @@ def where(scene: str) -> list[str]:
 
 
 def python_scene(scene: str) -> lenspath.Scene | str:
-    if needs_shared(scene):
+    if scene_needs_shared(scene):
         return lenspath.load(scene, allow_read=[SHARED])
     return scene if scene.endswith(".toml") else lenspath.Scene.builtin(scene, MESH_TRIANGLES)
 
@@ -138,7 +133,7 @@ def viewer_saved_file(
 def test_every_front_end_gives_the_same_image(
     cli: Path, client: Any, chromium: Any, scene: str, overrides: dict[str, Any], tmp_path: Path
 ) -> None:
-    if needs_shared(scene) and not SHARED.is_dir():
+    if scene_needs_shared(scene) and not SHARED.is_dir():
         pytest.skip(f"{scene} needs ../shared: {absent_shared_reason()}")
     reference = cli_render(cli, scene, cli_flags(overrides), tmp_path / "cli.exr")
     assert reference.shape == (RESOLUTION[1], RESOLUTION[0], 3)
@@ -154,7 +149,7 @@ def test_every_front_end_gives_the_same_image(
     saved, shown = viewer_saved_file(cli, chromium, scene, overrides, tmp_path)
     # The saved file names the scene file as its base, in another folder: allowed explicitly.
     allow = ["--allow-read", str(Path(scene).parent)] if scene.endswith(".toml") else []
-    allow += ["--allow-read", str(SHARED)] if needs_shared(scene) else []
+    allow += ["--allow-read", str(SHARED)] if scene_needs_shared(scene) else []
     again = cli_render(cli, str(saved), allow, tmp_path / "saved.exr")
     assert scene.endswith(".toml") or f"builtin = {scene!r}".replace("'", '"') in saved.read_text()
     assert np.array_equal(shown, reference), "the viewer shows another image than lenspath render"

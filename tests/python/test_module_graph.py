@@ -29,13 +29,16 @@ def test_a_circle_through_uses_paths_and_re_exports_is_found(tmp_path: Path) -> 
             "lib.rs": "pub mod a;\npub mod b;\npub mod c;\npub mod d;\n",
             "a/mod.rs": "pub mod x;\npub use x::Thing;\nuse crate::{b::Bee, c};\n",
             "a/x.rs": "pub struct Thing;\nfn f() -> super::super::d::Dee { todo!() }\n",
-            "b.rs": "pub struct Bee;\n",
-            "c.rs": "fn g(t: crate::a::Thing) {}\n",  # through a's re-export: the edge is to a::x
+            "b.rs": "pub mod measures;\npub use measures::FocusMeasure;\npub struct Bee;\n",
+            "b/measures.rs": "pub struct FocusMeasure;\n",
+            # Through a's re-export the edge is to a::x, through b's (of a name with "as" in it)
+            # to b::measures; an alias names what is before it (b's Bee).
+            "c.rs": "use crate::b::Bee as Honey;\nfn g(t: crate::a::Thing, s: crate::b::FocusMeasure) {}\n",
             "d.rs": 'pub struct Dee;\n// use crate::a::x;\nconst S: &str = "crate::a::x";\n',
         },
     )
     assert sorted("::".join(m[1:]) for m in graph.edges(("crate", "a"))) == ["b", "c"]
-    assert graph.edges(("crate", "c")) == {("crate", "a", "x")}
+    assert graph.edges(("crate", "c")) == {("crate", "a", "x"), ("crate", "b"), ("crate", "b", "measures")}
     assert circles(graph) == []  # comments and strings in d.rs name a::x, but they are no edge
     (tmp_path / "d.rs").write_text("use crate::c;\n")
     (tmp_path / "c.rs").write_text("use crate::a::x::Thing;\n")
