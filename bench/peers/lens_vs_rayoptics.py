@@ -5,7 +5,7 @@ lenspath's lens tests:
   focal length and back focal length (last glass surface to focus) at the g, F,
   d and C lines of a thin N-BK7 singlet, an N-BK7/SF5 cemented achromat and
   rayoptics' documented Cooke triplet, with its own Schott catalogue.
-- `lens::system::tests::an_aspheric_singlet_traces_as_rayoptics_does`: an even
+- `lens::trace::tests::an_aspheric_singlet_traces_as_rayoptics_does`: an even
   asphere (conic and A4-A8) on a singlet; where parallel rays cross the axis.
 - `lens::lentil::tests::the_aspheric_fisheye_traces_as_rayoptics_does`: the
   lentil database's 0014 (A4-A10 on four surfaces), read from `../shared` as
@@ -13,7 +13,7 @@ lenspath's lens tests:
 - `lens::lentil::tests::the_anamorphic_prime_traces_as_rayoptics_does`: lentil's
   2004, whose cylinders rayoptics models as toroids; skew rays, and each meridian's
   focal length.
-- `lens::system::tests::a_toric_doublet_traces_as_rayoptics_does`: two toric
+- `lens::trace::tests::a_toric_doublet_traces_as_rayoptics_does`: two toric
   surfaces (one bent each way) and a cylinder on a cemented doublet; skew rays
   and each meridian's focal length.
 - `tests/integration/lens_files.rs`: Zemax files (one with TOROIDAL surfaces, which
@@ -252,12 +252,12 @@ print_skew_rays(
 )
 
 
-# A toric doublet, as lenspath's table `TORIC_DOUBLET` (lens::system::tests) writes it:
+# A toric doublet, as lenspath's table `TORIC_DOUBLET` (lens::trace::tests) writes it:
 # stop in front, `toric=x:R` is rayoptics' YToroid (profile in y-z, swept with radius R
 # in x-z), `toric=y:R` its XToroid, `cylinder=y` an XToroid with no sweep curvature.
 # Skew rays start 50 mm in front of the stop; where they cross the plane 10 mm behind
 # the rear vertex, and each meridian's paraxial focal length from a parallel ray 0.01 mm
-# off the axis; `lens::system::tests::a_toric_doublet_traces_as_rayoptics_does`.
+# off the axis; `lens::trace::tests::a_toric_doublet_traces_as_rayoptics_does`.
 toric = d_line_model(50.0)
 sm = toric["seq_model"]
 sm.add_surface([0.0, 4.0])

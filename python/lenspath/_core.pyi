@@ -272,10 +272,15 @@ class Lens:
     def table(self) -> npt.NDArray[np.float64]:
         """The prescription as an N x 4 array (as ``from_table`` takes it)."""
     def analysis(self) -> dict[str, Any]:
-        """Every figure ``lenspath lens --json`` prints (focal lengths, pupils, focus range, ...),
-        floats; ``"anamorphic"`` is None, or for a lens with cylinders its ``"squeeze"`` and the
-        ``"horizontal"`` and ``"vertical"`` meridians' focal length, f-number, entrance pupil,
-        field of view and infinity focus."""
+        """What ``lenspath lens --json`` prints for the lens as placed, on a 36 x 24 mm sensor, the
+        same report (``lenspath::lens_report::LensReport``): focal lengths, pupils, focus range and
+        the other first-order and real-ray figures, floats; ``"lines"``, the g, F, d and C lines'
+        wavelength, focal length and back focal distance; ``"longitudinal_color_mm"``,
+        ``"lateral_color_mm"`` (at ``"lateral_color_field_height_mm"``); the shares of camera rays
+        that pass at the image centre and corner (``"passing_fraction_centre"``,
+        ``"passing_fraction_corner"``); ``"anamorphic"`` is None, or for a lens with cylinders its
+        ``"squeeze"`` and the ``"horizontal"`` and ``"vertical"`` meridians' focal length,
+        f-number, entrance pupil, field of view and infinity focus."""
     @property
     def focal_length_mm(self) -> float:
         """Real-ray focal length, |P' - F'|."""

@@ -4,12 +4,10 @@
 use std::path::PathBuf;
 
 use clap::Args;
-use glam::{Vec2, Vec3};
-use lenspath::camera::{CameraPose, LensFocus, RealisticCamera, RealisticCameraSettings};
 use lenspath::fs::write_text;
-use lenspath::lens::chromatic::ChromaticAnalysis;
 use lenspath::lens::plot::{focal_shift_svg, layout_svg};
-use lenspath::lens::{AnalysisSettings, LensAnalysis, LensPrescription, LensSystem};
+use lenspath::lens::{AnalysisSettings, LensPrescription, LensSystem};
+use lenspath::lens_report::{LensReport, LensReportSettings};
 use lenspath::{Error, Result};
 
 use crate::flags::{parse_sensor, SensorSize};
@@ -91,9 +89,6 @@ fn round_mm(mm: f64) -> String {
     text.trim_end_matches('0').trim_end_matches('.').to_string()
 }
 
-/// Rays per passing-fraction estimate.
-const PASSING_SAMPLES: usize = 20_000;
-
 /// Runs `lenspath lens`.
 pub fn run(mut args: LensArgs) -> Result<Outcome> {
     if let Some(m) = args.focus_distance.take() {
@@ -121,50 +116,20 @@ pub fn run(mut args: LensArgs) -> Result<Outcome> {
         None => wide_open,
     };
     let sensor_mm = (args.sensor.width_mm, args.sensor.height_mm);
-    let analysis = LensAnalysis::new(
-        &system,
-        &AnalysisSettings {
+    let settings = LensReportSettings {
+        analysis: AnalysisSettings {
             ray_height_mm: args.ray_height_mm,
             close_object_distance_mm: args.close_object_mm,
             sensor_mm,
         },
-    )?;
-    let h = args.ray_height_mm;
-    let sensor_for_distance = args
-        .focus_distance_m
-        .map(|m| system.sensor_z_for_focus_distance(m * 1e3, h))
-        .transpose()?;
-    let distance_for_sensor = match args.sensor_depth {
-        Some(z) if z.is_nan() || z <= system.rear_z() => {
-            return Err(Error::InvalidArgument(format!(
-                "--sensor-depth {z} mm must lie behind the rear element ({:.3} mm)",
-                system.rear_z()
-            )))
-        }
-        Some(z) => Some(system.focus_distance_mm(z, h).map(|mm| mm * 1e-3)),
-        None => None,
+        focus_distance_m: args.focus_distance_m,
+        sensor_depth_mm: args.sensor_depth,
     };
-    // How many generated rays get through, focused at infinity (the sensor at infinity focus).
-    let (width_px, height_px) = (1000u32, (1000.0 * sensor_mm.1 / sensor_mm.0).round().max(1.0) as u32);
-    let camera = RealisticCamera::new(
-        CameraPose::look_at(Vec3::ZERO, Vec3::Z, Vec3::Y),
-        width_px,
-        height_px,
-        &RealisticCameraSettings {
-            f_number: args.fstop,
-            ..RealisticCameraSettings::new(
-                prescription.clone(),
-                sensor_mm,
-                LensFocus::SensorPositionMm(analysis.infinity_focus_mm),
-            )
-        },
-    )?;
-    let centre = camera.passing_fraction(Vec2::new(width_px as f32, height_px as f32) * 0.5, PASSING_SAMPLES);
-    let corner = camera.passing_fraction(Vec2::splat(0.5), PASSING_SAMPLES);
+    let report = LensReport::new(&system, &settings)?.with_passing_fractions(&prescription, args.fstop)?;
 
     if let Some(path) = &args.plot {
         let diagonal = sensor_mm.0.hypot(sensor_mm.1);
-        write_text(path, &layout_svg(&system, &analysis, diagonal))?;
+        write_text(path, &layout_svg(&system, &report.analysis, diagonal))?;
     }
     if let Some(path) = &args.write_table {
         let header = format!(
@@ -176,39 +141,19 @@ pub fn run(mut args: LensArgs) -> Result<Outcome> {
     if let Some(path) = &args.focal_shift_plot {
         write_text(path, &focal_shift_svg(&system)?)?;
     }
-
-    let chromatic = ChromaticAnalysis::new(&system, 0.5 * sensor_mm.0.hypot(sensor_mm.1))?;
     if args.json {
-        let mut json = serde_json::to_value(analysis).map_err(|e| Error::InvalidArgument(e.to_string()))?;
-        let object = json.as_object_mut().expect("a struct serialises to an object");
-        let lines: serde_json::Map<String, serde_json::Value> = chromatic
-            .lines
-            .iter()
-            .map(|l| (l.line.to_string(), serde_json::to_value(l).expect("numbers serialise")))
-            .collect();
-        object.insert("lines".into(), lines.into());
-        object.insert("longitudinal_color_mm".into(), chromatic.longitudinal_color_mm.into());
-        object.insert("lateral_color_mm".into(), chromatic.lateral_color_mm.into());
-        object.insert("lateral_color_field_height_mm".into(), chromatic.field_height_mm.into());
-        object.insert("lens".into(), prescription.name().into());
-        object.insert("sensor_width_mm".into(), sensor_mm.0.into());
-        object.insert("sensor_height_mm".into(), sensor_mm.1.into());
-        object.insert("passing_fraction_centre".into(), centre.into());
-        object.insert("passing_fraction_corner".into(), corner.into());
-        if let (Some(m), Some(z)) = (args.focus_distance_m, sensor_for_distance) {
-            object.insert("focus_distance_m".into(), m.into());
-            object.insert("sensor_depth_for_focus_distance_mm".into(), z.into());
-        }
-        if let (Some(z), Some(d)) = (args.sensor_depth, distance_for_sensor) {
-            object.insert("sensor_depth_mm".into(), z.into());
-            object.insert("focus_distance_for_sensor_depth_m".into(), d.into());
-        }
-        println!("{json}");
+        println!("{}", report.to_json());
         return Ok(Outcome::Done);
     }
+    print_report(&report);
+    Ok(Outcome::Done)
+}
 
-    let a = &analysis;
-    println!("lens                      {}", prescription.name());
+/// `report` as the text `lenspath lens` prints.
+fn print_report(report: &LensReport) {
+    let (a, sensor_mm) = (&report.analysis, (report.sensor_width_mm, report.sensor_height_mm));
+    let lines = ["g", "F", "d", "C"].map(|name| (name, report.lines[name]));
+    println!("lens                      {}", report.lens);
     println!("                          positions in mm along the axis from the aperture stop, + toward the sensor");
     println!("paraxial");
     println!("  effective focal length  {:.4} mm", a.effective_focal_length_mm);
@@ -253,19 +198,19 @@ pub fn run(mut args: LensArgs) -> Result<Outcome> {
         }
     }
     println!("colour (paraxial)");
-    for l in &chromatic.lines {
+    for (name, l) in lines {
         println!(
-            "  {} line {:9.4} nm     EFL {:.4} mm, BFD {:.4} mm",
-            l.line, l.wavelength_nm, l.effective_focal_length_mm, l.back_focal_distance_mm
+            "  {name} line {:9.4} nm     EFL {:.4} mm, BFD {:.4} mm",
+            l.wavelength_nm, l.effective_focal_length_mm, l.back_focal_distance_mm
         );
     }
     println!(
         "  longitudinal colour     {:.4} mm (BFD F - BFD C)",
-        chromatic.longitudinal_color_mm
+        report.longitudinal_color_mm
     );
     println!(
         "  lateral colour          {:.4} mm (F - C chief ray heights at {:.2} mm image height)",
-        chromatic.lateral_color_mm, chromatic.field_height_mm
+        report.lateral_color_mm, report.lateral_color_field_height_mm
     );
     println!("real rays at {} mm height", a.ray_height_mm);
     if a.anamorphic.is_some() {
@@ -281,19 +226,21 @@ pub fn run(mut args: LensArgs) -> Result<Outcome> {
         "  lens vertices           front {:.4} mm, rear {:.4} mm",
         a.front_vertex_mm, a.rear_vertex_mm
     );
-    println!(
-        "rays through (inf. focus) {:.1}% at the centre, {:.1}% at the corner",
-        100.0 * centre,
-        100.0 * corner
-    );
-    if let (Some(m), Some(z)) = (args.focus_distance_m, sensor_for_distance) {
+    if let Some(p) = &report.passing {
+        println!(
+            "rays through (inf. focus) {:.1}% at the centre, {:.1}% at the corner",
+            100.0 * p.passing_fraction_centre,
+            100.0 * p.passing_fraction_corner
+        );
+    }
+    let focus = &report.focus;
+    if let (Some(m), Some(z)) = (focus.focus_distance_m, focus.sensor_depth_for_focus_distance_mm) {
         println!("focus at {m} m             sensor at {z:.4} mm");
     }
-    if let (Some(z), Some(d)) = (args.sensor_depth, distance_for_sensor) {
+    if let (Some(z), Some(d)) = (focus.sensor_depth_mm, focus.focus_distance_for_sensor_depth_m) {
         match d {
             Some(m) => println!("sensor at {z} mm          focuses at {m:.6} m"),
             None => println!("sensor at {z} mm          focuses beyond infinity (nearer than the infinity focus)"),
         }
     }
-    Ok(Outcome::Done)
 }

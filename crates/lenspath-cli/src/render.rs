@@ -15,7 +15,7 @@ use lenspath::integrator::{guiding_can_help, IntegratorKind};
 use lenspath::io::checkpoint::{read_checkpoint, write_checkpoint};
 use lenspath::io::image::{check_output_path, write_image_with_header};
 use lenspath::render::{
-    guide_map_at_pixel, render_from, render_guided_from, train_guide, Accumulation, Checkpoints, RenderSettings,
+    guide_map_at_pixel, render_from, train_guide, Accumulation, Checkpoints, Continuation, RenderSettings,
 };
 use lenspath::sampling::SamplerKind;
 use lenspath::scene::Scene;
@@ -432,27 +432,19 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
             guide.directional_leaf_count()
         ));
     }
-    let output = match &guide {
-        Some(guide) => render_guided_from(
-            &compiled,
-            camera.as_ref(),
-            &settings,
-            guide,
-            start,
-            checkpoints,
-            &|d, t| progress.update(d, t),
-            &cancel,
-        )?,
-        None => render_from(
-            &compiled,
-            camera.as_ref(),
-            &settings,
-            start,
-            checkpoints,
-            &|d, t| progress.update(d, t),
-            &cancel,
-        )?,
+    let from = Continuation {
+        start,
+        guide: guide.as_ref(),
+        checkpoints,
     };
+    let output = render_from(
+        &compiled,
+        camera.as_ref(),
+        &settings,
+        from,
+        &|d, t| progress.update(d, t),
+        &cancel,
+    )?;
     progress.finish();
     if let (Some(map), Some(path), Some(pixel)) = (&map, &args.guide_map, pixel) {
         write_guide_map(path, map)?;

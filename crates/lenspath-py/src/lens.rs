@@ -10,6 +10,7 @@ use lenspath::lens::{
     plot::{focal_shift_svg, layout, layout_svg, Polyline},
     AnalysisSettings, Direction, LensAnalysis, LensPrescription, LensRay, LensSystem, TableConvention,
 };
+use lenspath::lens_report::{LensReport, LensReportSettings};
 use lenspath::Error;
 use numpy::ndarray::Array2;
 use numpy::{AllowTypeChange, IntoPyArray, PyArray1, PyArray2, PyArrayLike1, PyArrayLike2, PyUntypedArrayMethods};
@@ -175,7 +176,12 @@ impl Lens {
     /// serialisation of the library's analysis, read back by Python's json,
     /// so the two front ends cannot drift apart (floats round-trip exactly).
     pub(crate) fn analysis<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let text = serde_json::to_string(&self.analysis).expect("numbers and nulls always serialise");
+        let report = guarded(|| {
+            LensReport::new(&self.system, &LensReportSettings::default())
+                .and_then(|r| r.with_passing_fractions(&self.prescription, self.stopped_to))
+        })?
+        .map_err(to_py)?;
+        let text = report.to_json();
         Ok(py
             .import("json")?
             .call_method1("loads", (text,))?

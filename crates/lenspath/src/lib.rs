@@ -44,6 +44,7 @@ pub mod guiding;
 pub mod integrator;
 pub mod io;
 pub mod lens;
+pub mod lens_report;
 pub mod lights;
 pub mod materials;
 pub mod math;

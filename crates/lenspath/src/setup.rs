@@ -305,7 +305,7 @@ impl RenderSetup {
             "lenspath/seed",
             i32::try_from(s.seed).map_or(HeaderValue::Double(f64::from(s.seed)), Int),
         );
-        if let Some(nm) = s.wavelength_nm {
+        if let Some(nm) = s.film.wavelength_nm() {
             put("lenspath/wavelengthNm", Float(nm));
         }
         comments += &format!(", {} spp of the {} integrator", s.spp, s.integrator.kind().name());
@@ -350,7 +350,7 @@ pub fn resolve(options: &SceneOptions, view: &SceneView, overrides: &RenderOverr
         if !matches!(camera, CameraSettings::Realistic(_)) {
             return Err(needs_a_lens());
         }
-        settings.film = FilmResponse::Sensor(sensor.response);
+        settings.film = settings.film.read_by(sensor.response)?;
         settings.validate()?;
     }
     Ok(RenderSetup {
@@ -398,7 +398,7 @@ pub fn resolve_settings(options: &SceneOptions, overrides: &RenderOverrides) -> 
         threads: overrides.threads,
         crop: overrides.crop,
         depth: overrides.depth.unwrap_or(library.depth),
-        wavelength_nm: overrides.wavelength_nm,
+        film: FilmResponse::radiance(overrides.wavelength_nm),
         ..library
     };
     settings.validate()?;

@@ -15,8 +15,9 @@ use lenspath::film::Image;
 use lenspath::integrator::IntegratorKind;
 use lenspath::io::scene_file::{SceneBase, SceneSettingsFile, SensorTable};
 use lenspath::lens::{AnalysisSettings, LensAnalysis, LensPrescription, TableConvention};
+use lenspath::lens_report::{LensReport, LensReportSettings};
 use lenspath::options::SceneOptions;
-use lenspath::render::{check_max_depth, FilmResponse, NormalizedRect, RenderSettings};
+use lenspath::render::{check_max_depth, NormalizedRect, RenderSettings};
 use lenspath::sampling::SamplerKind;
 use lenspath::scene::{CompiledScene, SceneView};
 use lenspath::sensor::{capture_through, develop::develop, Exposure, SensorSettings};
@@ -638,7 +639,7 @@ impl Config {
             },
         )?;
         if let Some(sensor) = &sensor {
-            render.film = FilmResponse::Sensor(sensor.response);
+            render.film = render.film.read_by(sensor.response)?;
         }
         // The same optics (a move, or render settings): the camera moves, nothing is built again.
         if let Some(p) = previous.filter(|p| {
@@ -672,25 +673,27 @@ impl Config {
         let sensor_depth_mm = camera.sensor_z_mm();
         lens_settings.focus = LensFocus::SensorPositionMm(sensor_depth_mm);
         let system = camera.system();
-        let analysis = LensAnalysis::new(
+        let report = LensReport::new(
             system,
-            &AnalysisSettings {
-                sensor_mm: lens_settings.sensor_mm,
+            &LensReportSettings {
+                analysis: AnalysisSettings {
+                    sensor_mm: lens_settings.sensor_mm,
+                    ..Default::default()
+                },
+                sensor_depth_mm: Some(sensor_depth_mm),
                 ..Default::default()
             },
         )?;
+        let analysis = &report.analysis;
         let diagonal_mm = lens_settings.sensor_mm.0.hypot(lens_settings.sensor_mm.1);
-        let layout = lenspath::lens::plot::layout_focused(system, &analysis, diagonal_mm, sensor_depth_mm);
+        let layout = lenspath::lens::plot::layout_focused(system, analysis, diagonal_mm, sensor_depth_mm);
         let wide_open = lenspath::lens::LensSystem::new(&lens_settings.lens).paraxial()?;
-        let colour = lenspath::lens::chromatic::ChromaticAnalysis::new(system, 0.5 * diagonal_mm)?;
         Ok(View {
-            focus_distance_m: system
-                .focus_distance_mm(sensor_depth_mm, analysis.ray_height_mm)
-                .map(|mm| mm * 1e-3),
+            focus_distance_m: report.focus.focus_distance_for_sensor_depth_m.flatten(),
             focus_range_mm: (analysis.infinity_focus_mm, analysis.close_focus_mm),
             focal_length_mm: analysis.effective_focal_length_mm,
             wide_open_f_number: wide_open.f_number,
-            longitudinal_color_mm: colour.longitudinal_color_mm,
+            longitudinal_color_mm: report.longitudinal_color_mm,
             layout_svg: lenspath::lens::plot::layout_to_svg(&layout),
             settings,
             lens_settings,

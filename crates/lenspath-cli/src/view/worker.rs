@@ -9,16 +9,14 @@
 
 use std::sync::atomic::Ordering;
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use axum::body::Bytes;
 use lenspath::autofocus::Focuser;
 use lenspath::guiding::Guide;
 use lenspath::integrator::Integrator;
 use lenspath::io::image::encode_jpeg;
-use lenspath::render::{
-    render, render_from, render_guided_from, train_guide, Accumulation, Checkpoints, NormalizedRect,
-};
+use lenspath::render::{render, render_from, train_guide, Accumulation, Continuation, NormalizedRect, RenderOutput};
 use lenspath::sensor::SensorSettings;
 use lenspath::setup::{autofocus_setup, AutofocusOverrides};
 use lenspath::Result;
@@ -138,11 +136,6 @@ fn step(session: &Session, progress: &mut Progress, view: &Arc<View>, changed_at
         spp: target,
         ..view.render
     };
-    let mut reached = None;
-    let mut keep = |state: &Accumulation| {
-        reached = Some(state.clone());
-        Ok(())
-    };
     // A guided render's guide is trained once, for every step of this view.
     if progress.guide.is_none() && settings.integrator.guide_training_spp(&session.scene).is_some() {
         progress.guide = train_guide(&session.scene, &view.camera, &settings, &session.cancel)?;
@@ -150,37 +143,28 @@ fn step(session: &Session, progress: &mut Progress, view: &Arc<View>, changed_at
             return Ok(());
         }
     }
-    let checkpoints = Some(Checkpoints {
-        // Only the final save, when the step ends or is stopped: the sums to go on from.
-        every: Duration::from_secs(86_400),
-        save: &mut keep,
-    });
-    let output = match &progress.guide {
-        Some(guide) => render_guided_from(
-            &session.scene,
-            &view.camera,
-            &settings,
-            guide,
-            progress.state.take(),
-            checkpoints,
-            &|_, _| {},
-            &session.cancel,
-        )?,
-        None => render_from(
-            &session.scene,
-            &view.camera,
-            &settings,
-            progress.state.take(),
-            checkpoints,
-            &|_, _| {},
-            &session.cancel,
-        )?,
+    let from = Continuation {
+        start: progress.state.take(),
+        guide: progress.guide.as_ref(),
+        checkpoints: None,
     };
-    progress.state = reached;
-    if output.stats.cancelled {
+    let RenderOutput {
+        image: film,
+        stats,
+        accumulation,
+    } = render_from(
+        &session.scene,
+        &view.camera,
+        &settings,
+        from,
+        &|_, _| {},
+        &session.cancel,
+    )?;
+    progress.state = Some(accumulation);
+    if stats.cancelled {
         return Ok(());
     }
-    let (image, exposure) = view.shown(&view.camera, output.image)?;
+    let (image, exposure) = view.shown(&view.camera, film)?;
     let jpeg = Bytes::from(encode_jpeg(&image, 0.0)?);
     let frame = Arc::new(Frame {
         generation: progress.generation,
@@ -196,7 +180,7 @@ fn step(session: &Session, progress: &mut Progress, view: &Arc<View>, changed_at
         }
         state.last_frame = Some(frame.clone());
     }
-    let s = output.stats;
+    let s = stats;
     let full_latency_ms = (!progress.shown).then(|| changed_at.elapsed().as_secs_f64() * 1e3);
     progress.shown = true;
     session.send(json!({

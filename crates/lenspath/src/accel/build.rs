@@ -13,7 +13,9 @@
 use glam::{Vec3A, Vec4};
 use rayon::prelude::*;
 
-use super::{BvhSettings, LeafPack, PrimGeometry, TrianglePack, WideNode, PACK, QUADS, WIDTH};
+use super::layout::{LeafPack, TrianglePack, WideNode, PACK, QUADS, WIDTH};
+use super::primitive::PrimGeometry;
+use super::settings::BvhSettings;
 use crate::math::Bounds3;
 
 /// A binary node: 32 bytes. The nodes lie in depth-first order, each

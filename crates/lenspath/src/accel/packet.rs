@@ -28,7 +28,12 @@ use std::mem::MaybeUninit;
 
 use glam::Vec3;
 
-use super::{Bvh, TraversalRay, WideNode, WIDE_STACK, WIDTH};
+use super::layout::{WideNode, WIDTH};
+#[cfg(target_arch = "x86_64")]
+use super::node_test::cpu_has_avx2;
+use super::node_test::TraversalRay;
+use super::traversal::WIDE_STACK;
+use super::Bvh;
 use crate::ray::Ray;
 
 /// Rays a packet holds at most.
@@ -51,7 +56,7 @@ impl<T: Copy> Bvh<T> {
             std::array::from_fn(|i| Ray::new(origin, targets[i.min(targets.len() - 1)] - origin));
         let rays = &rays[..targets.len()];
         #[cfg(target_arch = "x86_64")]
-        if super::cpu_has_avx2() {
+        if cpu_has_avx2() {
             // SAFETY: the CPU has the features the function is compiled for.
             return unsafe { self.occluded_packet_avx2(rays, t_max) };
         }

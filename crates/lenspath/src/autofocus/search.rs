@@ -491,7 +491,6 @@ impl<'a> Focuser<'a> {
             tile_size: 16,
             crop: Some(s.patch),
             depth: false,
-            wavelength_nm: None,
             film: self.film_response(),
         };
         let output = render(

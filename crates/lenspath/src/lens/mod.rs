@@ -2,20 +2,24 @@
 //! real-ray analysis, focusing, and the layout plot.
 
 pub mod chromatic;
+pub mod focusing;
 pub mod iset;
 pub mod lentil;
 pub mod library;
+pub mod paraxial;
 pub mod plot;
 pub mod prescription;
 pub mod surface;
 pub mod system;
 pub mod table;
 pub mod through_focus;
+pub mod trace;
 pub mod zemax;
 
+pub use paraxial::ParaxialData;
 pub use prescription::{LensPrescription, LensSurface, BUILTIN_LENSES};
 pub use surface::{CylinderAxis, EvenAsphere, Meridian, SurfaceShape};
-pub use system::{Direction, LensRay, LensSystem, ParaxialData};
+pub use system::{Direction, LensRay, LensSystem};
 pub use table::TableConvention;
 pub use through_focus::SpotBundle;
 

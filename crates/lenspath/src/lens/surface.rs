@@ -1,7 +1,6 @@
 //! The shapes of refracting surfaces: spheres, flats, even aspheres (a
 //! conic plus an even polynomial), cylinders and toric surfaces, with their
-//! sag, its slope, and the exact intersection of a ray with an asphere or a
-//! toric surface.
+//! sag, its slope, and the exact intersection of a ray with each of them.
 //!
 //! Sag is measured along the axis from the vertex, positive toward the
 //! sensor, as a function of the height `h` from the axis (for a cylinder,
@@ -311,7 +310,7 @@ const ASPHERE_MAX_STEPS: usize = 40;
 /// `vertex_z` and curvature `curvature`: [`intersect_by_newton`] with the
 /// asphere's sag, whose gradient is (2x·s′, 2y·s′) with s′ = dz/d(h²).
 #[inline]
-pub(crate) fn intersect_even_asphere(
+fn intersect_even_asphere(
     origin: DVec3,
     direction: DVec3,
     vertex_z: f64,
@@ -361,6 +360,135 @@ pub(crate) fn intersect_by_newton(
         }
     }
     None
+}
+
+/// A surface's vertex as a ray meets it: where it sits on the axis and its
+/// signed vertex radius.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Vertex {
+    /// Position on the axis, mm.
+    pub z_mm: f64,
+    /// Signed vertex radius, mm (infinite: a flat; 0: the stop).
+    pub radius_mm: f64,
+    /// 1 / |radius|, which scales the centre-to-hit vector to the unit normal.
+    pub inv_abs_radius: f64,
+}
+
+impl Vertex {
+    /// Where the ray `origin + t·direction` crosses the vertex plane.
+    #[inline(always)]
+    fn plane_t(&self, origin: DVec3, direction: DVec3) -> f64 {
+        (self.z_mm - origin.z) / direction.z
+    }
+}
+
+/// The hit of the ray `origin + t·direction` on the sphere of `vertex`, on
+/// the cap around the vertex, with the unit normal there (pointing away
+/// from the centre), for a ray travelling toward +z or not.
+/// After pbrt-v4 `RealisticCamera::IntersectSphericalElement`.
+#[inline(always)]
+pub(crate) fn intersect_sphere(
+    origin: DVec3,
+    direction: DVec3,
+    vertex: &Vertex,
+    toward_positive_z: bool,
+) -> Option<(f64, DVec3)> {
+    let radius = vertex.radius_mm;
+    let center = DVec3::new(0.0, 0.0, vertex.z_mm + radius);
+    let oc = origin - center;
+    let b = oc.dot(direction);
+    let c = oc.length_squared() - radius * radius;
+    let discriminant = b * b - c;
+    if discriminant < 0.0 {
+        return None;
+    }
+    // The vertex side is hit first when travel goes from the vertex toward
+    // the centre. Decided by the sense of travel, not by the sign of the
+    // ray's z, so rays far off axis (even past 90°) take the right cap.
+    let want_near = toward_positive_z == (radius > 0.0);
+    // -b ± √D directly: the root wanted is never the one near 0 (that would
+    // be a ray starting on this very surface), so cancellation costs at most
+    // |b|/|t| ≤ 1e4 ulps, ~1e-12 mm, and no division sits on the ray's path.
+    let root = discriminant.sqrt();
+    let t = if want_near { -b - root } else { -b + root };
+    let p = origin + direction * t;
+    Some((t, (p - center) * vertex.inv_abs_radius))
+}
+
+/// The hit on the cylinder of `vertex` whose axis runs along `axis`, with
+/// the unit normal there: [`intersect_sphere`]'s computation in the plane
+/// the cylinder curves in, the ray's component along the axis dropped (it
+/// only carries the ray along the cylinder).
+#[inline(always)]
+pub(crate) fn intersect_cylinder(
+    origin: DVec3,
+    direction: DVec3,
+    vertex: &Vertex,
+    axis: CylinderAxis,
+    toward_positive_z: bool,
+) -> Option<(f64, DVec3)> {
+    let keep = match axis {
+        CylinderAxis::X => DVec3::new(0.0, 1.0, 1.0),
+        CylinderAxis::Y => DVec3::new(1.0, 0.0, 1.0),
+    };
+    let radius = vertex.radius_mm;
+    let center = DVec3::new(0.0, 0.0, vertex.z_mm + radius);
+    let (oc, d) = ((origin - center) * keep, direction * keep);
+    // |oc + t·d|² = R², with d no longer a unit vector.
+    let a = d.length_squared();
+    let b = oc.dot(d);
+    let c = oc.length_squared() - radius * radius;
+    let discriminant = b * b - a * c;
+    if discriminant < 0.0 || a == 0.0 {
+        return None;
+    }
+    let want_near = toward_positive_z == (radius > 0.0);
+    let root = discriminant.sqrt();
+    let t = if want_near { (-b - root) / a } else { (-b + root) / a };
+    let p = origin + direction * t;
+    Some((t, (p - center) * keep * vertex.inv_abs_radius))
+}
+
+/// The hit on the even asphere of `vertex`, with the unit normal there:
+/// Newton's method from the vertex sphere's hit on the right cap (or the
+/// vertex plane's, for a flat base or a sphere the ray misses).
+#[inline(always)]
+pub(crate) fn intersect_asphere(
+    origin: DVec3,
+    direction: DVec3,
+    vertex: &Vertex,
+    asphere: &EvenAsphere,
+    toward_positive_z: bool,
+) -> Option<(f64, DVec3)> {
+    let t_start = match vertex.radius_mm.is_finite() {
+        true => intersect_sphere(origin, direction, vertex, toward_positive_z).map(|(t, _)| t),
+        false => None,
+    }
+    .unwrap_or_else(|| vertex.plane_t(origin, direction));
+    intersect_even_asphere(origin, direction, vertex.z_mm, 1.0 / vertex.radius_mm, asphere, t_start)
+}
+
+/// The hit on the toric surface of `vertex`, with the unit normal there:
+/// Newton's method from the hit on the cylinder of its profile (the surface
+/// before its axis is bent), or on the vertex plane for a flat profile or a
+/// cylinder the ray misses.
+#[inline(always)]
+pub(crate) fn intersect_toric(
+    origin: DVec3,
+    direction: DVec3,
+    vertex: &Vertex,
+    toric: &Toric,
+    toward_positive_z: bool,
+) -> Option<(f64, DVec3)> {
+    let t_start = match vertex.radius_mm.is_finite() {
+        true => intersect_cylinder(origin, direction, vertex, toric.axis, toward_positive_z).map(|(t, _)| t),
+        false => None,
+    }
+    .unwrap_or_else(|| vertex.plane_t(origin, direction));
+    let curvature = 1.0 / vertex.radius_mm;
+    intersect_by_newton(origin, direction, vertex.z_mm, t_start, |x, y| {
+        toric.sag_and_gradient(curvature, x, y)
+    })
 }
 
 #[cfg(test)]

@@ -9,8 +9,26 @@ use lenspath::accel::BvhSettings;
 use lenspath::builtin::builtin_scene;
 use lenspath::camera::PerspectiveCamera;
 use lenspath::io::checkpoint::{read_checkpoint, write_checkpoint};
-use lenspath::render::{render, render_depth, render_from, Accumulation, Checkpoints, PixelRect, RenderSettings};
+use lenspath::render::{
+    render, render_depth, render_from, Accumulation, Checkpoints, Continuation, PixelRect, RenderSettings,
+};
 use lenspath::scene::CompiledScene;
+
+/// Continuing from `start`, nothing else given.
+fn from(start: Accumulation) -> Continuation<'static> {
+    Continuation {
+        start: Some(start),
+        ..Continuation::default()
+    }
+}
+
+/// From the start, saving through `checkpoints`.
+fn checkpointed(checkpoints: Checkpoints<'_>) -> Continuation<'_> {
+    Continuation {
+        checkpoints: Some(checkpoints),
+        ..Continuation::default()
+    }
+}
 
 fn setup() -> (CompiledScene, PerspectiveCamera) {
     let scene = builtin_scene("cornell-spheres", 0).unwrap();
@@ -48,7 +66,7 @@ fn saves(scene: &CompiledScene, camera: &PerspectiveCamera, s: &RenderSettings, 
             cancel.store(true, Ordering::SeqCst);
         }
     };
-    render_from(scene, camera, s, None, Some(checkpoints), &progress, &cancel).unwrap();
+    render_from(scene, camera, s, checkpointed(checkpoints), &progress, &cancel).unwrap();
     saved
 }
 
@@ -73,35 +91,32 @@ fn a_continued_render_is_bit_identical_to_an_uninterrupted_one() {
     );
 
     for start in every_pass.iter().step_by(3).chain([last]) {
-        let continued = render_from(
-            &scene,
-            &camera,
-            &settings(12),
-            Some(start.clone()),
-            None,
-            &|_, _| {},
-            &never,
-        )
-        .unwrap();
+        let continued = render_from(&scene, &camera, &settings(12), from(start.clone()), &|_, _| {}, &never).unwrap();
         assert_eq!(continued.image, whole.image, "continued from {} spp", start.spp_min());
         assert!(!continued.stats.cancelled);
     }
+
+    // From the state a render returns (how the viewer refines its image step by step).
+    let half = render(&scene, &camera, &settings(5), &|_, _| {}, &never).unwrap();
+    assert_eq!(half.accumulation.spp_min(), 5);
+    let stepped = render_from(
+        &scene,
+        &camera,
+        &settings(12),
+        from(half.accumulation),
+        &|_, _| {},
+        &never,
+    )
+    .unwrap();
+    assert_eq!(stepped.image, whole.image, "continued from a returned state");
+    assert_eq!(stepped.accumulation.spp_min(), 12);
 
     // Through a file, and to more samples than the first render asked for.
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("render.ckpt");
     write_checkpoint(&path, "test", every_pass.last().unwrap()).unwrap();
     let (_, from_file) = read_checkpoint(&path).unwrap();
-    let more = render_from(
-        &scene,
-        &camera,
-        &settings(20),
-        Some(from_file),
-        None,
-        &|_, _| {},
-        &never,
-    )
-    .unwrap();
+    let more = render_from(&scene, &camera, &settings(20), from(from_file), &|_, _| {}, &never).unwrap();
     let straight = render(&scene, &camera, &settings(20), &|_, _| {}, &never).unwrap();
     assert_eq!(more.image, straight.image);
     assert_eq!(
@@ -146,7 +161,7 @@ fn a_checkpoint_of_another_render_is_refused() {
     let never = AtomicBool::new(false);
     let state = saves(&scene, &camera, &settings(4), u64::MAX).pop().unwrap();
     let run = |s: RenderSettings, start: Accumulation| {
-        render_from(&scene, &camera, &s, Some(start), None, &|_, _| {}, &never)
+        render_from(&scene, &camera, &s, from(start), &|_, _| {}, &never)
             .unwrap_err()
             .to_string()
     };

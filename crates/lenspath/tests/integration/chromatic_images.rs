@@ -18,7 +18,7 @@ use lenspath::lens::chromatic::ChromaticAnalysis;
 use lenspath::lens::{LensPrescription, LensSystem, TableConvention};
 use lenspath::materials::Material;
 use lenspath::math::Rgb;
-use lenspath::render::{render, RenderSettings};
+use lenspath::render::{render, FilmResponse, RenderSettings};
 use lenspath::scene::{CompiledScene, Scene};
 use lenspath::shapes::Sphere;
 
@@ -96,7 +96,7 @@ fn shoot(scene: &CompiledScene, lens: &LensPrescription, sensor_z_mm: f64, wavel
         filter: Filter::Box,
         crop: shot.crop,
         depth: false,
-        wavelength_nm: Some(wavelength_nm as f32),
+        film: FilmResponse::radiance(Some(wavelength_nm as f32)),
         ..Default::default()
     };
     render(scene, &camera, &settings, &|_, _| {}, &AtomicBool::new(false))

@@ -15,7 +15,7 @@ use lenspath::integrator::{guiding_can_help, Integrator, IntegratorKind, PathSet
 use lenspath::lights::Light;
 use lenspath::materials::Material;
 use lenspath::math::Rgb;
-use lenspath::render::{render, render_from, render_guided_from, train_guide, PixelRect, RenderSettings};
+use lenspath::render::{render, render_from, train_guide, Continuation, PixelRect, RenderSettings};
 use lenspath::scene::{CompiledScene, Scene};
 use lenspath::shapes::Sphere;
 
@@ -180,23 +180,25 @@ fn guided_cornell_box_is_unbiased_and_deterministic() {
         every: std::time::Duration::from_secs(3600),
         save: &mut save,
     };
-    render_from(&scene, &camera, &half, None, Some(checkpoints), &|_, _| {}, &never).unwrap();
-    let continued = render_from(&scene, &camera, &guided_settings, saved, None, &|_, _| {}, &never).unwrap();
+    let checkpointed = Continuation {
+        checkpoints: Some(checkpoints),
+        ..Continuation::default()
+    };
+    render_from(&scene, &camera, &half, checkpointed, &|_, _| {}, &never).unwrap();
+    let continued = Continuation {
+        start: saved,
+        ..Continuation::default()
+    };
+    let continued = render_from(&scene, &camera, &guided_settings, continued, &|_, _| {}, &never).unwrap();
     assert_eq!(continued.image.rgb, guided_image.rgb, "continued vs uninterrupted");
     // A guide trained beforehand (as the viewer does, once for all its steps) renders the same image.
     let guide = train_guide(&scene, &camera, &guided_settings, &never).unwrap().unwrap();
     assert_eq!(guide.iterations(), 3, "7 training samples: iterations of 1, 2 and 4");
-    let with_guide = render_guided_from(
-        &scene,
-        &camera,
-        &guided_settings,
-        &guide,
-        None,
-        None,
-        &|_, _| {},
-        &never,
-    )
-    .unwrap();
+    let given = Continuation {
+        guide: Some(&guide),
+        ..Continuation::default()
+    };
+    let with_guide = render_from(&scene, &camera, &guided_settings, given, &|_, _| {}, &never).unwrap();
     assert_eq!(with_guide.image.rgb, guided_image.rgb, "a guide trained beforehand");
 }
 

@@ -14,7 +14,7 @@ use lenspath::glass::{C_LINE_NM, F_LINE_NM};
 use lenspath::integrator::Integrator;
 use lenspath::io::load_scene;
 use lenspath::materials::Material;
-use lenspath::render::{render, RenderSettings};
+use lenspath::render::{render, FilmResponse, RenderSettings};
 use lenspath::scene::Scene;
 
 /// Schott's datasheet indices of SF11 at the F and C lines: independent
@@ -189,7 +189,7 @@ fn a_prism_spreads_the_slit_where_snells_law_puts_each_wavelength() {
             filter: Filter::Box,
             crop: Some(crop),
             depth: false,
-            wavelength_nm: Some(nm as f32),
+            film: FilmResponse::radiance(Some(nm as f32)),
             ..Default::default()
         };
         let image = render(&scene, &camera, &settings, &|_, _| {}, &AtomicBool::new(false))

@@ -16,7 +16,7 @@ use lenspath::lens::{library, LensPrescription, LensSystem, BUILTIN_LENSES};
 use lenspath::lights::Light;
 use lenspath::materials::Material;
 use lenspath::math::Rgb;
-use lenspath::render::{render, RenderSettings};
+use lenspath::render::{render, FilmResponse, RenderSettings};
 use lenspath::scene::Scene;
 use lenspath::shapes::Sphere;
 
@@ -60,7 +60,7 @@ fn shoot(scene: Scene, shot: &Shot) -> Image {
         tile_size: 16,
         crop: None,
         depth: true,
-        wavelength_nm: shot.wavelength_nm,
+        film: FilmResponse::radiance(shot.wavelength_nm),
         ..Default::default()
     };
     let compiled = scene.compile(&BvhSettings::default()).unwrap();

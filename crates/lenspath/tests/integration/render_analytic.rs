@@ -32,7 +32,6 @@ fn settings(width: u32, height: u32, spp: u32, seed: u32) -> RenderSettings {
         tile_size: 16,
         crop: None,
         depth: true,
-        wavelength_nm: None,
         film: FilmResponse::Srgb,
     }
 }
@@ -142,7 +141,7 @@ fn a_monochromatic_furnace_reads_the_spectra_at_its_wavelength() {
             Material::Diffuse { reflectance: albedo },
             sky.into(),
             &RenderSettings {
-                wavelength_nm: Some(wavelength_nm),
+                film: FilmResponse::radiance(Some(wavelength_nm)),
                 ..settings(24, 24, 64, 1)
             },
         );
