@@ -131,12 +131,12 @@ def test_a_diffuse_sphere_under_a_uniform_sky_has_its_albedo(sampler: str) -> No
         (
             lambda: lenspath.render("cornell-spheres", sampler="halton"),  # type: ignore[call-overload]
             ValueError,
-            "unknown sampler 'halton'; expected one of: sobol, independent",
+            "unknown sampler 'halton'; use one of sobol, independent",
         ),
         (
             lambda: lenspath.render("cornell-spheres", integrator="bdpt"),  # type: ignore[call-overload]
             ValueError,
-            "unknown integrator 'bdpt'; expected one of: path, guided",
+            "unknown integrator 'bdpt'; use one of path, guided",
         ),
         (
             lambda: lenspath.render("cornell-spheres", threads=100_000),

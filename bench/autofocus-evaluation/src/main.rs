@@ -15,7 +15,7 @@ use clap::Parser;
 use lenspath::accel::BvhSettings;
 use lenspath::autofocus::plot::{focus_curve_svg, working_range_svg, Series};
 use lenspath::autofocus::{
-    AutofocusResult, AutofocusSettings, FocusSensor, Focuser, GroundTruth, SensorSignal, Strategy, STRATEGIES,
+    AutofocusResult, AutofocusSettings, FocusSensor, Focuser, GroundTruth, SensorSignal, Strategy,
 };
 use lenspath::builtin::builtin_scene;
 use lenspath::camera::CameraPose;
@@ -24,6 +24,7 @@ use lenspath::film::NormalizedRect;
 use lenspath::fs::{check_writable, write_text};
 use lenspath::io::{load_scene_in, ReadScope};
 use lenspath::lens::LensPrescription;
+use lenspath::names::Named;
 use lenspath::options::SceneOptions;
 use lenspath::scene::CompiledScene;
 use lenspath::sensor::SensorDescription;
@@ -444,7 +445,7 @@ fn run_strategies(
                 ..settings.clone()
             },
         )?;
-        for (name, strategy) in STRATEGIES {
+        for &(strategy, name) in Strategy::NAMED {
             if !args.strategies.is_empty() && !args.strategies.iter().any(|s| s == name) {
                 continue;
             }
@@ -507,12 +508,13 @@ fn working_range(rows: &[serde_json::Value], levels: &[f64], label: &str) -> (St
     let rows: Vec<&serde_json::Value> = rows.iter().filter(agrees).collect();
     let mut table = String::from("| scene EV (ISO 100) | patch luminance (cd/m²) | frames: median exposure |");
     let mut rule = String::from("|---|---|---|");
-    for (name, _) in STRATEGIES {
+    for name in Strategy::names() {
         table += &format!(" {name} |");
         rule += "---|";
     }
     table += &format!("\n{rule}\n");
-    let mut series: Vec<(&str, Vec<(f64, f64)>)> = STRATEGIES.iter().map(|(name, _)| (*name, Vec::new())).collect();
+    let mut series: Vec<(&str, Vec<(f64, f64)>)> =
+        Strategy::names().into_iter().map(|name| (name, Vec::new())).collect();
     for &ev in levels {
         let results: Vec<&serde_json::Value> = rows
             .iter()
@@ -590,7 +592,7 @@ fn summarize(rows: &[serde_json::Value]) -> String {
         .map(|r| r["camera_rays"].as_f64().unwrap_or(0.0))
         .collect();
     let sweep_rays = sweep_runs.iter().sum::<f64>() / sweep_runs.len().max(1) as f64;
-    for (name, _) in STRATEGIES {
+    for name in Strategy::names() {
         let results: Vec<&serde_json::Value> = rows
             .iter()
             .flat_map(|r| r["results"].as_array().into_iter().flatten())

@@ -12,6 +12,7 @@ use lenspath::film::{NormalizedRect, PixelRect};
 use lenspath::io::builtin_scene_named;
 use lenspath::io::{load_named_scene, LoadedScene};
 use lenspath::lens::LensPrescription;
+use lenspath::names::Named;
 use lenspath::options::SceneOptions;
 use lenspath::sampling::SamplerKind;
 use lenspath::scene::Scene;

@@ -18,6 +18,7 @@ mod render;
 mod view;
 
 use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand};
+use lenspath::names::Named;
 
 /// A physically based path tracer whose camera is a real lens.
 #[derive(Parser)]

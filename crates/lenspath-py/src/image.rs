@@ -13,6 +13,7 @@ use lenspath::color::srgb_to_linear;
 use lenspath::film::Image;
 use lenspath::io::exr::{self, read_exr_image, ExrImage, HeaderValue};
 use lenspath::io::image::{exr_of_image, read_image, write_image, ImageFormat, ImageHeader};
+use lenspath::names::Named;
 use numpy::ndarray::Array2;
 use numpy::IntoPyArray;
 use numpy::{
@@ -252,7 +253,7 @@ fn attributes_from_py(attributes: &Bound<'_, PyDict>) -> PyResult<BTreeMap<Strin
 #[pyfunction]
 #[pyo3(signature = (image, metric = "tenengrad"))]
 pub(crate) fn focus_measure(image: &Bound<'_, PyAny>, metric: &str) -> PyResult<f64> {
-    let measure = FocusMeasure::from_name(metric).map_err(to_py)?;
+    let measure = FocusMeasure::parse(metric).map_err(to_py)?;
     let image = image_from_py(image)?;
     let patch = Patch::new(image.width as usize, image.height as usize, &image.rgb).map_err(to_py)?;
     Ok(measure.evaluate(&patch))
@@ -261,7 +262,7 @@ pub(crate) fn focus_measure(image: &Bound<'_, PyAny>, metric: &str) -> PyResult<
 /// The focus measures' names.
 #[pyfunction]
 pub(crate) fn focus_measures() -> Vec<&'static str> {
-    lenspath::autofocus::FOCUS_MEASURES.iter().map(|(n, _)| *n).collect()
+    FocusMeasure::names()
 }
 
 /// Blurs an (H, W, 3) image with a bokeh kernel: `aperture` a shape

@@ -8,6 +8,7 @@ use lenspath::camera::Camera as CameraTrait;
 use lenspath::film::Image;
 use lenspath::film::PixelRect;
 use lenspath::integrator::IntegratorKind;
+use lenspath::names::Named;
 use lenspath::render::render as render_scene;
 use lenspath::sampling::SamplerKind;
 use lenspath::scene::CompiledScene;
@@ -32,15 +33,7 @@ pub(crate) fn rgb_array<'py>(py: Python<'py>, image: &Image) -> Bound<'py, PyArr
 
 /// The sampler called `name`, if one is named.
 pub(crate) fn sampler_kind(name: Option<&str>) -> PyResult<Option<SamplerKind>> {
-    name.map(|name| {
-        SamplerKind::from_name(name).ok_or_else(|| {
-            value_error(format!(
-                "unknown sampler '{name}'; expected one of: {}",
-                SamplerKind::NAMES.join(", ")
-            ))
-        })
-    })
-    .transpose()
+    name.map(SamplerKind::parse).transpose().map_err(to_py)
 }
 
 /// What a render of `scene` through `camera` (None: the scene's own) with
@@ -86,16 +79,7 @@ pub(crate) fn render<'py>(
     sensor: Option<&Sensor>,
     integrator: Option<&str>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let integrator = integrator
-        .map(|name| {
-            IntegratorKind::from_name(name).ok_or_else(|| {
-                value_error(format!(
-                    "unknown integrator '{name}'; expected one of: {}",
-                    IntegratorKind::NAMES.join(", ")
-                ))
-            })
-        })
-        .transpose()?;
+    let integrator = integrator.map(IntegratorKind::parse).transpose().map_err(to_py)?;
     let sampler = sampler_kind(sampler)?;
     let want_depth = match aovs.as_deref() {
         None | Some([]) => false,

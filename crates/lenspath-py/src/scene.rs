@@ -12,6 +12,7 @@ use lenspath::glass::Dispersion;
 use lenspath::io::{load_scene_in, ReadScope};
 use lenspath::lights::Light;
 use lenspath::materials::Material;
+use lenspath::names::Named;
 use lenspath::options::SceneOptions;
 use lenspath::scene::{CompiledScene, Scene as CoreScene, SceneView};
 use lenspath::shapes::{Sphere, TriangleMesh};

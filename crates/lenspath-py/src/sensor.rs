@@ -5,6 +5,7 @@
 use std::path::PathBuf;
 
 use lenspath::io::scene_file::SensorTable;
+use lenspath::names::Named;
 use lenspath::sensor::develop::develop;
 use lenspath::sensor::raw_file::write_raw;
 use lenspath::sensor::{Demosaic, Development, RawFrame as LibRawFrame, SensorDescription, ToneCurve};

@@ -49,6 +49,7 @@ pub mod lights;
 pub mod materials;
 pub mod math;
 pub mod memory;
+pub mod names;
 pub mod options;
 pub mod parallel;
 pub mod ray;

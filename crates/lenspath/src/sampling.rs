@@ -5,6 +5,8 @@
 use glam::{Vec2, Vec3};
 use std::f32::consts::{FRAC_PI_4, PI};
 
+use crate::names::Named;
+
 /// Hash of 32 bits (Wellons' "lowbias32", a well-mixed integer hash).
 #[inline]
 pub fn hash_u32(mut x: u32) -> u32 {
@@ -32,25 +34,10 @@ pub enum SamplerKind {
     Independent,
 }
 
-impl SamplerKind {
-    /// Every kind.
-    pub const ALL: [SamplerKind; 2] = [SamplerKind::Sobol, SamplerKind::Independent];
-
-    /// The names the CLI, scene files and Python use.
-    pub const NAMES: [&'static str; 2] = [SamplerKind::ALL[0].name(), SamplerKind::ALL[1].name()];
-
-    /// The kind called `name` (see [`SamplerKind::NAMES`]).
-    pub fn from_name(name: &str) -> Option<Self> {
-        SamplerKind::ALL.into_iter().find(|kind| kind.name() == name)
-    }
-
-    /// Its name (one of [`SamplerKind::NAMES`]).
-    pub const fn name(self) -> &'static str {
-        match self {
-            SamplerKind::Sobol => "sobol",
-            SamplerKind::Independent => "independent",
-        }
-    }
+impl Named for SamplerKind {
+    const WHAT: &'static str = "sampler";
+    const NAMED: &'static [(SamplerKind, &'static str)] =
+        &[(SamplerKind::Sobol, "sobol"), (SamplerKind::Independent, "independent")];
 }
 
 /// The sample stream of one pixel sample: Owen-scrambled Sobol samples

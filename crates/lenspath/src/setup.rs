@@ -28,6 +28,7 @@ use crate::integrator::{Integrator, IntegratorKind, PathSettings};
 use crate::io::exr::HeaderValue;
 use crate::io::image::ImageHeader;
 use crate::lens::{LensPrescription, LensSystem};
+use crate::names::Named;
 use crate::options::SceneOptions;
 use crate::render::{FilmResponse, RenderSettings};
 use crate::sampling::SamplerKind;
@@ -603,7 +604,7 @@ pub fn autofocus_setup(
     overrides: &AutofocusOverrides,
     pose: CameraPose,
 ) -> Result<AutofocusSetup> {
-    let measure = FocusMeasure::from_name(overrides.metric.as_deref().unwrap_or(defaults::AUTOFOCUS_METRIC))?;
+    let measure = FocusMeasure::parse(overrides.metric.as_deref().unwrap_or(defaults::AUTOFOCUS_METRIC))?;
     let strategy = Strategy::from_name(
         overrides.strategy.as_deref().unwrap_or(defaults::AUTOFOCUS_STRATEGY),
         overrides.patience.unwrap_or(defaults::AUTOFOCUS_PATIENCE),

@@ -16,6 +16,7 @@ use lenspath::integrator::IntegratorKind;
 use lenspath::io::scene_file::{SceneBase, SceneSettingsFile, SensorTable};
 use lenspath::lens::{AnalysisSettings, LensAnalysis, LensPrescription, TableConvention};
 use lenspath::lens_report::{LensReport, LensReportSettings};
+use lenspath::names::Named;
 use lenspath::options::SceneOptions;
 use lenspath::render::{check_max_depth, NormalizedRect, RenderSettings};
 use lenspath::sampling::SamplerKind;
@@ -364,7 +365,7 @@ impl Session {
     pub fn request_autofocus(&self, request: AutofocusRequest) -> Result<()> {
         let [x, y, w, h] = request.patch;
         NormalizedRect::new(x, y, w, h)?;
-        lenspath::autofocus::FocusMeasure::from_name(&request.metric)?;
+        lenspath::autofocus::FocusMeasure::parse(&request.metric)?;
         lenspath::autofocus::Strategy::from_name(&request.strategy, lenspath::defaults::AUTOFOCUS_PATIENCE)?;
         let mut state = self.lock();
         if state.autofocus.is_some() {
@@ -455,9 +456,9 @@ impl Session {
             "generation": state.generation,
             "settings": v.settings,
             "lenses": self.config.lens_names(),
-            "metrics": lenspath::autofocus::FOCUS_MEASURES.iter().map(|(n, _)| *n).collect::<Vec<_>>(),
-            "strategies": lenspath::autofocus::STRATEGIES.iter().map(|(n, _)| *n).collect::<Vec<_>>(),
-            "integrators": IntegratorKind::NAMES,
+            "metrics": lenspath::autofocus::FocusMeasure::names(),
+            "strategies": lenspath::autofocus::Strategy::names(),
+            "integrators": IntegratorKind::names(),
             "sensor_depth_mm": v.sensor_depth_mm,
             "focus_distance_m": v.focus_distance_m,
             "focus_range_mm": [v.focus_range_mm.0, v.focus_range_mm.1],
@@ -577,20 +578,8 @@ impl Config {
                 settings.light_samples
             ));
         }
-        let sampler = SamplerKind::from_name(&settings.sampler).ok_or_else(|| {
-            Error::InvalidArgument(format!(
-                "sampler must be one of {}, got '{}'",
-                SamplerKind::NAMES.join(", "),
-                settings.sampler
-            ))
-        })?;
-        let integrator = IntegratorKind::from_name(&settings.integrator).ok_or_else(|| {
-            Error::InvalidArgument(format!(
-                "integrator must be one of {}, got '{}'",
-                IntegratorKind::NAMES.join(", "),
-                settings.integrator
-            ))
-        })?;
+        let sampler = SamplerKind::parse(&settings.sampler)?;
+        let integrator = IntegratorKind::parse(&settings.integrator)?;
         let aperture = ApertureShape::parse(&settings.aperture)?;
         if let Some(n) = settings.f_number {
             if !(n > 0.0 && n.is_finite()) {

@@ -159,6 +159,7 @@ impl TraversalRay {
 
 /// Whether this CPU runs the AVX2 traversal (it needs AVX2 and FMA).
 #[cfg(target_arch = "x86_64")]
+#[inline]
 pub(super) fn cpu_has_avx2() -> bool {
     std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma")
 }

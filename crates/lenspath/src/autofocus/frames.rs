@@ -15,9 +15,10 @@ use crate::camera::FilmRadiometry;
 use crate::color::luminance;
 use crate::error::Result;
 use crate::film::{Image, PixelRect};
+use crate::names::Named;
 use crate::sampling::mix64;
 use crate::sensor::develop::develop;
-use crate::sensor::{by_name, capture, name_in, Development, RawFrame, SensorSettings, ToneCurve};
+use crate::sensor::{capture, Development, RawFrame, SensorSettings, ToneCurve};
 
 /// What contrast autofocus reads off a raw frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -32,23 +33,15 @@ pub enum SensorSignal {
     Luminance,
 }
 
-impl SensorSignal {
-    /// Every signal with its name.
-    pub const ALL: [(SensorSignal, &'static str); 2] = [
+impl Named for SensorSignal {
+    const WHAT: &'static str = "autofocus sensor signal";
+    const NAMED: &'static [(SensorSignal, &'static str)] = &[
         (SensorSignal::RawGreen, "raw-green"),
         (SensorSignal::Luminance, "luminance"),
     ];
+}
 
-    /// The signal called `name` (case-insensitive).
-    pub fn parse(name: &str) -> Result<SensorSignal> {
-        by_name(&SensorSignal::ALL, name, "autofocus sensor signal")
-    }
-
-    /// The signal's name.
-    pub fn name(self) -> &'static str {
-        name_in(&SensorSignal::ALL, self)
-    }
-
+impl SensorSignal {
     /// This signal of `frame` as a grey RGB image (three equal channels, as
     /// the focus measures take), 1 at the white level over black;
     /// `development` says how [`SensorSignal::Luminance`] demosaicks.
@@ -252,7 +245,7 @@ mod tests {
 
     #[test]
     fn signal_names_round_trip() {
-        for (signal, name) in SensorSignal::ALL {
+        for &(signal, name) in SensorSignal::NAMED {
             assert_eq!(SensorSignal::parse(name).unwrap(), signal);
             assert_eq!(signal.name(), name);
         }

@@ -8,6 +8,7 @@
 //! where the operator's whole stencil lies inside the patch.
 
 use crate::error::{Error, Result};
+use crate::names::Named;
 
 /// A linear RGB image patch, row-major, three floats per pixel.
 #[derive(Clone, Copy, Debug)]
@@ -62,33 +63,28 @@ pub enum FocusMeasure {
     Vollath,
 }
 
-/// Every measure with its command-line name.
-pub const FOCUS_MEASURES: [(&str, FocusMeasure); 7] = [
-    ("variance", FocusMeasure::Variance),
-    ("normalized-variance", FocusMeasure::NormalizedVariance),
-    ("sml", FocusMeasure::SumModifiedLaplacian { step: 1 }),
-    ("tenengrad", FocusMeasure::Tenengrad),
-    ("brenner", FocusMeasure::Brenner),
-    ("laplacian-energy", FocusMeasure::EnergyOfLaplacian),
-    ("vollath", FocusMeasure::Vollath),
-];
+impl Named for FocusMeasure {
+    const WHAT: &'static str = "focus measure";
+    const NAMED: &'static [(FocusMeasure, &'static str)] = &[
+        (FocusMeasure::Variance, "variance"),
+        (FocusMeasure::NormalizedVariance, "normalized-variance"),
+        (FocusMeasure::SumModifiedLaplacian { step: 1 }, "sml"),
+        (FocusMeasure::Tenengrad, "tenengrad"),
+        (FocusMeasure::Brenner, "brenner"),
+        (FocusMeasure::EnergyOfLaplacian, "laplacian-energy"),
+        (FocusMeasure::Vollath, "vollath"),
+    ];
+
+    /// Its name, whatever the sum-modified Laplacian's step.
+    fn name(self) -> &'static str {
+        match self {
+            FocusMeasure::SumModifiedLaplacian { .. } => "sml",
+            m => Self::NAMED.iter().find(|(n, _)| *n == m).map_or("", |(_, name)| name),
+        }
+    }
+}
 
 impl FocusMeasure {
-    /// The measure called `name` (see [`FOCUS_MEASURES`]).
-    pub fn from_name(name: &str) -> Result<FocusMeasure> {
-        FOCUS_MEASURES
-            .iter()
-            .find(|(n, _)| *n == name)
-            .map(|(_, m)| *m)
-            .ok_or_else(|| {
-                let names: Vec<&str> = FOCUS_MEASURES.iter().map(|(n, _)| *n).collect();
-                Error::InvalidArgument(format!(
-                    "unknown focus measure '{name}'; use one of {}",
-                    names.join(", ")
-                ))
-            })
-    }
-
     /// The measure's value on `patch`; 0 for a patch too small for its stencil.
     pub fn evaluate(&self, patch: &Patch) -> f64 {
         self.evaluate_groups(std::slice::from_ref(patch))
@@ -379,9 +375,9 @@ mod tests {
         let images: Vec<Vec<f32>> = std::iter::once(sharp.clone())
             .chain([0.5, 1.0, 1.5, 2.5, 4.0].iter().map(|&s| blur(&sharp, 48, s)))
             .collect();
-        let measures = FOCUS_MEASURES
+        let measures = FocusMeasure::NAMED
             .iter()
-            .map(|(n, m)| (n.to_string(), *m))
+            .map(|(m, n)| (n.to_string(), *m))
             .chain([("sml step 2".to_string(), FocusMeasure::SumModifiedLaplacian { step: 2 })]);
         for (name, measure) in measures {
             let values: Vec<f64> = images
@@ -436,7 +432,7 @@ mod tests {
         fn patch(v: &[f32]) -> Patch<'_> {
             Patch::new(48, 48, v).unwrap()
         }
-        for (name, m) in FOCUS_MEASURES {
+        for &(m, name) in FocusMeasure::NAMED {
             let truth = m.evaluate(&patch(&clean));
             let single = m.evaluate(&patch(&a));
             let pair = m.evaluate_pair(&patch(&a), &patch(&b));
@@ -467,7 +463,7 @@ mod tests {
         fn patch(v: &[f32]) -> Patch<'_> {
             Patch::new(48, 48, v).unwrap()
         }
-        for (name, m) in FOCUS_MEASURES {
+        for &(m, name) in FocusMeasure::NAMED {
             if matches!(m, FocusMeasure::SumModifiedLaplacian { .. }) {
                 continue;
             }
@@ -520,7 +516,7 @@ mod tests {
             .collect();
         let patches: Vec<Patch> = groups.iter().map(|g| Patch::new(48, 48, g).unwrap()).collect();
         let mut bilinear = 0;
-        for (name, m) in FOCUS_MEASURES {
+        for &(m, name) in FocusMeasure::NAMED {
             if !m.is_bilinear() {
                 continue;
             }
@@ -558,10 +554,10 @@ mod tests {
     #[test]
     fn unknown_measure_names_the_known_ones() {
         assert_eq!(
-            FocusMeasure::from_name("sml").unwrap(),
+            FocusMeasure::parse("sml").unwrap(),
             FocusMeasure::SumModifiedLaplacian { step: 1 }
         );
-        let err = FocusMeasure::from_name("sharpness").unwrap_err().to_string();
+        let err = FocusMeasure::parse("sharpness").unwrap_err().to_string();
         assert!(
             err.contains("unknown focus measure 'sharpness'") && err.contains("tenengrad"),
             "{err}"

@@ -14,8 +14,8 @@ mod signal;
 mod truth;
 
 pub use frames::{FocusSensor, SensorSignal};
-pub use measures::{FocusMeasure, Patch, FOCUS_MEASURES};
+pub use measures::{FocusMeasure, Patch};
 pub use range::RangeFocus;
-pub use search::{AutofocusResult, AutofocusSettings, Evaluation, Focuser, Strategy, STRATEGIES};
+pub use search::{AutofocusResult, AutofocusSettings, Evaluation, Focuser, Strategy};
 pub use signal::Detail;
 pub use truth::{GroundTruth, TRUTH_MAX_SPP_FACTOR, TRUTH_SEED_SPREAD_DOF};

@@ -23,6 +23,7 @@ use crate::film::Filter;
 use crate::film::PixelRect;
 use crate::integrator::Integrator;
 use crate::lens::{AnalysisSettings, LensAnalysis, LensSystem};
+use crate::names::Named;
 use crate::render::{render, FilmResponse, RenderSettings};
 use crate::sampling::SamplerKind;
 use crate::scene::CompiledScene;
@@ -91,35 +92,23 @@ pub enum Strategy {
     Depth,
 }
 
-/// Every strategy with its command-line name.
-pub const STRATEGIES: [(&str, Strategy); 5] = [
-    ("sweep", Strategy::Sweep),
-    (
-        "early-exit",
-        Strategy::EarlyExit {
-            patience: crate::defaults::AUTOFOCUS_PATIENCE,
-        },
-    ),
-    ("fast", Strategy::Fast),
-    ("rangefinder", Strategy::Rangefinder),
-    ("depth", Strategy::Depth),
-];
+impl Named for Strategy {
+    const WHAT: &'static str = "autofocus strategy";
+    const NAMED: &'static [(Strategy, &'static str)] = &[
+        (Strategy::Sweep, "sweep"),
+        (
+            Strategy::EarlyExit {
+                patience: crate::defaults::AUTOFOCUS_PATIENCE,
+            },
+            "early-exit",
+        ),
+        (Strategy::Fast, "fast"),
+        (Strategy::Rangefinder, "rangefinder"),
+        (Strategy::Depth, "depth"),
+    ];
 
-impl Strategy {
-    /// The strategy called `name` (see [`STRATEGIES`]); `patience` sets early-exit's.
-    pub fn from_name(name: &str, patience: usize) -> Result<Strategy> {
-        match STRATEGIES.iter().find(|(n, _)| *n == name) {
-            Some((_, Strategy::EarlyExit { .. })) => Ok(Strategy::EarlyExit { patience }),
-            Some((_, s)) => Ok(*s),
-            None => Err(Error::InvalidArgument(format!(
-                "unknown autofocus strategy '{name}'; use one of {}",
-                STRATEGIES.map(|(n, _)| n).join(", ")
-            ))),
-        }
-    }
-
-    /// The command-line name.
-    pub fn name(&self) -> &'static str {
+    /// Its name, whatever early-exit's patience.
+    fn name(self) -> &'static str {
         match self {
             Strategy::Sweep => "sweep",
             Strategy::EarlyExit { .. } => "early-exit",
@@ -127,6 +116,16 @@ impl Strategy {
             Strategy::Rangefinder => "rangefinder",
             Strategy::Depth => "depth",
         }
+    }
+}
+
+impl Strategy {
+    /// The strategy called `name` ([`Named::parse`]), early-exit's patience `patience`.
+    pub fn from_name(name: &str, patience: usize) -> Result<Strategy> {
+        Ok(match Strategy::parse(name)? {
+            Strategy::EarlyExit { .. } => Strategy::EarlyExit { patience },
+            s => s,
+        })
     }
 }
 
@@ -746,7 +745,7 @@ mod tests {
 
     #[test]
     pub(super) fn strategy_names_round_trip() {
-        for (name, s) in STRATEGIES {
+        for &(s, name) in Strategy::NAMED {
             assert_eq!(Strategy::from_name(name, 12).unwrap(), s);
             assert_eq!(s.name(), name);
         }

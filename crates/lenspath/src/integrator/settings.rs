@@ -2,6 +2,7 @@
 //! samples, the guided path tracer's training, and their names.
 
 use super::guided::guiding_can_help;
+use crate::names::Named;
 use crate::scene::CompiledScene;
 
 /// How far and how carefully paths are traced.
@@ -52,26 +53,10 @@ pub enum IntegratorKind {
     Guided,
 }
 
-impl IntegratorKind {
-    /// Every kind's name, as every front end spells it.
-    pub const NAMES: [&'static str; 2] = ["path", "guided"];
-
-    /// The kind called `name` ([`IntegratorKind::NAMES`]).
-    pub fn from_name(name: &str) -> Option<Self> {
-        match name {
-            "path" => Some(IntegratorKind::Path),
-            "guided" => Some(IntegratorKind::Guided),
-            _ => None,
-        }
-    }
-
-    /// Its name in [`IntegratorKind::NAMES`].
-    pub fn name(self) -> &'static str {
-        match self {
-            IntegratorKind::Path => "path",
-            IntegratorKind::Guided => "guided",
-        }
-    }
+impl Named for IntegratorKind {
+    const WHAT: &'static str = "integrator";
+    const NAMED: &'static [(IntegratorKind, &'static str)] =
+        &[(IntegratorKind::Path, "path"), (IntegratorKind::Guided, "guided")];
 }
 
 impl Integrator {

@@ -26,6 +26,7 @@ use crate::integrator::IntegratorKind;
 use crate::lights::Light;
 use crate::materials::Material;
 use crate::math::Rgb;
+use crate::names::Named;
 use crate::sampling::SamplerKind;
 use crate::scene::{Scene, SceneView};
 use crate::sensor::{Cfa, Demosaic, SensorDescription, ToneCurve, WhiteBalance};
@@ -491,21 +492,11 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
         options.light_samples = i.light_samples.or(options.light_samples);
         options.seed = i.seed.or(options.seed);
         if let Some(name) = &i.kind {
-            let kind = IntegratorKind::from_name(name).ok_or_else(|| {
-                fail(format!(
-                    "[integrator] type must be one of {}, got '{name}'",
-                    IntegratorKind::NAMES.join(", ")
-                ))
-            })?;
+            let kind = IntegratorKind::parse(name).map_err(|e| fail(format!("[integrator] type: {e}")))?;
             options.integrator = Some(kind);
         }
         if let Some(name) = &i.sampler {
-            let kind = SamplerKind::from_name(name).ok_or_else(|| {
-                fail(format!(
-                    "[integrator] sampler must be one of {}, got '{name}'",
-                    SamplerKind::NAMES.join(", ")
-                ))
-            })?;
+            let kind = SamplerKind::parse(name).map_err(|e| fail(format!("[integrator] sampler: {e}")))?;
             options.sampler = Some(kind);
         }
     }

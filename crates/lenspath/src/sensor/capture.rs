@@ -10,6 +10,7 @@ use rayon::prelude::*;
 use super::{Cfa, SensorSettings};
 use crate::camera::{Camera, FilmRadiometry};
 use crate::film::Image;
+use crate::names::Named;
 use crate::sampling::mix64;
 use crate::{Error, Result};
 
@@ -174,7 +175,7 @@ fn phase(cfa: Cfa, origin: (u32, u32)) -> Cfa {
     let at = |dx, dy| cfa.channel(origin.0 + dx, origin.1 + dy);
     let block = [at(0, 0), at(1, 0), at(0, 1), at(1, 1)];
     // Every pattern's block is its own (mono's is all green).
-    Cfa::ALL
+    Cfa::NAMED
         .iter()
         .map(|(c, _)| *c)
         .find(|c| c.block() == block)

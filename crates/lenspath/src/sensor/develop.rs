@@ -20,10 +20,10 @@
 use glam::{DMat3, DVec3, Mat3, Vec3};
 use rayon::prelude::*;
 
-use super::{by_name, name_in, Cfa, RawFrame};
+use super::{Cfa, RawFrame};
 use crate::film::Image;
+use crate::names::Named;
 use crate::spectrum::cie;
-use crate::Result;
 
 /// How the mosaic's missing channels are filled in.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -39,23 +39,13 @@ pub enum Demosaic {
     MalvarHeCutler,
 }
 
-impl Demosaic {
-    /// Every method with its name.
-    pub const ALL: [(Demosaic, &'static str); 2] =
-        [(Demosaic::Bilinear, "bilinear"), (Demosaic::MalvarHeCutler, "mhc")];
-
-    /// The method called `name` (case-insensitive; `malvar` is `mhc`).
-    pub fn parse(name: &str) -> Result<Demosaic> {
-        if name.eq_ignore_ascii_case("malvar") {
-            return Ok(Demosaic::MalvarHeCutler);
-        }
-        by_name(&Demosaic::ALL, name, "demosaicking method")
-    }
-
-    /// The method's name.
-    pub fn name(self) -> &'static str {
-        name_in(&Demosaic::ALL, self)
-    }
+impl Named for Demosaic {
+    const WHAT: &'static str = "demosaicking method";
+    const NAMED: &'static [(Demosaic, &'static str)] = &[
+        (Demosaic::Bilinear, "bilinear"),
+        (Demosaic::MalvarHeCutler, "mhc"),
+        (Demosaic::MalvarHeCutler, "malvar"),
+    ];
 }
 
 /// The curve from linear sRGB to the developed image's values.
@@ -72,20 +62,12 @@ pub enum ToneCurve {
     Filmic,
 }
 
+impl Named for ToneCurve {
+    const WHAT: &'static str = "tone curve";
+    const NAMED: &'static [(ToneCurve, &'static str)] = &[(ToneCurve::Linear, "linear"), (ToneCurve::Filmic, "filmic")];
+}
+
 impl ToneCurve {
-    /// Every curve with its name.
-    pub const ALL: [(ToneCurve, &'static str); 2] = [(ToneCurve::Linear, "linear"), (ToneCurve::Filmic, "filmic")];
-
-    /// The curve called `name` (case-insensitive).
-    pub fn parse(name: &str) -> Result<ToneCurve> {
-        by_name(&ToneCurve::ALL, name, "tone curve")
-    }
-
-    /// The curve's name.
-    pub fn name(self) -> &'static str {
-        name_in(&ToneCurve::ALL, self)
-    }
-
     /// The curve at linear value `x`.
     #[inline]
     pub fn apply(self, x: f32) -> f32 {

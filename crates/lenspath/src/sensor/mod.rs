@@ -41,6 +41,7 @@ pub use white_balance::WhiteBalance;
 
 use crate::camera::FilmRadiometry;
 use crate::film::Image;
+use crate::names::Named;
 use crate::spectrum::cie;
 use crate::{Error, Result};
 
@@ -65,26 +66,18 @@ pub enum Cfa {
     Mono,
 }
 
-impl Cfa {
-    /// Every pattern with its name.
-    pub const ALL: [(Cfa, &'static str); 5] = [
+impl Named for Cfa {
+    const WHAT: &'static str = "colour filter array";
+    const NAMED: &'static [(Cfa, &'static str)] = &[
         (Cfa::Rggb, "rggb"),
         (Cfa::Bggr, "bggr"),
         (Cfa::Grbg, "grbg"),
         (Cfa::Gbrg, "gbrg"),
         (Cfa::Mono, "mono"),
     ];
+}
 
-    /// The pattern called `name` (case-insensitive).
-    pub fn parse(name: &str) -> Result<Cfa> {
-        by_name(&Cfa::ALL, name, "colour filter array")
-    }
-
-    /// The pattern's name.
-    pub fn name(self) -> &'static str {
-        name_in(&Cfa::ALL, self)
-    }
-
+impl Cfa {
     /// The channels (0 red, 1 green, 2 blue) of the 2 × 2 block, row by row.
     pub fn block(self) -> [usize; 4] {
         match self {
@@ -474,23 +467,6 @@ impl SensorDescription {
         sensor.validate()?;
         Ok(sensor)
     }
-}
-
-/// The choice called `name` (case-insensitive) in `all`, a table of choices
-/// and their names; an error names `what` and lists the names.
-pub(crate) fn by_name<T: Copy>(all: &[(T, &'static str)], name: &str, what: &str) -> Result<T> {
-    all.iter()
-        .find(|(_, n)| n.eq_ignore_ascii_case(name))
-        .map(|(t, _)| *t)
-        .ok_or_else(|| {
-            let known: Vec<&str> = all.iter().map(|(_, n)| *n).collect();
-            Error::InvalidArgument(format!("unknown {what} '{name}' (known: {})", known.join(", ")))
-        })
-}
-
-/// `t`'s name in `all`, a table of choices and their names.
-pub(crate) fn name_in<T: PartialEq>(all: &[(T, &'static str)], t: T) -> &'static str {
-    all.iter().find(|(x, _)| *x == t).map_or("", |(_, n)| n)
 }
 
 /// Why a sensor needs the realistic camera (the ideal ones have no optics
