@@ -14,11 +14,13 @@ pub trait Named: Copy + PartialEq + 'static {
     /// Every value with its name, in the order front ends list them.
     const NAMED: &'static [(Self, &'static str)];
 
-    /// Its name.
+    /// Its name: its variant's in [`Named::NAMED`], whatever the variant's
+    /// fields hold (a strategy's patience, a measure's step).
     fn name(self) -> &'static str {
+        let variant = std::mem::discriminant(&self);
         Self::NAMED
             .iter()
-            .find(|(value, _)| *value == self)
+            .find(|(value, _)| std::mem::discriminant(value) == variant)
             .map_or("", |(_, name)| name)
     }
 

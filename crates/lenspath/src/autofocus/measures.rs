@@ -74,14 +74,6 @@ impl Named for FocusMeasure {
         (FocusMeasure::EnergyOfLaplacian, "laplacian-energy"),
         (FocusMeasure::Vollath, "vollath"),
     ];
-
-    /// Its name, whatever the sum-modified Laplacian's step.
-    fn name(self) -> &'static str {
-        match self {
-            FocusMeasure::SumModifiedLaplacian { .. } => "sml",
-            m => Self::NAMED.iter().find(|(n, _)| *n == m).map_or("", |(_, name)| name),
-        }
-    }
 }
 
 impl FocusMeasure {

@@ -106,17 +106,6 @@ impl Named for Strategy {
         (Strategy::Rangefinder, "rangefinder"),
         (Strategy::Depth, "depth"),
     ];
-
-    /// Its name, whatever early-exit's patience.
-    fn name(self) -> &'static str {
-        match self {
-            Strategy::Sweep => "sweep",
-            Strategy::EarlyExit { .. } => "early-exit",
-            Strategy::Fast => "fast",
-            Strategy::Rangefinder => "rangefinder",
-            Strategy::Depth => "depth",
-        }
-    }
 }
 
 impl Strategy {
@@ -748,6 +737,11 @@ mod tests {
         for &(s, name) in Strategy::NAMED {
             assert_eq!(Strategy::from_name(name, 12).unwrap(), s);
             assert_eq!(s.name(), name);
+            assert_eq!(
+                Strategy::from_name(name, 3).unwrap().name(),
+                name,
+                "whatever the patience"
+            );
         }
         let err = Strategy::from_name("phase", 12).unwrap_err().to_string();
         assert!(
