@@ -45,17 +45,31 @@ def render(binary: str, scene: str, res: tuple[int, int], spp: int, integrator: 
     args = [binary, "render", str(REPO / "scenes" / f"{scene}.toml"), "--res", f"{res[0]}x{res[1]}"]
     args += ["--spp", str(spp), "--integrator", integrator, "--out", str(out), *extra]
     start = time.perf_counter()
-    subprocess.run(args, check=True, capture_output=True)
+    run = subprocess.run(args, capture_output=True, text=True)
+    if run.returncode != 0:
+        sys.exit(f"{' '.join(args)} failed ({run.returncode}):\n{run.stderr}")
     return time.perf_counter() - start
 
 
 def spp_in(binary: str, scene: str, res: tuple[int, int], integrator: str, seconds: float, work: Path) -> int:
-    """The samples per pixel `integrator` renders in `seconds`, from a line through two timings."""
+    """The samples per pixel `integrator` renders in `seconds`, from a line through two timings.
+
+    Each timing is the faster of two runs (a loaded machine only ever adds time). When the two
+    sample counts time within noise of each other (tiny images), the slope is no measure of the
+    cost of a sample: the dearer run's time over its samples bounds it from above instead, which
+    keeps the count within what the command accepts."""
     low, high = 4, 16
-    t_low = render(binary, scene, res, low, integrator, work / "t.exr")
-    t_high = render(binary, scene, res, high, integrator, work / "t.exr")
-    per_spp = max(t_high - t_low, 1e-6) / (high - low)
-    return max(1, int((seconds - (t_low - low * per_spp)) / per_spp))
+
+    def timed(spp: int) -> float:
+        return min(render(binary, scene, res, spp, integrator, work / "t.exr") for _ in range(2))
+
+    t_low, t_high = timed(low), timed(high)
+    per_spp = (t_high - t_low) / (high - low)
+    if per_spp < 0.1 * t_high / high:
+        per_spp, overhead = t_high / high, 0.0
+    else:
+        overhead = t_low - low * per_spp
+    return int(np.clip((seconds - overhead) / per_spp, 1, lenspath.MAX_SAMPLES_PER_PIXEL))
 
 
 def signed(diff: np.ndarray) -> np.ndarray:

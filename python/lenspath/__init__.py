@@ -21,6 +21,7 @@ import numpy.typing as npt
 
 from . import _core, sensor
 from ._core import (
+    MAX_SAMPLES_PER_PIXEL,
     AutofocusResult,
     Camera,
     Emission,
@@ -50,6 +51,7 @@ from ._core import (
 __version__: str = _core.__version__
 
 __all__ = [
+    "MAX_SAMPLES_PER_PIXEL",
     "AutofocusResult",
     "Camera",
     "Emission",

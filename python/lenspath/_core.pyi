@@ -15,7 +15,10 @@ import numpy as np
 import numpy.typing as npt
 
 __version__: str
+#: The most samples per pixel a render takes.
+MAX_SAMPLES_PER_PIXEL: int
 __all__ = [
+    "MAX_SAMPLES_PER_PIXEL",
     "Emission",
     "LenspathError",
     "SceneError",
@@ -608,9 +611,10 @@ def write_exr(
     ``data_origin`` in it (default (0, 0)). Attributes are written in name order, so the same input gives the
     same bytes."""
 
-def focus_measure(image: npt.ArrayLike, metric: str = "tenengrad") -> float:
+def focus_measure(image: npt.ArrayLike, metric: str | None = None) -> float:
     """A focus measure of an image (RGB or grey, as ``write`` takes): ``focus_measures()`` lists them
-    (variance, normalized-variance, sml, tenengrad, brenner, laplacian-energy, vollath)."""
+    (variance, normalized-variance, sml, tenengrad, brenner, laplacian-energy, vollath); ``None``,
+    the autofocus default (``defaults()["autofocus_metric"]``)."""
 
 def focus_measures() -> list[str]:
     """The focus measures' names."""

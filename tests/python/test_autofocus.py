@@ -28,7 +28,7 @@ def test_same_settings_give_the_clis_answer(cli, strategy: str) -> None:
     camera = lenspath.Camera.realistic("dgauss50", f_number=2.8)
     ours = lenspath.autofocus("cornell-spheres", NEAR_SPHERE, camera, strategy=strategy, spp=4, resolution=(160, 120))
     assert ours.strategy == theirs["strategy"] == strategy
-    assert ours.sensor_depth_mm == theirs["sensor_position_mm"]
+    assert ours.sensor_depth_mm == theirs["sensor_depth_mm"]
     assert ours.focus_distance == theirs["focus_distance"]
     assert ours.camera_rays == theirs["camera_rays"]
     assert ours.evaluations.shape == (theirs["evaluations"], 2)
@@ -72,7 +72,7 @@ def test_through_a_sensor_the_cli_and_python_focus_on_the_same_frames(cli, signa
     ours = lenspath.autofocus(
         "cornell-spheres", NEAR_SPHERE, spp=4, resolution=(160, 120), sensor=dim, sensor_signal=signal
     )
-    assert ours.sensor_depth_mm == theirs["sensor_position_mm"]
+    assert ours.sensor_depth_mm == theirs["sensor_depth_mm"]
     assert (ours.exposure_time_s, ours.iso) == (theirs["exposure_time_s"], theirs["iso"])
     assert ours.exposure_time_s == pytest.approx(1 / 30)
     assert ours.iso > 55

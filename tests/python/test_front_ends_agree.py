@@ -177,6 +177,11 @@ def test_the_defaults_are_the_librarys() -> None:
     assert d["resolution"] == (640, 480) and d["sampler"] == "sobol" and d["lens"] == "dgauss50"
     assert (d["integrator"], d["guide_training_spp"]) == ("path", 15)
     assert (d["autofocus_spp"], d["autofocus_max_depth"], d["autofocus_patience"]) == (16, 8, 12)
+    assert (d["autofocus_metric"], d["autofocus_strategy"], d["autofocus_sensor_signal"]) == (
+        "tenengrad",
+        "fast",
+        "raw-green",
+    )
 
 
 #: A sensor set in every front end's spelling: the scene file's `[sensor]` keys

@@ -239,7 +239,7 @@ def test_click_autofocuses_where_the_cli_does(chromium, viewer: Viewer, cli: Pat
         capture_output=True,
         text=True,
     )
-    assert json.loads(out.stdout)["sensor_position_mm"] == viewer_sensor_mm
+    assert json.loads(out.stdout)["sensor_depth_mm"] == viewer_sensor_mm
     assert page.errors == []
 
 

@@ -15,7 +15,7 @@ use clap::Parser;
 use lenspath::accel::BvhSettings;
 use lenspath::autofocus::plot::{focus_curve_svg, working_range_svg, Series};
 use lenspath::autofocus::{
-    AutofocusResult, AutofocusSettings, FocusSensor, Focuser, GroundTruth, SensorSignal, Strategy,
+    AutofocusResult, AutofocusSettings, FocusMeasure, FocusSensor, Focuser, GroundTruth, SensorSignal, Strategy,
 };
 use lenspath::builtin::builtin_scene;
 use lenspath::camera::CameraPose;
@@ -40,7 +40,7 @@ struct Args {
     #[arg(long, value_parser = parse_resolution)]
     res: Option<(u32, u32)>,
     /// Focus measure: variance, normalized-variance, sml, tenengrad, brenner, laplacian-energy, vollath.
-    #[arg(long, default_value = defaults::AUTOFOCUS_METRIC)]
+    #[arg(long, default_value = FocusMeasure::default().name())]
     metric: String,
     /// early-exit: stop after this many steps without a new best.
     #[arg(long, default_value_t = defaults::AUTOFOCUS_PATIENCE)]
@@ -91,7 +91,7 @@ struct Args {
     #[arg(long, value_name = "ISO")]
     max_iso: Option<f64>,
     /// With --light-levels: what autofocus reads of the frames, raw-green or luminance.
-    #[arg(long, value_name = "SIGNAL", default_value = defaults::AUTOFOCUS_SENSOR_SIGNAL)]
+    #[arg(long, value_name = "SIGNAL", default_value = SensorSignal::default().name())]
     af_signal: String,
     /// Reuse the ground truths of an earlier --evaluate-json for the patches
     /// it has with the same place, metric, samples and image size (the truth
@@ -124,17 +124,17 @@ fn main() -> ExitCode {
 }
 
 /// The patch renders the flags ask for.
-fn overrides(args: &Args) -> AutofocusOverrides {
-    AutofocusOverrides {
+fn overrides(args: &Args) -> Result<AutofocusOverrides> {
+    Ok(AutofocusOverrides {
         spp: Some(args.spp),
         max_depth: Some(args.max_depth),
         seed: Some(args.seed),
         threads: args.threads,
-        metric: Some(args.metric.clone()),
+        metric: Some(FocusMeasure::parse(&args.metric)?),
         patience: Some(args.patience),
-        sensor_signal: Some(args.af_signal.clone()),
+        sensor_signal: Some(SensorSignal::parse(&args.af_signal)?),
         ..AutofocusOverrides::default()
-    }
+    })
 }
 
 /// Luminance of a scene at `ev` (exposure value at ISO 100), cd/m²: the
@@ -327,16 +327,17 @@ fn evaluate(args: &Args) -> Result<()> {
                 width: p[2],
                 height: p[3],
             };
-            let settings = autofocus_setup(lens.clone(), (width, height), patch, &overrides(args), view.pose)?.settings;
+            let settings =
+                autofocus_setup(lens.clone(), (width, height), patch, &overrides(args)?, view.pose)?.settings;
             let mut focuser = Focuser::new(&compiled, view.pose, settings.clone())?;
             let truth = match earlier_truths.as_ref().and_then(|t| t.get(&id, p, args.spp)) {
                 Some(truth) => truth,
                 None => focuser.ground_truth()?,
             };
-            let dof = focuser.depth_of_focus_mm(truth.sensor_z_mm);
+            let dof = focuser.depth_of_focus_mm(truth.sensor_depth_mm);
             if !args.light_levels.is_empty() {
                 // The patch's luminance per scene unit of emission, from its sharp image.
-                let relative = focuser.patch_luminance(truth.sensor_z_mm)?;
+                let relative = focuser.patch_luminance(truth.sensor_depth_mm)?;
                 for &ev in &args.light_levels {
                     let white_luminance_cd_m2 = luminance_at_ev(ev) / relative;
                     let sensor = SensorDescription {
@@ -377,12 +378,12 @@ fn evaluate(args: &Args) -> Result<()> {
                     .map(|(_, r)| Series {
                         label: r.strategy,
                         points: &r.evaluations,
-                        chosen_mm: Some(r.sensor_z_mm),
+                        chosen_mm: Some(r.sensor_depth_mm),
                         line: r.strategy == "sweep",
                     })
                     .collect();
                 let title = format!("{id} ({}, {} spp)", args.metric, args.spp);
-                let svg = focus_curve_svg(&title, &series, Some(truth.sensor_z_mm));
+                let svg = focus_curve_svg(&title, &series, Some(truth.sensor_depth_mm));
                 write_text(&dir.join(format!("{}-{}.svg", scene_spec.name, k + 1)), &svg)?;
             }
             rows.push(result_row(&id, p, &truth, dof, &results));
@@ -478,8 +479,8 @@ fn result_row(
         "results": results.iter().map(|(seed, r)| json!({
             "strategy": r.strategy,
             "seed": seed,
-            "sensor_position_mm": r.sensor_z_mm,
-            "error_dof": (r.sensor_z_mm - truth.sensor_z_mm) / dof,
+            "sensor_depth_mm": r.sensor_depth_mm,
+            "error_dof": (r.sensor_depth_mm - truth.sensor_depth_mm) / dof,
             "evaluations": r.evaluations.len(),
             "patch_renders": r.patch_renders(),
             "light_fields": r.light_fields,
@@ -556,10 +557,14 @@ fn working_range(rows: &[serde_json::Value], levels: &[f64], label: &str) -> (St
 
 /// One patch's line of the evaluation's progress: its truth and each run's error.
 fn row_text(id: &str, truth: &GroundTruth, dof: f64, results: &[(u32, AutofocusResult)]) -> String {
-    let offset = |z: Option<f64>| z.map_or("none".into(), |z| format!("{:+.2} DoF", (z - truth.sensor_z_mm) / dof));
+    let offset = |z: Option<f64>| {
+        z.map_or("none".into(), |z| {
+            format!("{:+.2} DoF", (z - truth.sensor_depth_mm) / dof)
+        })
+    };
     let mut line = format!(
         "{id:<24} truth {:.4} mm (seed spread {:.2} DoF, {} spp; depth conjugate {}, lens best focus {})",
-        truth.sensor_z_mm,
+        truth.sensor_depth_mm,
         truth.seed_spread_dof,
         truth.spp,
         offset(truth.depth_conjugate_z_mm),
@@ -569,7 +574,7 @@ fn row_text(id: &str, truth: &GroundTruth, dof: f64, results: &[(u32, AutofocusR
         line += &format!(
             " | {} (seed {seed}) {:+.2} DoF {} renders",
             r.strategy,
-            (r.sensor_z_mm - truth.sensor_z_mm) / dof,
+            (r.sensor_depth_mm - truth.sensor_depth_mm) / dof,
             r.patch_renders()
         );
         if r.light_fields > 0 {

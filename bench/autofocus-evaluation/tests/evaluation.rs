@@ -61,13 +61,13 @@ fn evaluate_with_truth(dir: &Path, truth: serde_json::Value, extra: &[&str]) -> 
 fn autofocus_evaluation_reuses_settled_truths_only_and_runs_several_seeds() {
     let dir = tempfile::tempdir().unwrap();
     let truth = |spread: f64, spp: u32| {
-        serde_json::json!({"sensor_z_mm": 55.5, "seed_spread_dof": spread, "spp": spp,
+        serde_json::json!({"sensor_depth_mm": 55.5, "seed_spread_dof": spread, "spp": spp,
                            "depth_conjugate_z_mm": null, "lens_best_focus_z_mm": null})
     };
     // Seeds that agreed: kept as it is, however wrong.
     let settled = evaluate_with_truth(dir.path(), truth(0.1, 8), &["--seeds", "3"]);
     let patch = &settled["patches"][0];
-    assert_eq!(patch["truth"]["sensor_z_mm"], 55.5);
+    assert_eq!(patch["truth"]["sensor_depth_mm"], 55.5);
     let runs = |name: &str| -> Vec<u64> {
         patch["results"]
             .as_array()
@@ -83,6 +83,6 @@ fn autofocus_evaluation_reuses_settled_truths_only_and_runs_several_seeds() {
     // Seeds that disagreed with fewer samples than now allowed: computed again.
     let unsettled = evaluate_with_truth(dir.path(), truth(3.0, 8), &[]);
     let recomputed = &unsettled["patches"][0]["truth"];
-    assert_ne!(recomputed["sensor_z_mm"], 55.5);
+    assert_ne!(recomputed["sensor_depth_mm"], 55.5);
     assert!(recomputed["seed_spread_dof"].as_f64().unwrap() < 3.0);
 }

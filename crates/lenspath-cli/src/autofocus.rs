@@ -8,18 +8,19 @@ use std::sync::atomic::AtomicBool;
 use clap::Args;
 use lenspath::accel::BvhSettings;
 use lenspath::autofocus::plot::{focus_curve_svg, Series};
-use lenspath::autofocus::{AutofocusResult, Focuser, Strategy};
+use lenspath::autofocus::{AutofocusResult, FocusMeasure, Focuser, SensorSignal, Strategy};
 use lenspath::camera::{LensFocus, RealisticCameraSettings};
 use lenspath::defaults;
 use lenspath::film::NormalizedRect;
 use lenspath::fs::{check_writable, write_text};
 use lenspath::io::image::{check_output_path, write_image_with_header};
+use lenspath::names::Named;
 use lenspath::render::{render, RenderSettings};
 use lenspath::setup::{resolve_autofocus, AutofocusOverrides, CameraSettings, RenderSetup};
 use lenspath::{Error, Result};
 use serde_json::json;
 
-use crate::flags::{parse_patch, parse_resolution, LensFlags, Resolution, SceneArgs, SensorFlags};
+use crate::flags::{named, parse_patch, parse_resolution, LensFlags, Resolution, SceneArgs, SensorFlags};
 use crate::Outcome;
 
 /// Options of `lenspath autofocus`.
@@ -34,17 +35,17 @@ pub struct AutofocusArgs {
     sensor: SensorFlags,
     /// Sensor: what contrast autofocus reads of its frames: raw-green (the green pixels, undeveloped)
     /// or luminance (the developed frame's).
-    #[arg(long, value_name = "SIGNAL", default_value = defaults::AUTOFOCUS_SENSOR_SIGNAL)]
-    af_signal: String,
+    #[arg(long, value_name = "SIGNAL", value_parser = named::<SensorSignal>(), default_value = SensorSignal::default().name())]
+    af_signal: SensorSignal,
     /// The patch to focus on, X,Y,W,H in fractions of the image (0 to 1), such as 0.55,0.7,0.1,0.12.
     #[arg(long, value_name = "X,Y,W,H", value_parser = parse_patch)]
     patch: NormalizedRect,
-    /// Focus measure: variance, normalized-variance, sml, tenengrad, brenner, laplacian-energy, vollath.
-    #[arg(long, default_value = defaults::AUTOFOCUS_METRIC)]
-    metric: String,
+    /// Focus measure.
+    #[arg(long, value_parser = named::<FocusMeasure>(), default_value = FocusMeasure::default().name())]
+    metric: FocusMeasure,
     /// Search: sweep, early-exit, fast, rangefinder (probe rays and the lens model) or depth (range finder, then a short contrast refinement).
-    #[arg(long, default_value = defaults::AUTOFOCUS_STRATEGY)]
-    strategy: String,
+    #[arg(long, value_parser = named::<Strategy>(), default_value = Strategy::default().name())]
+    strategy: Strategy,
     /// early-exit: stop after this many steps without a new best.
     #[arg(long, default_value_t = defaults::AUTOFOCUS_PATIENCE)]
     patience: usize,
@@ -78,7 +79,7 @@ pub struct AutofocusArgs {
 }
 
 /// "autofocus (fast, sml): sensor 52.634 mm behind the stop, in focus at 3.412 m; 21 patch renders, ..."
-pub fn summary_line(r: &AutofocusResult, metric: &str, scene_unit_m: f64) -> String {
+pub fn summary_line(r: &AutofocusResult, metric: FocusMeasure, scene_unit_m: f64) -> String {
     let distance = match r.focus_distance {
         Some(d) => format!(
             "in focus at {:.3} m ({d:.4} scene units) from the sensor",
@@ -91,9 +92,10 @@ pub fn summary_line(r: &AutofocusResult, metric: &str, scene_unit_m: f64) -> Str
         _ => String::new(),
     };
     let mut line = format!(
-        "autofocus ({}, {metric}): sensor {:.4} mm behind the stop, {distance}; {} patch renders, {} light fields, {:.2} M camera rays, {:.2} s{exposure}",
+        "autofocus ({}, {}): sensor {:.4} mm behind the stop, {distance}; {} patch renders, {} light fields, {:.2} M camera rays, {:.2} s{exposure}",
         r.strategy,
-        r.sensor_z_mm,
+        metric.name(),
+        r.sensor_depth_mm,
         r.patch_renders(),
         r.light_fields,
         r.camera_rays as f64 / 1e6,
@@ -127,10 +129,12 @@ pub fn run(args: AutofocusArgs) -> Result<Outcome> {
     let result = focuser.run(strategy)?;
     if args.json {
         let out = json!({
-            "sensor_position_mm": result.sensor_z_mm,
+            "sensor_depth_mm": result.sensor_depth_mm,
+            // Deprecated: the old name of `sensor_depth_mm`, kept for scripts that read it.
+            "sensor_position_mm": result.sensor_depth_mm,
             "focus_distance": result.focus_distance,
             "focus_distance_m": result.focus_distance.map(|d| d * lens.scene_unit_m),
-            "metric": args.metric,
+            "metric": args.metric.name(),
             "strategy": result.strategy,
             "evaluations": result.evaluations.len(),
             "patch_renders": result.patch_renders(),
@@ -140,12 +144,12 @@ pub fn run(args: AutofocusArgs) -> Result<Outcome> {
             "exposure_time_s": result.exposure_time_s,
             "iso": result.iso,
             "fallbacks": result.fallbacks,
-            "depth_of_focus_mm": focuser.depth_of_focus_mm(result.sensor_z_mm),
+            "depth_of_focus_mm": focuser.depth_of_focus_mm(result.sensor_depth_mm),
             "points": result.evaluations,
         });
         println!("{}", serde_json::to_string_pretty(&out).expect("JSON serializes"));
     } else {
-        println!("{}", summary_line(&result, &args.metric, lens.scene_unit_m));
+        println!("{}", summary_line(&result, args.metric, lens.scene_unit_m));
     }
     if let Some(path) = &args.plot {
         let sweep = if strategy == Strategy::Sweep {
@@ -153,20 +157,25 @@ pub fn run(args: AutofocusArgs) -> Result<Outcome> {
         } else {
             focuser.run(Strategy::Sweep)?
         };
-        let title = format!("{} on {} ({})", result.strategy, args.metric, patch_label(&patch));
+        let title = format!(
+            "{} on {} ({})",
+            result.strategy,
+            args.metric.name(),
+            patch_label(&patch)
+        );
         let svg = focus_curve_svg(
             &title,
             &[
                 Series {
                     label: "sweep",
                     points: &sweep.evaluations,
-                    chosen_mm: Some(sweep.sensor_z_mm),
+                    chosen_mm: Some(sweep.sensor_depth_mm),
                     line: true,
                 },
                 Series {
                     label: result.strategy,
                     points: &result.evaluations,
-                    chosen_mm: Some(result.sensor_z_mm),
+                    chosen_mm: Some(result.sensor_depth_mm),
                     line: false,
                 },
             ],
@@ -188,7 +197,7 @@ pub fn run(args: AutofocusArgs) -> Result<Outcome> {
         let setup = RenderSetup {
             settings,
             camera: CameraSettings::Realistic(RealisticCameraSettings {
-                focus: LensFocus::SensorPositionMm(result.sensor_z_mm),
+                focus: LensFocus::SensorDepthMm(result.sensor_depth_mm),
                 ..lens
             }),
             pose: view.pose,
@@ -217,12 +226,12 @@ fn overrides(args: &AutofocusArgs) -> Result<AutofocusOverrides> {
         max_depth: Some(args.max_depth),
         seed: Some(args.seed),
         threads: args.threads,
-        metric: Some(args.metric.clone()),
-        strategy: Some(args.strategy.clone()),
+        metric: Some(args.metric),
+        strategy: Some(args.strategy),
         patience: Some(args.patience),
         camera: args.lens.description()?,
         sensor: args.sensor.description()?,
-        sensor_signal: Some(args.af_signal.clone()),
+        sensor_signal: Some(args.af_signal),
     })
 }
 

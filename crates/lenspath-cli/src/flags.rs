@@ -2,9 +2,13 @@
 //! and the parsers of their values. They only spell options: what a flag left
 //! out means is decided by the library ([`lenspath::setup`]).
 
+use std::ffi::OsStr;
+use std::marker::PhantomData;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
+use clap::builder::{PossibleValue, TypedValueParser};
+use clap::error::ErrorKind;
 use clap::{Args, ValueEnum};
 use lenspath::builtin::DEFAULT_MESH_TRIANGLES;
 use lenspath::camera::{Aperture, ApertureShape, Radiometry};
@@ -14,7 +18,6 @@ use lenspath::io::{load_named_scene, LoadedScene};
 use lenspath::lens::LensPrescription;
 use lenspath::names::Named;
 use lenspath::options::SceneOptions;
-use lenspath::sampling::SamplerKind;
 use lenspath::scene::Scene;
 use lenspath::sensor::{Cfa, Demosaic, SensorDescription, ToneCurve, WhiteBalance};
 use lenspath::setup::RealisticDescription;
@@ -31,20 +34,24 @@ pub enum CameraKind {
     Realistic,
 }
 
-/// Exposure normalisation of the realistic camera.
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub enum RadiometryKind {
-    /// The image centre reads the scene radiance at any f-number.
-    Normalized,
-    /// Stopping down darkens the image by (N2/N1)^2, as on a real camera.
-    Physical,
-}
-
 /// Sensor size as WIDTHxHEIGHT in mm.
 #[derive(Clone, Copy, Debug)]
 pub struct SensorSize {
     pub width_mm: f64,
     pub height_mm: f64,
+}
+
+impl From<(f64, f64)> for SensorSize {
+    fn from((width_mm, height_mm): (f64, f64)) -> Self {
+        SensorSize { width_mm, height_mm }
+    }
+}
+
+impl std::fmt::Display for SensorSize {
+    /// As the flag is written: WIDTHxHEIGHT.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}x{}", self.width_mm, self.height_mm)
+    }
 }
 
 pub fn parse_sensor(s: &str) -> std::result::Result<SensorSize, String> {
@@ -70,21 +77,30 @@ pub enum FilterKind {
     Gaussian,
 }
 
-/// Sample sequences.
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub enum SamplerArg {
-    /// Owen-scrambled Sobol points: less noise at the same samples per pixel.
-    Sobol,
-    /// Independent random numbers (PCG32), as pbrt's and Mitsuba's `independent`.
-    Independent,
+/// The value parser of a flag choosing a library value by name
+/// ([`Named`]): its names are the flag's possible values (in the help and
+/// in shell completion), in the library's spelling and order, and a value
+/// parses as [`Named::parse`] parses it (any case, its error), so the CLI
+/// keeps no list of its own.
+pub fn named<T: Named + Send + Sync>() -> NamedValue<T> {
+    NamedValue(PhantomData)
 }
 
-impl From<SamplerArg> for SamplerKind {
-    fn from(arg: SamplerArg) -> Self {
-        match arg {
-            SamplerArg::Sobol => SamplerKind::Sobol,
-            SamplerArg::Independent => SamplerKind::Independent,
-        }
+/// See [`named`].
+#[derive(Clone, Copy)]
+pub struct NamedValue<T>(PhantomData<fn() -> T>);
+
+impl<T: Named + Send + Sync> TypedValueParser for NamedValue<T> {
+    type Value = T;
+
+    fn parse_ref(&self, cmd: &clap::Command, arg: Option<&clap::Arg>, value: &OsStr) -> clap::error::Result<T> {
+        let flag = arg.map_or_else(String::new, |a| format!("invalid value for '{a}': "));
+        T::parse(&value.to_string_lossy())
+            .map_err(|e| clap::Error::raw(ErrorKind::InvalidValue, format!("{flag}{e}\n")).with_cmd(cmd))
+    }
+
+    fn possible_values(&self) -> Option<Box<dyn Iterator<Item = PossibleValue> + '_>> {
+        Some(Box::new(T::names().into_iter().map(PossibleValue::new)))
     }
 }
 
@@ -347,9 +363,11 @@ pub struct LensFlags {
     /// Realistic camera: metres per scene unit, since lenses are in mm.
     #[arg(long, value_name = "M")]
     pub scene_unit: Option<f64>,
-    /// Realistic camera: exposure normalisation.
-    #[arg(long, value_enum)]
-    pub radiometry: Option<RadiometryKind>,
+    /// Realistic camera: exposure normalisation: normalized (the image centre reads the scene
+    /// radiance at any f-number) or physical (stopping down darkens the image by (N2/N1)^2, as on
+    /// a real camera).
+    #[arg(long, value_parser = named::<Radiometry>())]
+    pub radiometry: Option<Radiometry>,
     /// Realistic camera: every glass at its d-line index, so the lens shows no colour (and a
     /// little less colour noise, no tracing back per wavelength; default: glasses disperse).
     #[arg(long)]
@@ -369,10 +387,7 @@ impl LensFlags {
             sensor_width_mm: self.sensor.map(|s| s.width_mm),
             f_number: self.fstop,
             scene_unit_m: self.scene_unit,
-            radiometry: self.radiometry.map(|r| match r {
-                RadiometryKind::Normalized => Radiometry::Normalized,
-                RadiometryKind::Physical => Radiometry::Physical,
-            }),
+            radiometry: self.radiometry,
             dispersion: self.no_dispersion.then_some(false),
             desqueeze: self.desqueeze.then_some(true),
             ..RealisticDescription::default()

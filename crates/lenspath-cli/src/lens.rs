@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use clap::Args;
 use lenspath::fs::write_text;
 use lenspath::lens::plot::{focal_shift_svg, layout_svg};
-use lenspath::lens::{AnalysisSettings, LensPrescription, LensSystem};
+use lenspath::lens::{AnalysisSettings, LensPrescription, LensSystem, FULL_FRAME_MM};
 use lenspath::lens_report::{LensReport, LensReportSettings};
 use lenspath::{Error, Result};
 
@@ -36,13 +36,13 @@ pub struct LensArgs {
     #[arg(long, value_name = "FILE")]
     write_table: Option<PathBuf>,
     /// Sensor WIDTHxHEIGHT in mm (field of view, pupil sampling).
-    #[arg(long, default_value = "36x24", value_parser = parse_sensor)]
+    #[arg(long, default_value_t = SensorSize::from(FULL_FRAME_MM), value_parser = parse_sensor)]
     sensor: SensorSize,
     /// Stop down to this f-number before analysing (default: wide open).
     #[arg(long, value_name = "N")]
     fstop: Option<f64>,
     /// Height of the near-axis real rays, mm (the CS184 lens simulator used 0.1 mm).
-    #[arg(long, value_name = "MM", default_value_t = 0.1)]
+    #[arg(long, value_name = "MM", default_value_t = AnalysisSettings::default().ray_height_mm)]
     ray_height_mm: f64,
     /// Distance of the close-focus object in front of the aperture stop, mm (default: 5 x focal length).
     #[arg(long, value_name = "MM")]

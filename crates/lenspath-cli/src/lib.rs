@@ -18,7 +18,9 @@ mod render;
 mod view;
 
 use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand};
+use lenspath::integrator::IntegratorKind;
 use lenspath::names::Named;
+use lenspath::sampling::SamplerKind;
 
 /// A physically based path tracer whose camera is a real lens.
 #[derive(Parser)]
@@ -79,13 +81,16 @@ fn command() -> clap::Command {
         ("max_depth", scene_file_else(d::MAX_DEPTH.to_string())),
         ("res", scene_file_else(format!("{w}x{h}"))),
         ("seed", scene_file_else(d::SEED.to_string())),
-        ("sampler", scene_file_else(d::SAMPLER.name().to_string())),
-        ("integrator", scene_file_else(d::INTEGRATOR.name().to_string())),
+        ("sampler", scene_file_else(SamplerKind::default().name().to_string())),
+        (
+            "integrator",
+            scene_file_else(IntegratorKind::default().name().to_string()),
+        ),
         ("lens", scene_file_else(d::LENS.to_string())),
         ("sensor", scene_file_else(format!("{} mm wide", d::SENSOR_WIDTH_MM))),
         ("scene_unit", scene_file_else(d::SCENE_UNIT_M.to_string())),
         ("aperture_radius", d::THIN_LENS_APERTURE_RADIUS.to_string()),
-        ("radiometry", "normalized".to_string()),
+        ("radiometry", lenspath::camera::Radiometry::default().name().to_string()),
         (
             "sensor_model",
             scene_file_else(format!("{} when another sensor flag is given", d::SENSOR_RESPONSE)),

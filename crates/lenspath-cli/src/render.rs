@@ -9,7 +9,6 @@ use clap::Args;
 use lenspath::accel::BvhSettings;
 use lenspath::autofocus::Focuser;
 use lenspath::camera::{ApertureShape, LensFocus};
-use lenspath::defaults;
 use lenspath::film::{Filter, NormalizedRect, PixelRect};
 use lenspath::integrator::{guiding_can_help, IntegratorKind};
 use lenspath::io::checkpoint::{read_checkpoint, write_checkpoint};
@@ -30,21 +29,12 @@ use lenspath::{Error, Result};
 use sha2::{Digest, Sha256};
 
 use crate::flags::{
-    parse_crop, parse_duration, parse_image_point, parse_patch, parse_resolution, ApertureFlags, CameraKind,
-    FilterKind, LensFlags, Resolution, SamplerArg, SceneArgs, SensorFlags,
+    named, parse_crop, parse_duration, parse_image_point, parse_patch, parse_resolution, ApertureFlags, CameraKind,
+    FilterKind, LensFlags, Resolution, SceneArgs, SensorFlags,
 };
 use crate::guide_map::{write_guide_map, MAP_SIZE};
 use crate::progress::Progress;
 use crate::Outcome;
-
-/// `--integrator`'s values ([`IntegratorKind`]'s names).
-#[derive(Clone, Copy, Debug, clap::ValueEnum)]
-pub enum IntegratorArg {
-    /// The path tracer: next-event estimation, MIS, Russian roulette.
-    Path,
-    /// The path tracer guided by a learned distribution of incident light (path guiding).
-    Guided,
-}
 
 /// Options of `lenspath render`.
 #[derive(Args, Debug)]
@@ -70,14 +60,16 @@ pub struct RenderArgs {
     /// Seed of the sample sequences; the same seed gives the same image.
     #[arg(long)]
     seed: Option<u32>,
-    /// Sample sequence.
-    #[arg(long, value_enum)]
-    sampler: Option<SamplerArg>,
-    /// Integrator: the path tracer, or the path tracer guided by a guide of where light comes from,
-    /// trained first (for caustics and light through glass or off metal; docs/guiding.md). A scene
-    /// with no glass, mirror or smooth metal renders guided as with the path tracer, without training.
-    #[arg(long, value_enum)]
-    integrator: Option<IntegratorArg>,
+    /// Sample sequence: sobol (Owen-scrambled Sobol points, less noise at the same samples per
+    /// pixel) or independent (PCG32 random numbers, as pbrt's and Mitsuba's `independent`).
+    #[arg(long, value_parser = named::<SamplerKind>())]
+    sampler: Option<SamplerKind>,
+    /// Integrator: path (next-event estimation, MIS, Russian roulette), or guided: the path tracer
+    /// guided by a guide of where light comes from, trained first (for caustics and light through
+    /// glass or off metal; docs/guiding.md). A scene with no glass, mirror or smooth metal renders
+    /// guided as with the path tracer, without training.
+    #[arg(long, value_parser = named::<IntegratorKind>())]
+    integrator: Option<IntegratorKind>,
     /// Guided renders: also write what the guide learned at the surface seen at --guide-at, its
     /// density over the sphere of directions in an equal-area disc (the normal at the centre, the
     /// horizon a circle, the camera's side at the bottom): .png in false colour, .exr the density
@@ -242,7 +234,7 @@ fn overrides(args: &RenderArgs) -> Result<RenderOverrides> {
                 ));
             }
             let focus = match (args.sensor_depth, args.focus_distance) {
-                (Some(mm), _) => Some(LensFocus::SensorPositionMm(mm)),
+                (Some(mm), _) => Some(LensFocus::SensorDepthMm(mm)),
                 (None, Some(d)) => Some(LensFocus::Distance(f64::from(d))),
                 (None, None) => None,
             };
@@ -262,11 +254,8 @@ fn overrides(args: &RenderArgs) -> Result<RenderOverrides> {
         max_depth: args.max_depth,
         light_samples: args.light_samples,
         seed: args.seed,
-        sampler: args.sampler.map(SamplerKind::from),
-        integrator: args.integrator.map(|i| match i {
-            IntegratorArg::Path => IntegratorKind::Path,
-            IntegratorArg::Guided => IntegratorKind::Guided,
-        }),
+        sampler: args.sampler,
+        integrator: args.integrator,
         filter: Some(match args.filter {
             FilterKind::Box => Filter::Box,
             FilterKind::Gaussian => Filter::GAUSSIAN,
@@ -333,14 +322,11 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
     let compiled = scene.compile_on(&BvhSettings::default(), args.threads)?;
     if let Some(patch) = args.autofocus {
         let search = autofocus_before_render(&setup, patch)?;
-        let scene_unit_m = search.settings.camera.scene_unit_m;
+        let (scene_unit_m, measure) = (search.settings.camera.scene_unit_m, search.settings.measure);
         let result = Focuser::new(&compiled, search.pose, search.settings)?.run(search.strategy)?;
-        eprintln!(
-            "{}",
-            crate::autofocus::summary_line(&result, defaults::AUTOFOCUS_METRIC, scene_unit_m)
-        );
+        eprintln!("{}", crate::autofocus::summary_line(&result, measure, scene_unit_m));
         if let CameraSettings::Realistic(camera) = &mut setup.camera {
-            camera.focus = LensFocus::SensorPositionMm(result.sensor_z_mm);
+            camera.focus = LensFocus::SensorDepthMm(result.sensor_depth_mm);
         }
     }
     let camera = setup.build_camera()?;

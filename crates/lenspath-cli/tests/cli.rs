@@ -77,7 +77,9 @@ fn an_autofocus_render_carries_the_render_header() {
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let found: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    let sensor_mm = found["sensor_position_mm"].as_f64().unwrap() as f32;
+    let sensor_mm = found["sensor_depth_mm"].as_f64().unwrap() as f32;
+    // The deprecated name says the same.
+    assert_eq!(found["sensor_position_mm"], found["sensor_depth_mm"]);
     let (image, header) = lenspath::io::image::read_exr_with_header(&out).unwrap();
     assert_eq!((image.width, image.height), (48, 36));
     let a = &header.attributes;
@@ -268,6 +270,18 @@ fn usage_errors_name_the_argument_and_what_was_meant() {
                 "invalid value 'thinlens'",
                 "possible values: pinhole, thin-lens, realistic",
             ],
+        ),
+        // A library choice: its names and message are the library's (`Named`).
+        (
+            vec!["render", "--sampler", "bogus"],
+            vec![
+                "invalid value for '--sampler <SAMPLER>'",
+                "unknown sampler 'bogus'; use one of sobol, independent",
+            ],
+        ),
+        (
+            vec!["autofocus", "--patch", "0.5,0.5,0.1,0.1", "--metric", "sharpness"],
+            vec!["unknown focus measure 'sharpness'", "tenengrad"],
         ),
     ];
     for (args, expected) in cases {

@@ -1,8 +1,9 @@
 //! Autofocus: the options map onto `lenspath::setup::AutofocusOverrides`.
 
-use lenspath::autofocus::Focuser;
+use lenspath::autofocus::{FocusMeasure, Focuser, SensorSignal, Strategy};
 use lenspath::camera::LensFocus;
 use lenspath::film::NormalizedRect;
+use lenspath::names::Named;
 use lenspath::setup::{resolve_autofocus, AutofocusOverrides, CameraDescription, RealisticDescription};
 use lenspath::Error;
 use numpy::ndarray::Array2;
@@ -10,7 +11,7 @@ use numpy::{IntoPyArray, PyArray2, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
 use crate::camera::Camera;
-use crate::error::{deprecated, guarded, to_py, whole_number};
+use crate::error::{deprecated, guarded, named, to_py, whole_number};
 use crate::scene::Scene;
 use crate::sensor::Sensor;
 
@@ -111,25 +112,22 @@ pub(crate) fn autofocus(
         max_depth: whole_number("max_depth", max_depth)?,
         seed: whole_number("seed", seed)?,
         threads: whole_number("threads", threads)?,
-        metric,
-        strategy,
+        metric: named::<FocusMeasure>(metric.as_deref())?,
+        strategy: named::<Strategy>(strategy.as_deref())?,
         patience: whole_number("patience", patience)?,
         camera: description.clone(),
         sensor: sensor.map(|s| s.description.clone()),
-        sensor_signal,
+        sensor_signal: named::<SensorSignal>(sensor_signal.as_deref())?,
     };
     let search = resolve_autofocus(&scene.options, &view, patch, &overrides).map_err(to_py)?;
-    // The result names the measure as asked; `resolve_autofocus` took the same default.
-    let metric = overrides
-        .metric
-        .unwrap_or_else(|| lenspath::defaults::AUTOFOCUS_METRIC.to_string());
+    let metric = search.settings.measure.name().to_string();
     let compiled = scene.compiled(py, search.settings.threads)?;
     let (result, depth_of_focus_mm) = py
         .detach(|| {
             guarded(|| {
                 let mut focuser = Focuser::new(&compiled, search.pose, search.settings)?;
                 let result = focuser.run(search.strategy)?;
-                let dof = focuser.depth_of_focus_mm(result.sensor_z_mm);
+                let dof = focuser.depth_of_focus_mm(result.sensor_depth_mm);
                 Ok::<_, Error>((result, dof))
             })
         })?
@@ -137,14 +135,14 @@ pub(crate) fn autofocus(
     let rows: Vec<f64> = result
         .evaluations
         .iter()
-        .flat_map(|e| [e.sensor_z_mm, e.score])
+        .flat_map(|e| [e.sensor_depth_mm, e.score])
         .collect();
     let evaluations = Array2::from_shape_vec((result.evaluations.len(), 2), rows)
         .expect("two values per evaluation")
         .into_pyarray(py)
         .unbind();
     Ok(AutofocusResult {
-        sensor_depth_mm: result.sensor_z_mm,
+        sensor_depth_mm: result.sensor_depth_mm,
         focus_distance: result.focus_distance,
         metric,
         strategy: result.strategy.to_string(),
@@ -155,7 +153,7 @@ pub(crate) fn autofocus(
         seconds: result.seconds,
         depth_of_focus_mm,
         camera: Camera::new(CameraDescription::Realistic(RealisticDescription {
-            focus: Some(LensFocus::SensorPositionMm(result.sensor_z_mm)),
+            focus: Some(LensFocus::SensorDepthMm(result.sensor_depth_mm)),
             ..description
         })),
         exposure_time_s: result.exposure_time_s,

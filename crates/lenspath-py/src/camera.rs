@@ -164,7 +164,7 @@ impl Camera {
                     set("lens", r.lens.as_ref().map(|l| format!("'{}'", l.name()))),
                     match r.focus {
                         Some(LensFocus::Distance(d)) => set("focus_distance", Some(d)),
-                        Some(LensFocus::SensorPositionMm(mm)) => set("sensor_depth_mm", Some(mm)),
+                        Some(LensFocus::SensorDepthMm(mm)) => set("sensor_depth_mm", Some(mm)),
                         None => None,
                     },
                     set("f_number", r.f_number),
@@ -219,7 +219,7 @@ impl Camera {
         let realistic = match &self.description {
             CameraDescription::Realistic(r) => (
                 match r.focus {
-                    Some(LensFocus::SensorPositionMm(mm)) => Some(mm),
+                    Some(LensFocus::SensorDepthMm(mm)) => Some(mm),
                     _ => None,
                 },
                 r.sensor_width_mm,
@@ -352,7 +352,7 @@ impl Camera {
         let focus = match (focus_distance, sensor_depth_mm) {
             (Some(_), Some(_)) => return Err(value_error("give focus_distance or sensor_depth_mm, not both")),
             (Some(d), None) => Some(LensFocus::Distance(d)),
-            (None, Some(mm)) => Some(LensFocus::SensorPositionMm(mm)),
+            (None, Some(mm)) => Some(LensFocus::SensorDepthMm(mm)),
             (None, None) => None,
         };
         Ok(Camera::new(CameraDescription::Realistic(RealisticDescription {

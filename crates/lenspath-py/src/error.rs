@@ -3,6 +3,7 @@
 //! broken lens tables, `OSError` for I/O; one argument, since a library
 //! error says what kind of file it is about.
 
+use lenspath::names::Named;
 use lenspath::{Error, FileKind};
 use pyo3::create_exception;
 use pyo3::exceptions::{PyException, PyOSError, PyValueError};
@@ -21,6 +22,12 @@ create_exception!(
     "A scene file is broken or inconsistent."
 );
 create_exception!(lenspath, LensError, LenspathError, "A lens table is broken.");
+
+/// The library value a keyword names, if it names one ([`Named::parse`]:
+/// a `ValueError` listing the names otherwise).
+pub(crate) fn named<T: Named>(name: Option<&str>) -> PyResult<Option<T>> {
+    name.map(T::parse).transpose().map_err(to_py)
+}
 
 /// A library error as the Python exception users expect: the error says
 /// what kind of file a parse failure is about.

@@ -6,6 +6,7 @@ use std::sync::atomic::AtomicBool;
 use lenspath::guiding::map::DensityMap;
 use lenspath::integrator::{guiding_can_help, IntegratorKind};
 use lenspath::render::{guide_map_at_pixel, train_guide};
+use lenspath::sampling::SamplerKind;
 use lenspath::setup::RenderOverrides;
 use lenspath::Error;
 use numpy::ndarray::Array2;
@@ -14,8 +15,8 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::camera::Camera;
-use crate::error::{guarded, to_py, value_error, whole_number};
-use crate::render::{prepared, sampler_kind};
+use crate::error::{guarded, named, to_py, value_error, whole_number};
+use crate::render::prepared;
 use crate::scene::Scene;
 
 /// Trains the guide of a guided render of `scene` through `camera` and
@@ -45,7 +46,7 @@ pub(crate) fn guide_map<'py>(
         max_depth: whole_number("max_depth", max_depth)?,
         light_samples: whole_number("light_samples", light_samples)?,
         seed: whole_number("seed", seed)?,
-        sampler: sampler_kind(sampler)?,
+        sampler: named::<SamplerKind>(sampler)?,
         threads: whole_number("threads", threads)?,
         camera: camera.map(|c| c.description.clone()).unwrap_or_default(),
         ..RenderOverrides::default()

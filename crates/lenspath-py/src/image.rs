@@ -23,7 +23,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyTuple};
 
 use crate::camera::{lens_from_py, parse_aperture};
-use crate::error::{guarded, to_py, value_error};
+use crate::error::{guarded, named, to_py, value_error};
 use crate::render::rgb_array;
 
 /// An image as numpy users hold it, as a core image in linear light:
@@ -251,9 +251,9 @@ fn attributes_from_py(attributes: &Bound<'_, PyDict>) -> PyResult<BTreeMap<Strin
 
 /// A focus measure of an (H, W, 3) image (see `focus_measures()`).
 #[pyfunction]
-#[pyo3(signature = (image, metric = "tenengrad"))]
-pub(crate) fn focus_measure(image: &Bound<'_, PyAny>, metric: &str) -> PyResult<f64> {
-    let measure = FocusMeasure::parse(metric).map_err(to_py)?;
+#[pyo3(signature = (image, metric = None))]
+pub(crate) fn focus_measure(image: &Bound<'_, PyAny>, metric: Option<&str>) -> PyResult<f64> {
+    let measure = named::<FocusMeasure>(metric)?.unwrap_or_default();
     let image = image_from_py(image)?;
     let patch = Patch::new(image.width as usize, image.height as usize, &image.rgb).map_err(to_py)?;
     Ok(measure.evaluate(&patch))

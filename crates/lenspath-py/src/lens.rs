@@ -8,7 +8,7 @@ use lenspath::lens::{
     chromatic::{focal_shift, ChromaticAnalysis},
     library,
     plot::{focal_shift_svg, layout, layout_svg, Polyline},
-    AnalysisSettings, Direction, LensAnalysis, LensPrescription, LensRay, LensSystem, TableConvention,
+    AnalysisSettings, Direction, LensAnalysis, LensPrescription, LensRay, LensSystem, TableConvention, FULL_FRAME_MM,
 };
 use lenspath::lens_report::{LensReport, LensReportSettings};
 use lenspath::Error;
@@ -18,9 +18,6 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
 use crate::error::{deprecated, guarded, to_py, value_error};
-
-/// The default sensor of the lens drawings, as `lenspath lens` draws them: 36 × 24 mm.
-pub(crate) const FULL_FRAME_MM: (f64, f64) = (36.0, 24.0);
 
 /// A real compound lens: its prescription, placed wide open (or stopped down).
 #[pyclass(module = "lenspath._core")]
@@ -229,7 +226,7 @@ impl Lens {
     #[pyo3(signature = (distance_mm, ray_height_mm = 0.1))]
     pub(crate) fn sensor_depth_mm_for(&self, distance_mm: f64, ray_height_mm: f64) -> PyResult<f64> {
         self.system
-            .sensor_z_for_focus_distance(distance_mm, ray_height_mm)
+            .sensor_depth_mm_for_focus_distance(distance_mm, ray_height_mm)
             .map_err(to_py)
     }
 

@@ -63,5 +63,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(autofocus::autofocus, m)?)?;
     m.add_function(wrap_pyfunction!(cli::run_cli, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    m.add("MAX_SAMPLES_PER_PIXEL", lenspath::sampling::MAX_SAMPLES_PER_PIXEL)?;
     Ok(())
 }

@@ -8,7 +8,6 @@ use lenspath::camera::Camera as CameraTrait;
 use lenspath::film::Image;
 use lenspath::film::PixelRect;
 use lenspath::integrator::IntegratorKind;
-use lenspath::names::Named;
 use lenspath::render::render as render_scene;
 use lenspath::sampling::SamplerKind;
 use lenspath::scene::CompiledScene;
@@ -20,7 +19,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::camera::Camera;
-use crate::error::{guarded, to_py, value_error, whole_number};
+use crate::error::{guarded, named, to_py, value_error, whole_number};
 use crate::scene::Scene;
 use crate::sensor::{RawFrame, Sensor};
 
@@ -29,11 +28,6 @@ pub(crate) fn rgb_array<'py>(py: Python<'py>, image: &Image) -> Bound<'py, PyArr
     Array3::from_shape_vec((image.height as usize, image.width as usize, 3), image.rgb.clone())
         .expect("an image holds width × height × 3 values")
         .into_pyarray(py)
-}
-
-/// The sampler called `name`, if one is named.
-pub(crate) fn sampler_kind(name: Option<&str>) -> PyResult<Option<SamplerKind>> {
-    name.map(SamplerKind::parse).transpose().map_err(to_py)
 }
 
 /// What a render of `scene` through `camera` (None: the scene's own) with
@@ -79,8 +73,8 @@ pub(crate) fn render<'py>(
     sensor: Option<&Sensor>,
     integrator: Option<&str>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let integrator = integrator.map(IntegratorKind::parse).transpose().map_err(to_py)?;
-    let sampler = sampler_kind(sampler)?;
+    let integrator = named::<IntegratorKind>(integrator)?;
+    let sampler = named::<SamplerKind>(sampler)?;
     let want_depth = match aovs.as_deref() {
         None | Some([]) => false,
         Some(names) => {

@@ -6,14 +6,17 @@ use std::sync::{Arc, OnceLock};
 
 use glam::Vec3;
 use lenspath::accel::BvhSettings;
+use lenspath::autofocus::{FocusMeasure, SensorSignal, Strategy};
 use lenspath::builtin::{builtin_scene, BUILTIN_SCENES, DEFAULT_MESH_TRIANGLES};
 use lenspath::camera::CameraPose;
 use lenspath::glass::Dispersion;
+use lenspath::integrator::IntegratorKind;
 use lenspath::io::{load_scene_in, ReadScope};
 use lenspath::lights::Light;
 use lenspath::materials::Material;
 use lenspath::names::Named;
 use lenspath::options::SceneOptions;
+use lenspath::sampling::SamplerKind;
 use lenspath::scene::{CompiledScene, Scene as CoreScene, SceneView};
 use lenspath::shapes::{Sphere, TriangleMesh};
 use lenspath::spectrum::Emission as LibraryEmission;
@@ -455,8 +458,8 @@ pub(crate) fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     out.set_item("max_depth", d::MAX_DEPTH)?;
     out.set_item("light_samples", d::LIGHT_SAMPLES)?;
     out.set_item("seed", d::SEED)?;
-    out.set_item("sampler", d::SAMPLER.name())?;
-    out.set_item("integrator", d::INTEGRATOR.name())?;
+    out.set_item("sampler", SamplerKind::default().name())?;
+    out.set_item("integrator", IntegratorKind::default().name())?;
     out.set_item("guide_training_spp", d::GUIDE_TRAINING_SPP)?;
     out.set_item("scene_unit_m", d::SCENE_UNIT_M)?;
     out.set_item("lens", d::LENS)?;
@@ -466,8 +469,9 @@ pub(crate) fn defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     out.set_item("autofocus_max_depth", d::AUTOFOCUS_PATCH_MAX_DEPTH)?;
     out.set_item("autofocus_seed", d::AUTOFOCUS_SEED)?;
     out.set_item("autofocus_patience", d::AUTOFOCUS_PATIENCE)?;
-    out.set_item("autofocus_metric", d::AUTOFOCUS_METRIC)?;
-    out.set_item("autofocus_strategy", d::AUTOFOCUS_STRATEGY)?;
+    out.set_item("autofocus_metric", FocusMeasure::default().name())?;
+    out.set_item("autofocus_strategy", Strategy::default().name())?;
+    out.set_item("autofocus_sensor_signal", SensorSignal::default().name())?;
     Ok(out)
 }
 

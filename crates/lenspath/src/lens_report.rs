@@ -108,13 +108,13 @@ impl LensReport {
         let h = settings.analysis.ray_height_mm;
         let sensor_depth_for_focus_distance_mm = settings
             .focus_distance_m
-            .map(|m| system.sensor_z_for_focus_distance(m * 1e3, h))
+            .map(|m| system.sensor_depth_mm_for_focus_distance(m * 1e3, h))
             .transpose()?;
         let focus_distance_for_sensor_depth_m = match settings.sensor_depth_mm {
-            Some(z) if z.is_nan() || z <= system.rear_z() => {
+            Some(z) if z.is_nan() || z <= system.rear_z_mm() => {
                 return Err(Error::InvalidArgument(format!(
                     "sensor depth {z} mm must lie behind the rear element ({:.3} mm)",
-                    system.rear_z()
+                    system.rear_z_mm()
                 )))
             }
             Some(z) => Some(system.focus_distance_mm(z, h).map(|mm| mm * 1e-3)),
@@ -156,7 +156,7 @@ impl LensReport {
                 ..RealisticCameraSettings::new(
                     prescription.clone(),
                     (width_mm, height_mm),
-                    LensFocus::SensorPositionMm(self.analysis.infinity_focus_mm),
+                    LensFocus::SensorDepthMm(self.analysis.infinity_focus_mm),
                 )
             },
         )?;
@@ -206,7 +206,7 @@ mod tests {
         let metres = back.focus.focus_distance_for_sensor_depth_m.unwrap().unwrap();
         assert!((metres - 2.0).abs() < 1e-6, "{metres}");
         let too_near = LensReportSettings {
-            sensor_depth_mm: Some(system.rear_z() - 1.0),
+            sensor_depth_mm: Some(system.rear_z_mm() - 1.0),
             ..LensReportSettings::default()
         };
         let err = LensReport::new(&system, &too_near).unwrap_err().to_string();

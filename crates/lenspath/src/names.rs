@@ -46,6 +46,14 @@ pub trait Named: Copy + PartialEq + 'static {
     }
 }
 
+/// Reads a [`Named`] value from its name, for `#[serde(deserialize_with)]`:
+/// a JSON request names its choices as the CLI does, failing with
+/// [`Named::parse`]'s message.
+pub fn deserialize<'de, D: serde::Deserializer<'de>, T: Named>(deserializer: D) -> std::result::Result<T, D::Error> {
+    let name = <std::borrow::Cow<'de, str> as serde::Deserialize>::deserialize(deserializer)?;
+    T::parse(&name).map_err(serde::de::Error::custom)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

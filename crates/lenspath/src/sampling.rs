@@ -24,10 +24,11 @@ pub const MAX_SAMPLES_PER_PIXEL: u32 = 1 << 16;
 
 /// Which sample sequence a render draws from (pbrt-v4's `Sampler` types
 /// `sobol` and `independent`, Mitsuba 3's `independent`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum SamplerKind {
     /// Owen-scrambled Sobol points: stratified in every dimension, so less
-    /// noise at the same samples per pixel (the default, [`crate::defaults::SAMPLER`]).
+    /// noise at the same samples per pixel (the default).
+    #[default]
     Sobol,
     /// Independent uniform random numbers (PCG32): no stratification, the
     /// cheapest to draw; what Mitsuba's and pbrt's `independent` samplers give.

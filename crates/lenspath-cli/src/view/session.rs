@@ -10,6 +10,7 @@ use std::time::Instant;
 
 use axum::body::Bytes;
 use glam::Vec3;
+use lenspath::autofocus::{FocusMeasure, Strategy};
 use lenspath::camera::{ApertureShape, CameraPose, LensFocus, RealisticCamera, RealisticCameraSettings};
 use lenspath::film::Image;
 use lenspath::integrator::IntegratorKind;
@@ -18,8 +19,9 @@ use lenspath::lens::{AnalysisSettings, LensAnalysis, LensPrescription, TableConv
 use lenspath::lens_report::{LensReport, LensReportSettings};
 use lenspath::names::Named;
 use lenspath::options::SceneOptions;
-use lenspath::render::{check_max_depth, NormalizedRect, RenderSettings};
+use lenspath::render::{NormalizedRect, RenderSettings};
 use lenspath::sampling::SamplerKind;
+use lenspath::sampling::MAX_SAMPLES_PER_PIXEL;
 use lenspath::scene::{CompiledScene, SceneView};
 use lenspath::sensor::{capture_through, develop::develop, Exposure, SensorSettings};
 use lenspath::setup::{
@@ -88,7 +90,7 @@ pub struct ViewSettings {
 
 /// The integrator of settings that do not name one: the library's default.
 fn default_integrator() -> String {
-    lenspath::defaults::INTEGRATOR.name().into()
+    IntegratorKind::default().name().into()
 }
 
 /// The autofocus request of a click or a dragged rectangle.
@@ -97,20 +99,12 @@ fn default_integrator() -> String {
 pub struct AutofocusRequest {
     /// The patch, `[x, y, width, height]` in fractions of the image.
     pub patch: [f64; 4],
-    /// Focus measure name (as `lenspath autofocus --metric`).
-    #[serde(default = "default_metric")]
-    pub metric: String,
-    /// Strategy name (as `lenspath autofocus --strategy`).
-    #[serde(default = "default_strategy")]
-    pub strategy: String,
-}
-
-fn default_metric() -> String {
-    "tenengrad".into()
-}
-
-fn default_strategy() -> String {
-    "fast".into()
+    /// The focus measure, by name (as `lenspath autofocus --metric`).
+    #[serde(default, deserialize_with = "lenspath::names::deserialize")]
+    pub metric: FocusMeasure,
+    /// The strategy, by name (as `lenspath autofocus --strategy`).
+    #[serde(default, deserialize_with = "lenspath::names::deserialize")]
+    pub strategy: Strategy,
 }
 
 /// The camera that settings describe, built and checked.
@@ -365,8 +359,6 @@ impl Session {
     pub fn request_autofocus(&self, request: AutofocusRequest) -> Result<()> {
         let [x, y, w, h] = request.patch;
         NormalizedRect::new(x, y, w, h)?;
-        lenspath::autofocus::FocusMeasure::parse(&request.metric)?;
-        lenspath::autofocus::Strategy::from_name(&request.strategy, lenspath::defaults::AUTOFOCUS_PATIENCE)?;
         let mut state = self.lock();
         if state.autofocus.is_some() {
             return Err(Error::InvalidArgument("an autofocus is already waiting to run".into()));
@@ -568,14 +560,10 @@ impl Config {
             Vec3::from_array(settings.up),
         );
         let moved_pose = CameraPose::try_look_at(eye, target, up).map_err(Error::InvalidArgument)?;
-        if !(1..=1 << 16).contains(&settings.max_spp) {
-            return bad(format!("max_spp must be from 1 to 65536, got {}", settings.max_spp));
-        }
-        check_max_depth(settings.max_depth)?;
-        if !(1..=64).contains(&settings.light_samples) {
+        if !(1..=MAX_SAMPLES_PER_PIXEL).contains(&settings.max_spp) {
             return bad(format!(
-                "light_samples must be from 1 to 64, got {}",
-                settings.light_samples
+                "max_spp must be from 1 to {MAX_SAMPLES_PER_PIXEL}, got {}",
+                settings.max_spp
             ));
         }
         let sampler = SamplerKind::parse(&settings.sampler)?;
@@ -587,9 +575,7 @@ impl Config {
             }
         }
         let focus = match settings.focus {
-            Focus::Sensor { depth_mm } if depth_mm > 0.0 && depth_mm.is_finite() => {
-                LensFocus::SensorPositionMm(depth_mm)
-            }
+            Focus::Sensor { depth_mm } if depth_mm > 0.0 && depth_mm.is_finite() => LensFocus::SensorDepthMm(depth_mm),
             Focus::Distance { distance_m } if distance_m > 0.0 && distance_m.is_finite() => {
                 LensFocus::Distance(distance_m / self.scene_unit_m())
             }
@@ -659,8 +645,8 @@ impl Config {
         lens_settings.f_number = settings.f_number;
         let camera = RealisticCamera::new(pose, width, height, &lens_settings)?;
         // The focus is kept as the sensor's place: what a saved file and autofocus speak in.
-        let sensor_depth_mm = camera.sensor_z_mm();
-        lens_settings.focus = LensFocus::SensorPositionMm(sensor_depth_mm);
+        let sensor_depth_mm = camera.sensor_depth_mm();
+        lens_settings.focus = LensFocus::SensorDepthMm(sensor_depth_mm);
         let system = camera.system();
         let report = LensReport::new(
             system,
@@ -718,7 +704,7 @@ fn initial_settings(options: &SceneOptions, view: &SceneView, resolution: (u32, 
     let eye = Vec3::from(m.translation);
     let target = eye + Vec3::from(m.z_axis) * view.focus_distance;
     let focus = match camera.focus {
-        LensFocus::SensorPositionMm(depth_mm) => Focus::Sensor { depth_mm },
+        LensFocus::SensorDepthMm(depth_mm) => Focus::Sensor { depth_mm },
         LensFocus::Distance(d) => Focus::Distance {
             distance_m: d * camera.scene_unit_m,
         },

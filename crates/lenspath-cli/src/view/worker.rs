@@ -16,6 +16,7 @@ use lenspath::autofocus::Focuser;
 use lenspath::guiding::Guide;
 use lenspath::integrator::Integrator;
 use lenspath::io::image::encode_jpeg;
+use lenspath::names::Named;
 use lenspath::render::{render, render_from, train_guide, Accumulation, Continuation, NormalizedRect, RenderOutput};
 use lenspath::sensor::SensorSettings;
 use lenspath::setup::{autofocus_setup, AutofocusOverrides};
@@ -239,8 +240,8 @@ fn autofocus(session: &Session, request: &AutofocusRequest, view: &View) -> Resu
     let overrides = AutofocusOverrides {
         seed: Some(view.settings.seed),
         threads: session.threads(),
-        metric: Some(request.metric.clone()),
-        strategy: Some(request.strategy.clone()),
+        metric: Some(request.metric),
+        strategy: Some(request.strategy),
         // Through the view's sensor, when it has one: what its image shows.
         sensor: view.sensor.as_ref().map(SensorSettings::description),
         ..AutofocusOverrides::default()
@@ -258,25 +259,25 @@ fn autofocus(session: &Session, request: &AutofocusRequest, view: &View) -> Resu
     session.send(json!({
         "type": "autofocus-start",
         "patch": request.patch,
-        "metric": request.metric,
-        "strategy": request.strategy,
+        "metric": request.metric.name(),
+        "strategy": request.strategy.name(),
         "range_mm": [infinity_mm, close_mm],
     }));
     focuser.on_evaluation(|e| {
         session.send(json!({
             "type": "autofocus-evaluation",
-            "sensor_depth_mm": e.sensor_z_mm,
+            "sensor_depth_mm": e.sensor_depth_mm,
             "score": e.score,
             "refocused": e.refocused,
         }))
     });
     let result = focuser.run(strategy)?;
-    let view = session.change(&json!({"focus": {"by": "sensor", "depth_mm": result.sensor_z_mm}}))?;
+    let view = session.change(&json!({"focus": {"by": "sensor", "depth_mm": result.sensor_depth_mm}}))?;
     session.send(json!({
         "type": "autofocus-done",
         "strategy": result.strategy,
-        "metric": request.metric,
-        "sensor_depth_mm": result.sensor_z_mm,
+        "metric": request.metric.name(),
+        "sensor_depth_mm": result.sensor_depth_mm,
         "focus_distance_m": view.focus_distance_m,
         "evaluations": result.evaluations.len(),
         "camera_rays": result.camera_rays,

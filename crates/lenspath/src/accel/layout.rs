@@ -73,6 +73,28 @@ pub(super) const QUADS: usize = WIDTH / 4;
 /// Primitives in one [`TrianglePack`].
 pub(super) const PACK: usize = 4;
 
+/// The largest subtree the collapse turns into one wide leaf: two packs,
+/// the fastest of four, eight and twelve primitives on the dragon, Lucy and
+/// the 1 M knot (BENCHMARKS.md, "BVH build: SIMD bins").
+pub(super) const WIDE_LEAF_PRIMITIVES: usize = 2 * PACK;
+
+/// ... when its box has at most this fraction of the root box's surface
+/// area. Deep in a mesh's tree (where such subtrees have 10⁻⁴ of it) a
+/// leaf's packs save the box tests of its last levels; but a few large
+/// primitives near the root, such as the walls of a room, are better in
+/// their own boxes, which only the rays that hit them enter (a flat box
+/// around an axis-aligned quad is the quad).
+pub(super) const WIDE_LEAF_MAX_AREA_FRACTION: f32 = 0.01;
+
+/// Whether a subtree of `count` primitives whose box has `area_fraction` of
+/// the root box's surface area becomes one wide leaf (the two rules above).
+/// The binary build makes such a subtree one leaf instead of splitting it
+/// down to single primitives: the collapse would pack it whatever its shape.
+#[inline(always)]
+pub(super) fn packs_whole(count: usize, area_fraction: f32) -> bool {
+    count <= WIDE_LEAF_PRIMITIVES && area_fraction <= WIDE_LEAF_MAX_AREA_FRACTION
+}
+
 impl TrianglePack {
     /// Bit `k` set where lane `k` holds a sphere (see [`TrianglePack`]).
     #[inline(always)]

@@ -12,10 +12,13 @@ use rayon::prelude::*;
 
 use crate::math::Bounds3;
 
+mod binning;
 mod build;
+mod collapse;
 mod layout;
 mod node_test;
 mod packet;
+mod partition;
 mod primitive;
 mod settings;
 mod traversal;
@@ -61,13 +64,13 @@ impl<T: Copy + Send + Sync> Bvh<T> {
         let bounds: Vec<Bounds3> = prims.par_iter().map(|(g, _)| g.bounds()).collect();
         let tree = build::binary_tree(bounds, settings);
         // The geometry and the tags go into the wide leaves' packs.
-        let build::WideTree {
+        let collapse::WideTree {
             wide,
             packs,
             pack_ranges,
-        } = build::collapse(&tree.nodes, &prims, &tree.order);
+        } = collapse::collapse(&tree.nodes, &prims, &tree.order);
         #[cfg(test)]
-        let slot_of = build::slots_in_binary_order(&pack_ranges, n);
+        let slot_of = collapse::slots_in_binary_order(&pack_ranges, n);
         drop(pack_ranges);
         let memory_bytes = size_of_val(wide.as_slice()) + size_of_val(packs.as_slice());
         let stats = BuildStats {

@@ -21,12 +21,13 @@ use crate::sensor::develop::develop;
 use crate::sensor::{capture, Development, RawFrame, SensorSettings, ToneCurve};
 
 /// What contrast autofocus reads off a raw frame.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum SensorSignal {
     /// The green pixels over the black level, a red or blue pixel taking
     /// the mean of its green neighbours (on a monochrome sensor, every
     /// pixel): nothing developed, as a camera's contrast AF reads its
-    /// sensor.
+    /// sensor. The default.
+    #[default]
     RawGreen,
     /// The developed frame's luminance (demosaicked, white-balanced, the
     /// camera matrix to linear sRGB; no tone curve).
@@ -249,10 +250,6 @@ mod tests {
             assert_eq!(SensorSignal::parse(name).unwrap(), signal);
             assert_eq!(signal.name(), name);
         }
-        assert_eq!(
-            SensorSignal::parse(crate::defaults::AUTOFOCUS_SENSOR_SIGNAL).unwrap(),
-            SensorSignal::RawGreen
-        );
         let err = SensorSignal::parse("blue").unwrap_err().to_string();
         assert!(err.contains("raw-green, luminance"), "{err}");
     }

@@ -123,13 +123,13 @@ pub struct Recording {
 
 impl LightField {
     /// The film region to record so that `patch` can be refocused anywhere
-    /// from `sensor_z_mm.0` to `sensor_z_mm.1` through `camera`: the patch's
+    /// from `sensor_depth_mm.0` to `sensor_depth_mm.1` through `camera`: the patch's
     /// corners carried back to the camera's sensor position along lines
     /// through the rear aperture's bounding box, plus a pixel.
-    pub fn region_for(camera: &RealisticCamera, patch: PixelRect, sensor_z_mm: (f64, f64)) -> FilmRegion {
+    pub fn region_for(camera: &RealisticCamera, patch: PixelRect, sensor_depth_mm: (f64, f64)) -> FilmRegion {
         let rear_bounds = camera.rear_aperture_raster_bounds();
         let bounds = |z: f64| preimage_bounds(patch, rear_bounds, camera.refocus_scale(z) as f32);
-        let ((lo_near, hi_near), (lo_far, hi_far)) = (bounds(sensor_z_mm.0), bounds(sensor_z_mm.1));
+        let ((lo_near, hi_near), (lo_far, hi_far)) = (bounds(sensor_depth_mm.0), bounds(sensor_depth_mm.1));
         let (lo, hi) = (lo_near.min(lo_far), hi_near.max(hi_far));
         let (lo, hi) = (lo.floor() - Vec2::ONE, hi.ceil() + Vec2::ONE);
         let (x0, y0) = ((lo.x as i32).min(patch.x0 as i32), (lo.y as i32).min(patch.y0 as i32));
@@ -206,20 +206,20 @@ impl LightField {
     }
 
     /// Whether every sample that lands in `patch` with the sensor at
-    /// `sensor_z_mm` was recorded: each line through the recorded rear-plane
+    /// `sensor_depth_mm` was recorded: each line through the recorded rear-plane
     /// points that reaches the patch crossed the recording inside the region.
-    pub fn reaches(&self, sensor_z_mm: f64, patch: PixelRect) -> bool {
-        let scale = self.camera.refocus_scale(sensor_z_mm) as f32;
+    pub fn reaches(&self, sensor_depth_mm: f64, patch: PixelRect) -> bool {
+        let scale = self.camera.refocus_scale(sensor_depth_mm) as f32;
         let (lo, hi) = preimage_bounds(patch, self.rear_bounds, scale);
         self.region.contains(lo) && self.region.contains(hi)
     }
 
     /// The image of `patch` (RGB, row by row) with the sensor at
-    /// `sensor_z_mm`, its samples gathered into pixels as `splat` says (none
+    /// `sensor_depth_mm`, its samples gathered into pixels as `splat` says (none
     /// in a pixel: black). `None` when the patch is out of reach
     /// ([`LightField::reaches`]).
-    pub fn refocus(&self, sensor_z_mm: f64, patch: PixelRect, splat: Splat) -> Option<Vec<f32>> {
-        if !self.reaches(sensor_z_mm, patch) {
+    pub fn refocus(&self, sensor_depth_mm: f64, patch: PixelRect, splat: Splat) -> Option<Vec<f32>> {
+        if !self.reaches(sensor_depth_mm, patch) {
             return None;
         }
         let (w, h) = (patch.width as usize, patch.height as usize);
@@ -232,13 +232,13 @@ impl LightField {
                 weight[k] += share;
             }
         };
-        let recorded_here = sensor_z_mm == self.camera.sensor_z_mm();
+        let recorded_here = sensor_depth_mm == self.camera.sensor_depth_mm();
         let origin = Vec2::new(patch.x0 as f32, patch.y0 as f32);
         for r in &self.records {
             let film = if recorded_here {
                 r.film
             } else {
-                self.camera.refocused_raster(r.film, r.rear, sensor_z_mm)
+                self.camera.refocused_raster(r.film, r.rear, sensor_depth_mm)
             };
             let p = film - origin;
             match splat {

@@ -39,7 +39,7 @@ impl<'a> Patch<'a> {
 }
 
 /// A focus measure.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum FocusMeasure {
     /// Grey-level variance \[GLVA\]: Σ_c (1/N) Σ (I − μ_c)².
     Variance,
@@ -53,7 +53,8 @@ pub enum FocusMeasure {
         /// Distance s, in pixels, of the Laplacian's neighbours.
         step: usize,
     },
-    /// Tenengrad \[TENG\]: Σ (Gx² + Gy²) with the 3×3 Sobel operators.
+    /// Tenengrad \[TENG\]: Σ (Gx² + Gy²) with the 3×3 Sobel operators. The default.
+    #[default]
     Tenengrad,
     /// Brenner's gradient \[BREN\]: Σ max(I(x+2,y) − I(x,y), I(x,y+2) − I(x,y))².
     Brenner,

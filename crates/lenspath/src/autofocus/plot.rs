@@ -27,7 +27,7 @@ pub struct Series<'a> {
 pub fn focus_curve_svg(title: &str, series: &[Series], truth_mm: Option<f64>) -> String {
     let xs = series
         .iter()
-        .flat_map(|s| s.points.iter().map(|e| e.sensor_z_mm).chain(s.chosen_mm))
+        .flat_map(|s| s.points.iter().map(|e| e.sensor_depth_mm).chain(s.chosen_mm))
         .chain(truth_mm);
     let chart = Chart::new(
         title,
@@ -44,7 +44,7 @@ pub fn focus_curve_svg(title: &str, series: &[Series], truth_mm: Option<f64>) ->
         let colour = COLOURS[i % COLOURS.len()];
         let max = s.points.iter().map(|e| e.score).fold(0.0f64, f64::max);
         let scale = if max > 0.0 { 1.0 / max } else { 0.0 };
-        let mut points: Vec<(f64, f64)> = s.points.iter().map(|e| (e.sensor_z_mm, e.score * scale)).collect();
+        let mut points: Vec<(f64, f64)> = s.points.iter().map(|e| (e.sensor_depth_mm, e.score * scale)).collect();
         if s.line {
             points.sort_by(|a, b| a.0.total_cmp(&b.0));
             chart.polyline(&mut svg, &points, colour);

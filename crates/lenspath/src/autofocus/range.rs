@@ -71,7 +71,7 @@ impl Focuser<'_> {
         let mut probes: Vec<(f64, Vec3)> = self
             .probe_points(8)?
             .into_iter()
-            .filter_map(|p| self.sensor_z_for_distance(f64::from(p.z)).ok().map(|z| (z, p)))
+            .filter_map(|p| self.sensor_depth_mm_for_distance(f64::from(p.z)).ok().map(|z| (z, p)))
             .collect();
         if probes.is_empty() {
             return Ok(None);

@@ -67,8 +67,19 @@ pub const LIGHT_FIELD_MAX_REACH_DOF: f64 = 8.0;
 /// Real-ray height for converting between sensor positions and distances (as the camera focuses).
 const FOCUS_RAY_HEIGHT_MM: f64 = 0.1;
 
+/// Samples per pixel of each patch render when the caller gives none.
+pub const DEFAULT_PATCH_SPP: u32 = 16;
+/// Maximum path depth of the patch renders when the caller gives none (a
+/// full render's depth is capped at this for `render --autofocus`).
+pub const DEFAULT_PATCH_MAX_DEPTH: u32 = 8;
+/// Seed of the patch renders when the caller gives none.
+pub const DEFAULT_SEED: u32 = 0;
+/// The early-exit strategy's patience when the caller gives none: steps
+/// without a new best before it stops.
+pub const DEFAULT_PATIENCE: usize = 12;
+
 /// A search strategy.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum Strategy {
     /// Every pixel-pitch step from infinity focus to close focus; the reference.
     Sweep,
@@ -80,7 +91,8 @@ pub enum Strategy {
     /// Hybrid search: a start from the range finder (or, with nothing to range
     /// on, a coarse contrast scan of the whole range), then the contrast peak
     /// around it, refocused from one light field with the rest of 10% of the
-    /// sweep's camera rays.
+    /// sweep's camera rays. The default.
+    #[default]
     Fast,
     /// Range finder: probe rays find the patch's dominant surface, the lens's
     /// through-focus modulation gives its best-contrast sensor position. No
@@ -98,7 +110,7 @@ impl Named for Strategy {
         (Strategy::Sweep, "sweep"),
         (
             Strategy::EarlyExit {
-                patience: crate::defaults::AUTOFOCUS_PATIENCE,
+                patience: DEFAULT_PATIENCE,
             },
             "early-exit",
         ),
@@ -150,7 +162,7 @@ pub struct AutofocusSettings {
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct Evaluation {
     /// Sensor position, mm behind the stop.
-    pub sensor_z_mm: f64,
+    pub sensor_depth_mm: f64,
     /// Focus measure of the patch.
     pub score: f64,
     /// Samples per pixel it was rendered (or its light field recorded) with.
@@ -167,7 +179,7 @@ pub struct AutofocusResult {
     /// The strategy's name.
     pub strategy: &'static str,
     /// The chosen sensor position, mm behind the stop.
-    pub sensor_z_mm: f64,
+    pub sensor_depth_mm: f64,
     /// The distance in focus there, from the sensor plane, in scene units
     /// (`None` when the sensor is nearer than the infinity focus).
     pub focus_distance: Option<f64>,
@@ -311,14 +323,14 @@ impl<'a> Focuser<'a> {
     }
 
     /// The sensor position that focuses `distance` (scene units from the sensor).
-    pub fn sensor_z_for_distance(&self, distance: f64) -> Result<f64> {
+    pub fn sensor_depth_mm_for_distance(&self, distance: f64) -> Result<f64> {
         self.system
-            .sensor_z_for_focus_distance(distance * self.mm_per_scene, FOCUS_RAY_HEIGHT_MM)
+            .sensor_depth_mm_for_focus_distance(distance * self.mm_per_scene, FOCUS_RAY_HEIGHT_MM)
     }
 
     pub(super) fn camera_settings(&self, z: f64) -> RealisticCameraSettings {
         RealisticCameraSettings {
-            focus: LensFocus::SensorPositionMm(z),
+            focus: LensFocus::SensorDepthMm(z),
             ..self.settings.camera.clone()
         }
     }
@@ -340,7 +352,7 @@ impl<'a> Focuser<'a> {
         }
         let score = self.score(&images)?;
         self.record(Evaluation {
-            sensor_z_mm: z,
+            sensor_depth_mm: z,
             score,
             spp,
             detail,
@@ -388,10 +400,10 @@ impl<'a> Focuser<'a> {
     }
 
     /// The film region a light field recorded at `z0` needs for refocusing
-    /// the patch anywhere in `sensor_z_mm` (near, far).
-    pub(super) fn light_field_region(&self, z0: f64, sensor_z_mm: (f64, f64)) -> Result<FilmRegion> {
+    /// the patch anywhere in `sensor_depth_mm` (near, far).
+    pub(super) fn light_field_region(&self, z0: f64, sensor_depth_mm: (f64, f64)) -> Result<FilmRegion> {
         let camera = self.patch_camera(z0, self.settings.camera.aperture.clone())?;
-        Ok(LightField::region_for(&camera, self.settings.patch, sensor_z_mm))
+        Ok(LightField::region_for(&camera, self.settings.patch, sensor_depth_mm))
     }
 
     /// The score of the patch refocused from `fields` to `z` (bilinear
@@ -538,7 +550,7 @@ impl<'a> Focuser<'a> {
         };
         Ok(AutofocusResult {
             strategy: strategy.name(),
-            sensor_z_mm: z,
+            sensor_depth_mm: z,
             focus_distance: self.focus_distance_at(z),
             evaluations: std::mem::take(&mut self.evaluations),
             light_fields: self.light_fields,
@@ -660,7 +672,7 @@ impl<'a> Focuser<'a> {
             if let Some(score) = self.refocused_score(&fields, z)? {
                 curve.push((z, score));
                 self.record(Evaluation {
-                    sensor_z_mm: z,
+                    sensor_depth_mm: z,
                     score,
                     spp,
                     detail: Detail::Fine,

@@ -18,8 +18,10 @@ pub const TRUTH_SEED_SPREAD_DOF: f64 = 0.25;
 /// The reference focus of a patch.
 #[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
 pub struct GroundTruth {
-    /// Sensor position of the sharpest patch, mm behind the stop.
-    pub sensor_z_mm: f64,
+    /// Sensor position of the sharpest patch, mm behind the stop (read
+    /// under its old name `sensor_z_mm` too, which earlier files have).
+    #[serde(alias = "sensor_z_mm")]
+    pub sensor_depth_mm: f64,
     /// How far two independent fine sweeps put the peak apart, in DoF (noise).
     pub seed_spread_dof: f64,
     /// Samples per pixel that brought the spread within [`TRUTH_SEED_SPREAD_DOF`] (or the most tried).
@@ -126,7 +128,7 @@ impl Focuser<'_> {
         let range = self.range_focus()?;
         (self.evaluations, self.camera_rays) = saved;
         Ok(GroundTruth {
-            sensor_z_mm: result.0,
+            sensor_depth_mm: result.0,
             seed_spread_dof: result.1,
             spp: result.2,
             depth_conjugate_z_mm: range.map(|r| r.conjugate_z_mm),

@@ -18,7 +18,10 @@ use crate::spectrum::SampledWavelengths;
 mod aperture;
 mod realistic;
 pub use aperture::{Aperture, ApertureMask, ApertureShape};
-pub use realistic::{sensor_for_image, LensFocus, LensSample, Radiometry, RealisticCamera, RealisticCameraSettings};
+pub use realistic::{
+    sensor_for_image, LensFocus, LensSample, Radiometry, RealisticCamera, RealisticCameraSettings, DEFAULT_DESQUEEZE,
+    DEFAULT_DISPERSION, DEFAULT_LENS, DEFAULT_SCENE_UNIT_M, DEFAULT_SENSOR_WIDTH_MM,
+};
 
 /// Where on the film and where on the lens a camera ray starts.
 #[derive(Clone, Copy, Debug)]
@@ -180,6 +183,9 @@ pub fn check_fov_deg(fov_deg: f32) -> std::result::Result<(), String> {
         ))
     }
 }
+
+/// The thin-lens camera's aperture radius when the scene file gives none, scene units.
+pub const DEFAULT_THIN_LENS_APERTURE_RADIUS: f32 = 0.05;
 
 /// A perspective camera: a pinhole when `aperture_radius` is 0, otherwise
 /// an ideal thin lens focused at `focus_distance` (pbrt-v4 `PerspectiveCamera`),

@@ -34,7 +34,10 @@ use context::PathContext;
 pub use guided::guiding_can_help;
 pub(crate) use guided::material_is_guided;
 use path::trace_path;
-pub use settings::{GuidedSettings, Integrator, IntegratorKind, PathSettings};
+pub use settings::{
+    GuidedSettings, Integrator, IntegratorKind, PathSettings, DEFAULT_GUIDE_TRAINING_SPP, DEFAULT_LIGHT_SAMPLES,
+    DEFAULT_MAX_DEPTH,
+};
 
 impl Integrator {
     /// Radiance arriving along a camera ray at the wavelengths `lambda`, as

@@ -16,6 +16,28 @@ pub struct PathSettings {
     pub light_samples: u32,
 }
 
+/// Maximum path depth when neither the caller nor the scene file gives one
+/// (scattering events; 1 is direct lighting only).
+pub const DEFAULT_MAX_DEPTH: u32 = 16;
+/// Shadow rays per area or environment light at each non-specular hit when
+/// neither the caller nor the scene file gives them (a point, spot or
+/// directional light takes one: its samples would all be one ray).
+pub const DEFAULT_LIGHT_SAMPLES: u32 = 1;
+/// The guided integrator's training when the scene file does not give it:
+/// samples per pixel of the whole image spent on iterations of 1, 2, 4 and
+/// 8 before the render.
+pub const DEFAULT_GUIDE_TRAINING_SPP: u32 = 15;
+
+impl Default for PathSettings {
+    /// [`DEFAULT_MAX_DEPTH`] and [`DEFAULT_LIGHT_SAMPLES`].
+    fn default() -> Self {
+        PathSettings {
+            max_depth: DEFAULT_MAX_DEPTH,
+            light_samples: DEFAULT_LIGHT_SAMPLES,
+        }
+    }
+}
+
 /// Which integrator estimates the radiance along camera rays, with its
 /// settings: the seam where another integrator (spectral transport, path
 /// guiding) goes beside the path tracer. An enum, not a trait object, so
@@ -57,6 +79,17 @@ impl Named for IntegratorKind {
     const WHAT: &'static str = "integrator";
     const NAMED: &'static [(IntegratorKind, &'static str)] =
         &[(IntegratorKind::Path, "path"), (IntegratorKind::Guided, "guided")];
+}
+
+impl Default for Integrator {
+    /// The default kind with the default path settings (and training).
+    fn default() -> Self {
+        Integrator::new(
+            IntegratorKind::default(),
+            PathSettings::default(),
+            DEFAULT_GUIDE_TRAINING_SPP,
+        )
+    }
 }
 
 impl Integrator {

@@ -63,7 +63,7 @@ impl ChromaticAnalysis {
         let d = at(D_LINE_NM);
         let tan_field = field_height_mm / d.effective_focal_length_mm;
         // The d line's paraxial image plane: rear vertex + its back focal distance.
-        let image_z = system.rear_z() + d.back_focal_distance_mm;
+        let image_z = system.rear_z_mm() + d.back_focal_distance_mm;
         let height = |nm: f64| system.at_wavelength(nm).paraxial_chief_ray_height(tan_field, image_z);
         Ok(ChromaticAnalysis {
             longitudinal_color_mm: at(F_LINE_NM).back_focal_distance_mm - at(C_LINE_NM).back_focal_distance_mm,

@@ -61,7 +61,7 @@ impl LensSystem {
 
     /// Real-ray rear focal point and principal plane in `meridian`.
     pub fn real_focus_at_infinity_in(&self, height_mm: f64, meridian: Meridian) -> Result<(f64, f64)> {
-        let start = meridian.across() * height_mm + DVec3::new(0.0, 0.0, self.front_z() - 1.0);
+        let start = meridian.across() * height_mm + DVec3::new(0.0, 0.0, self.front_z_mm() - 1.0);
         let ray = LensRay {
             origin: start,
             direction: DVec3::Z,
@@ -75,15 +75,15 @@ impl LensSystem {
     /// The sensor position at which objects at infinity focus: the real
     /// focus of [`LensSystem::real_focus_at_infinity`], for an anamorphic
     /// lens midway between its two meridians' (where the camera puts it).
-    pub fn infinity_focus_z(&self, height_mm: f64) -> Result<f64> {
+    pub fn infinity_focus_z_mm(&self, height_mm: f64) -> Result<f64> {
         self.between_meridians(|m| Ok(self.real_focus_at_infinity_in(height_mm, m)?.0))
     }
 
     /// Sensor position focusing an on-axis object point at `object_z` (in
     /// front of the lens), by a real ray meeting the front vertex plane at
     /// `height_mm` (for an anamorphic lens, midway between its meridians').
-    pub fn real_image_z(&self, object_z: f64, height_mm: f64) -> Result<f64> {
-        if object_z >= self.front_z() {
+    pub fn real_image_z_mm(&self, object_z: f64, height_mm: f64) -> Result<f64> {
+        if object_z >= self.front_z_mm() {
             return Err(Error::InvalidArgument(format!(
                 "{}: the object must be in front of the lens",
                 self.prescription.name
@@ -92,34 +92,34 @@ impl LensSystem {
         self.between_meridians(|m| {
             let ray = LensRay::between(
                 DVec3::new(0.0, 0.0, object_z),
-                m.across() * height_mm + DVec3::new(0.0, 0.0, self.front_z()),
+                m.across() * height_mm + DVec3::new(0.0, 0.0, self.front_z_mm()),
             );
             Ok(self.image_of(&ray, "object", m)?.1)
         })
     }
 
     /// The object distance (mm, from the sensor plane to the object, as a
-    /// focus-distance scale reads) that a sensor at `sensor_z` focuses, by a
+    /// focus-distance scale reads) that a sensor at `sensor_depth_mm` focuses, by a
     /// real ray from the sensor's centre meeting the rear vertex plane at
     /// `height_mm`. `None` when nothing in front of the lens is in focus there
     /// (the sensor is nearer than the infinity focus). For an anamorphic
-    /// lens, the distance whose two line foci `sensor_z` lies midway between:
-    /// the inverse of [`LensSystem::sensor_z_for_focus_distance`].
-    pub fn focus_distance_mm(&self, sensor_z: f64, height_mm: f64) -> Option<f64> {
+    /// lens, the distance whose two line foci `sensor_depth_mm` lies midway between:
+    /// the inverse of [`LensSystem::sensor_depth_mm_for_focus_distance`].
+    pub fn focus_distance_mm(&self, sensor_depth_mm: f64, height_mm: f64) -> Option<f64> {
         if self.is_rotationally_symmetric() {
-            return self.focus_distance_in(sensor_z, height_mm, Meridian::Horizontal);
+            return self.focus_distance_in(sensor_depth_mm, height_mm, Meridian::Horizontal);
         }
         // Bisection in the object's vergence 1/d, which the sensor
         // position grows with: 0 is infinity.
-        let sensor_at = |vergence: f64| self.sensor_z_for_focus_distance(1.0 / vergence, height_mm).ok();
-        if sensor_z <= self.infinity_focus_z(height_mm).ok()? {
+        let sensor_at = |vergence: f64| self.sensor_depth_mm_for_focus_distance(1.0 / vergence, height_mm).ok();
+        if sensor_depth_mm <= self.infinity_focus_z_mm(height_mm).ok()? {
             return None;
         }
         let focal = self.paraxial().ok()?.effective_focal_length_mm.abs();
         let (mut lo, mut hi) = (0.0, 1e-3 / focal);
         for doubling in 0.. {
             match sensor_at(hi) {
-                Some(z) if z < sensor_z && doubling < 200 => (lo, hi) = (hi, 2.0 * hi),
+                Some(z) if z < sensor_depth_mm && doubling < 200 => (lo, hi) = (hi, 2.0 * hi),
                 Some(_) => break,
                 // Closer than the lens focuses: the answer lies below.
                 None if doubling > 0 => break,
@@ -132,19 +132,19 @@ impl LensSystem {
                 break;
             }
             match sensor_at(mid) {
-                Some(z) if z < sensor_z => lo = mid,
+                Some(z) if z < sensor_depth_mm => lo = mid,
                 _ => hi = mid,
             }
         }
         let distance = 2.0 / (lo + hi);
-        (sensor_z - distance < self.front_z()).then_some(distance)
+        (sensor_depth_mm - distance < self.front_z_mm()).then_some(distance)
     }
 
     /// [`LensSystem::focus_distance_mm`] by one real ray in `meridian`.
-    fn focus_distance_in(&self, sensor_z: f64, height_mm: f64, meridian: Meridian) -> Option<f64> {
+    fn focus_distance_in(&self, sensor_depth_mm: f64, height_mm: f64, meridian: Meridian) -> Option<f64> {
         let ray = LensRay::between(
-            DVec3::new(0.0, 0.0, sensor_z),
-            meridian.across() * height_mm + DVec3::new(0.0, 0.0, self.rear_z()),
+            DVec3::new(0.0, 0.0, sensor_depth_mm),
+            meridian.across() * height_mm + DVec3::new(0.0, 0.0, self.rear_z_mm()),
         );
         let out = self.trace(&ray, Direction::ToScene)?;
         // In focus only if the ray leaves heading toward the axis.
@@ -152,19 +152,24 @@ impl LensSystem {
             return None;
         }
         let object_z = out.axis_crossing_z(meridian)?;
-        (object_z < self.front_z()).then_some(sensor_z - object_z)
+        (object_z < self.front_z_mm()).then_some(sensor_depth_mm - object_z)
     }
 
     /// The sensor position whose real-ray conjugate is `distance_mm` from the
     /// sensor plane: the inverse of [`LensSystem::focus_distance_mm`], by
     /// bisection (for an anamorphic lens, midway between the positions that
     /// focus each meridian).
-    pub fn sensor_z_for_focus_distance(&self, distance_mm: f64, height_mm: f64) -> Result<f64> {
-        self.between_meridians(|m| self.sensor_z_for_focus_distance_in(distance_mm, height_mm, m))
+    pub fn sensor_depth_mm_for_focus_distance(&self, distance_mm: f64, height_mm: f64) -> Result<f64> {
+        self.between_meridians(|m| self.sensor_depth_mm_for_focus_distance_in(distance_mm, height_mm, m))
     }
 
-    /// [`LensSystem::sensor_z_for_focus_distance`] in one meridian.
-    fn sensor_z_for_focus_distance_in(&self, distance_mm: f64, height_mm: f64, meridian: Meridian) -> Result<f64> {
+    /// [`LensSystem::sensor_depth_mm_for_focus_distance`] in one meridian.
+    fn sensor_depth_mm_for_focus_distance_in(
+        &self,
+        distance_mm: f64,
+        height_mm: f64,
+        meridian: Meridian,
+    ) -> Result<f64> {
         let (infinity_z, _) = self.real_focus_at_infinity_in(height_mm, meridian)?;
         if !(distance_mm.is_finite() && distance_mm > 0.0) {
             return Err(Error::InvalidArgument(format!(
@@ -246,8 +251,8 @@ mod tests {
         );
         // Gaussian lens equation 1/s + 1/s' = 1/f with real rays near the axis.
         for image_distance in [110.0, 150.0, 200.0, 400.0] {
-            let sensor_z = lens.rear_z() + image_distance;
-            let to_object = lens.focus_distance_mm(sensor_z, 0.1).unwrap();
+            let sensor_depth_mm = lens.rear_z_mm() + image_distance;
+            let to_object = lens.focus_distance_mm(sensor_depth_mm, 0.1).unwrap();
             let object_distance = to_object - image_distance - t;
             let lhs = 1.0 / object_distance + 1.0 / image_distance;
             assert!(
@@ -264,17 +269,20 @@ mod tests {
         let names = BUILTIN_LENSES.iter().map(|(name, _)| *name).chain(["lentil:2004"]);
         for name in names {
             let lens = builtin(name);
-            let infinity = lens.infinity_focus_z(0.1).unwrap();
+            let infinity = lens.infinity_focus_z_mm(0.1).unwrap();
             let focal = lens.paraxial().unwrap().effective_focal_length_mm;
             // Objects from 6 f in front of the lens (a telephoto's closest
             // real focus is about 4 f from the sensor) to far away.
             for multiple in [6.0, 10.0, 40.0, 400.0, 4000.0] {
-                let metres = (infinity - lens.front_z() + multiple * focal) * 1e-3;
-                let z = lens.sensor_z_for_focus_distance(metres * 1e3, 0.1).unwrap();
+                let metres = (infinity - lens.front_z_mm() + multiple * focal) * 1e-3;
+                let z = lens.sensor_depth_mm_for_focus_distance(metres * 1e3, 0.1).unwrap();
                 assert!(z > infinity, "{name} at {metres} m");
                 let back = lens.focus_distance_mm(z, 0.1).unwrap();
                 assert!(relative(back, metres * 1e3) < 1e-6, "{name} at {metres} m: {back} mm");
-                let [h, v] = Meridian::BOTH.map(|m| lens.sensor_z_for_focus_distance_in(metres * 1e3, 0.1, m).unwrap());
+                let [h, v] = Meridian::BOTH.map(|m| {
+                    lens.sensor_depth_mm_for_focus_distance_in(metres * 1e3, 0.1, m)
+                        .unwrap()
+                });
                 assert!(
                     (z - 0.5 * (h + v)).abs() < 1e-9,
                     "{name} at {metres} m: {z} between {h} and {v}"

@@ -288,12 +288,12 @@ mod tests {
         for (height_mm, angle_deg, expected) in rayoptics {
             let a = f64::to_radians(angle_deg);
             let ray = LensRay {
-                origin: DVec3::new(height_mm - a.tan() * 50.0, 0.0, lens.front_z() - 50.0),
+                origin: DVec3::new(height_mm - a.tan() * 50.0, 0.0, lens.front_z_mm() - 50.0),
                 direction: DVec3::new(a.sin(), 0.0, a.cos()),
             };
             let at = |system: &LensSystem| {
                 let out = system.trace(&ray, Direction::ToSensor).expect("passes");
-                out.at_z(system.rear_z() + 10.0).unwrap().x
+                out.at_z(system.rear_z_mm() + 10.0).unwrap().x
             };
             let ours = at(&lens);
             assert!(
@@ -327,7 +327,7 @@ mod tests {
                 hits.push(p)
             });
             let out = out.unwrap_or_else(|| panic!("{start:?} {slope:?} blocked: {hits:?}"));
-            let behind = out.at_z(lens.rear_z() + 10.0).unwrap();
+            let behind = out.at_z(lens.rear_z_mm() + 10.0).unwrap();
             assert!(
                 (behind.x - expected[0]).abs() < 1e-9 && (behind.y - expected[1]).abs() < 1e-9,
                 "{start:?} {slope:?}: {behind} vs rayoptics {expected:?}"

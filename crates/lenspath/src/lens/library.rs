@@ -24,10 +24,8 @@
 use super::lentil;
 use super::prescription::LensPrescription;
 use super::system::LensSystem;
+use super::FULL_FRAME_MM;
 use crate::error::Result;
-
-/// 35 mm film and full-frame digital, mm.
-const FULL_FRAME_MM: (f64, f64) = (36.0, 24.0);
 
 /// A lens the program ships.
 #[derive(Clone, Debug, PartialEq)]

@@ -62,6 +62,10 @@ impl LensPrescription {
     }
 }
 
+/// The 35 mm format (film and full-frame digital), width and height in mm:
+/// the sensor a lens is analysed and drawn for unless told another.
+pub const FULL_FRAME_MM: (f64, f64) = (36.0, 24.0);
+
 /// Choices behind the real-ray figures of [`LensAnalysis`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AnalysisSettings {
@@ -79,7 +83,7 @@ impl Default for AnalysisSettings {
         AnalysisSettings {
             ray_height_mm: 0.1,
             close_object_distance_mm: None,
-            sensor_mm: (36.0, 24.0),
+            sensor_mm: FULL_FRAME_MM,
         }
     }
 }
@@ -170,9 +174,9 @@ impl LensAnalysis {
         let h = settings.ray_height_mm;
         let (horizontal_focus, real_principal) = system.real_focus_at_infinity(h)?;
         let focal_length = (horizontal_focus - real_principal).abs();
-        let infinity_focus = system.infinity_focus_z(h)?;
+        let infinity_focus = system.infinity_focus_z_mm(h)?;
         let close_distance = settings.close_object_distance_mm.unwrap_or(5.0 * focal_length);
-        let close_focus = system.real_image_z(-close_distance, h)?;
+        let close_focus = system.real_image_z_mm(-close_distance, h)?;
         let (w, ht) = settings.sensor_mm;
         // Paraxial field of view across a half-width `half_mm` through a focal length.
         let fov_deg = |half_mm: f64, focal_mm: f64| 2.0 * (half_mm / focal_mm.abs()).atan().to_degrees();
@@ -225,8 +229,8 @@ impl LensAnalysis {
             close_focus_object_distance_mm: close_distance,
             focal_length_mm: focal_length,
             ray_height_mm: h,
-            front_vertex_mm: system.front_z(),
-            rear_vertex_mm: system.rear_z(),
+            front_vertex_mm: system.front_z_mm(),
+            rear_vertex_mm: system.rear_z_mm(),
             anamorphic,
         })
     }

@@ -127,7 +127,7 @@ impl LensSystem {
                 Direction::ToScene => 0..self.stop,
             };
             let seq = self.travel_sequence(direction, range, meridian);
-            let r = self.stop_radius();
+            let r = self.stop_radius_mm();
             let chief = Self::paraxial_trace(&seq, ParaxialRay { z: 0.0, y: 0.0, u: 1.0 });
             let edge = Self::paraxial_trace(&seq, ParaxialRay { z: 0.0, y: r, u: 0.0 });
             let z = chief.z - chief.y / chief.u;
@@ -139,8 +139,8 @@ impl LensSystem {
         let efl = rear_focal - rear_principal;
         Ok(ParaxialData {
             effective_focal_length_mm: efl,
-            back_focal_distance_mm: rear_focal - self.rear_z(),
-            front_focal_distance_mm: self.front_z() + front_focal,
+            back_focal_distance_mm: rear_focal - self.rear_z_mm(),
+            front_focal_distance_mm: self.front_z_mm() + front_focal,
             rear_focal_point_z_mm: rear_focal,
             front_focal_point_z_mm: -front_focal,
             rear_principal_plane_z_mm: rear_principal,

@@ -74,10 +74,15 @@ pub fn layout(system: &LensSystem, analysis: &LensAnalysis, sensor_diagonal_mm: 
     layout_focused(system, analysis, sensor_diagonal_mm, analysis.infinity_focus_mm)
 }
 
-/// [`layout`] with the sensor `sensor_z` mm behind the stop (where it is
+/// [`layout`] with the sensor `sensor_depth_mm` mm behind the stop (where it is
 /// focused now): the rays from infinity meet it blurred unless it is at the
 /// infinity focus.
-pub fn layout_focused(system: &LensSystem, analysis: &LensAnalysis, sensor_diagonal_mm: f64, sensor_z: f64) -> Layout {
+pub fn layout_focused(
+    system: &LensSystem,
+    analysis: &LensAnalysis,
+    sensor_diagonal_mm: f64,
+    sensor_depth_mm: f64,
+) -> Layout {
     let surfaces: Vec<_> = system.surface_layout().collect();
     let largest_aperture = surfaces.iter().map(|s| s.2).fold(0.0, f64::max);
 
@@ -99,8 +104,8 @@ pub fn layout_focused(system: &LensSystem, analysis: &LensAnalysis, sensor_diago
             front.chain(back).collect()
         })
         .collect();
-    let outer = system.stop_radius() + 0.25 * largest_aperture;
-    let blade = |sign: f64| vec![(0.0, sign * system.stop_radius()), (0.0, sign * outer)];
+    let outer = system.stop_radius_mm() + 0.25 * largest_aperture;
+    let blade = |sign: f64| vec![(0.0, sign * system.stop_radius_mm()), (0.0, sign * outer)];
     let max_field = (0.5 * analysis.diagonal_fov_deg).to_radians();
     // Each wavelength with its colour (`None`: colour the fans by field).
     let lines: Vec<(f64, Option<&'static str>)> = if system.is_dispersive() {
@@ -113,7 +118,7 @@ pub fn layout_focused(system: &LensSystem, analysis: &LensAnalysis, sensor_diago
         let at_line = system.at_wavelength(wavelength_nm);
         for (field_index, &field_fraction) in FIELD_FRACTIONS.iter().enumerate() {
             rays.extend(
-                ray_fan(&at_line, field_fraction * max_field, sensor_z)
+                ray_fan(&at_line, field_fraction * max_field, sensor_depth_mm)
                     .into_iter()
                     .map(|path| FanRay {
                         field_fraction,
@@ -132,10 +137,10 @@ pub fn layout_focused(system: &LensSystem, analysis: &LensAnalysis, sensor_diago
             analysis.f_number,
             analysis.diagonal_fov_deg,
             sensor_diagonal_mm,
-            if sensor_z == analysis.infinity_focus_mm {
+            if sensor_depth_mm == analysis.infinity_focus_mm {
                 "focused at infinity".to_string()
             } else {
-                format!("sensor {sensor_z:.3} mm behind the stop")
+                format!("sensor {sensor_depth_mm:.3} mm behind the stop")
             },
             if system.is_dispersive() {
                 "; rays at F, d, C"
@@ -146,11 +151,14 @@ pub fn layout_focused(system: &LensSystem, analysis: &LensAnalysis, sensor_diago
         elements,
         stop: [blade(1.0), blade(-1.0)],
         sensor: vec![
-            (sensor_z, 0.5 * sensor_diagonal_mm),
-            (sensor_z, -0.5 * sensor_diagonal_mm),
+            (sensor_depth_mm, 0.5 * sensor_diagonal_mm),
+            (sensor_depth_mm, -0.5 * sensor_diagonal_mm),
         ],
         rays,
-        z_range_mm: (system.front_z() - 0.15 * (sensor_z - system.front_z()), sensor_z + 2.0),
+        z_range_mm: (
+            system.front_z_mm() - 0.15 * (sensor_depth_mm - system.front_z_mm()),
+            sensor_depth_mm + 2.0,
+        ),
         half_height_mm: largest_aperture.max(0.5 * sensor_diagonal_mm) * 1.15,
     }
 }
@@ -224,19 +232,19 @@ pub fn layout_to_svg(l: &Layout) -> String {
 
 /// Paths of rays from infinity at `field` radians that reach the sensor,
 /// spread evenly over the heights at which they pass.
-fn ray_fan(system: &LensSystem, field: f64, sensor_z: f64) -> Vec<Vec<DVec3>> {
+fn ray_fan(system: &LensSystem, field: f64, sensor_depth_mm: f64) -> Vec<Vec<DVec3>> {
     let direction = DVec3::new(field.sin(), 0.0, field.cos());
-    let start_z = system.front_z() - 0.1 * (sensor_z - system.front_z());
+    let start_z = system.front_z_mm() - 0.1 * (sensor_depth_mm - system.front_z_mm());
     // A ray by its height where it crosses the front vertex plane.
     let ray_at = |h: f64| LensRay {
         origin: DVec3::new(
-            h - direction.x / direction.z * (system.front_z() - start_z),
+            h - direction.x / direction.z * (system.front_z_mm() - start_z),
             0.0,
             start_z,
         ),
         direction,
     };
-    let reach = system.front_aperture_radius() * 1.5;
+    let reach = system.front_aperture_radius_mm() * 1.5;
     let passing: Vec<f64> = (0..=2000)
         .map(|k| -reach + 2.0 * reach * k as f64 / 2000.0)
         .filter(|&h| system.trace(&ray_at(h), Direction::ToSensor).is_some())
@@ -250,7 +258,7 @@ fn ray_fan(system: &LensSystem, field: f64, sensor_z: f64) -> Vec<Vec<DVec3>> {
             let ray = ray_at(h);
             let mut path = vec![ray.origin];
             let out = system.trace_visiting(&ray, Direction::ToSensor, |p| path.push(p))?;
-            path.push(out.at_z(sensor_z)?);
+            path.push(out.at_z(sensor_depth_mm)?);
             Some(path)
         })
         .collect()

@@ -211,27 +211,27 @@ impl LensSystem {
     }
 
     /// Front vertex position.
-    pub fn front_z(&self) -> f64 {
+    pub fn front_z_mm(&self) -> f64 {
         self.surfaces[0].vertex.z_mm
     }
 
     /// Rear vertex position.
-    pub fn rear_z(&self) -> f64 {
+    pub fn rear_z_mm(&self) -> f64 {
         self.surfaces[self.surfaces.len() - 1].vertex.z_mm
     }
 
     /// Clear aperture radius of the rear element.
-    pub fn rear_aperture_radius(&self) -> f64 {
+    pub fn rear_aperture_radius_mm(&self) -> f64 {
         self.surfaces[self.surfaces.len() - 1].aperture_radius
     }
 
     /// Clear aperture radius of the front element.
-    pub fn front_aperture_radius(&self) -> f64 {
+    pub fn front_aperture_radius_mm(&self) -> f64 {
         self.surfaces[0].aperture_radius
     }
 
     /// Current radius of the aperture stop, mm.
-    pub fn stop_radius(&self) -> f64 {
+    pub fn stop_radius_mm(&self) -> f64 {
         self.surfaces[self.stop].aperture_radius
     }
 
@@ -277,7 +277,7 @@ pub(super) mod test_support {
         /// compare with rayoptics (`bench/peers/lens_vs_rayoptics.py`).
         pub(crate) fn skew(lens: &LensSystem, start: [f64; 2], slope: [f64; 2]) -> LensRay {
             LensRay {
-                origin: DVec3::new(start[0], start[1], lens.front_z() - 50.0),
+                origin: DVec3::new(start[0], start[1], lens.front_z_mm() - 50.0),
                 direction: DVec3::new(slope[0], slope[1], 1.0).normalize(),
             }
         }
@@ -334,7 +334,7 @@ mod tests {
                 surfaces,
             });
             let _ = crate::lens::LensAnalysis::new(&lens, &crate::lens::AnalysisSettings::default());
-            let _ = lens.sensor_z_for_focus_distance(2000.0, 0.1);
+            let _ = lens.sensor_depth_mm_for_focus_distance(2000.0, 0.1);
             let _ = lens.with_f_number(8.0);
         }
     }

@@ -26,8 +26,8 @@ impl LensSystem {
     /// aperture, traced to the sensor side; the blocked ones are dropped, so
     /// vignetting shapes the bundle as it shapes the image.
     pub fn spot_bundle(&self, object: DVec3, grid: usize) -> SpotBundle {
-        let radius = self.front_aperture_radius();
-        let front_z = self.front_z();
+        let radius = self.front_aperture_radius_mm();
+        let front_z_mm = self.front_z_mm();
         let mut rays = Vec::with_capacity(grid * grid);
         for j in 0..grid {
             for i in 0..grid {
@@ -36,7 +36,7 @@ impl LensSystem {
                 if u * u + v * v > 1.0 {
                     continue;
                 }
-                let target = DVec3::new(u * radius, v * radius, front_z);
+                let target = DVec3::new(u * radius, v * radius, front_z_mm);
                 let out = self.trace(&LensRay::between(object, target), Direction::ToSensor);
                 if let Some(out) = out.filter(|o| o.direction.z > 0.0) {
                     rays.push(out);
@@ -58,19 +58,19 @@ impl SpotBundle {
         self.rays.is_empty()
     }
 
-    /// The modulation energy of the spot at sensor position `sensor_z`
+    /// The modulation energy of the spot at sensor position `sensor_depth_mm`
     /// (mm behind the stop) for a sinusoid of `frequency_per_mm` cycles per
     /// mm: the mean of the squared geometric MTF across x and across y. Squared,
     /// because gradient-energy focus measures (Tenengrad) grow with the
     /// square of the contrast; 1 for a perfect point image, toward 0 when blurred.
-    pub fn modulation_energy(&self, sensor_z: f64, frequency_per_mm: f64) -> f64 {
+    pub fn modulation_energy(&self, sensor_depth_mm: f64, frequency_per_mm: f64) -> f64 {
         if self.rays.is_empty() {
             return 0.0;
         }
         let omega = std::f64::consts::TAU * frequency_per_mm;
         let (mut cx, mut sx, mut cy, mut sy) = (0.0, 0.0, 0.0, 0.0);
         for ray in &self.rays {
-            let t = (sensor_z - ray.origin.z) / ray.direction.z;
+            let t = (sensor_depth_mm - ray.origin.z) / ray.direction.z;
             let (x, y) = (ray.origin.x + ray.direction.x * t, ray.origin.y + ray.direction.y * t);
             let (s, c) = (omega * x).sin_cos();
             (sx, cx) = (sx + s, cx + c);
@@ -153,7 +153,7 @@ mod tests {
         // on-axis point is its near-axis real-ray conjugate.
         let lens = dgauss50().with_f_number(16.0).unwrap();
         let object = DVec3::new(0.0, 0.0, -2000.0);
-        let conjugate = lens.real_image_z(object.z, 0.1).unwrap();
+        let conjugate = lens.real_image_z_mm(object.z, 0.1).unwrap();
         let bundle = lens.spot_bundle(object, 96);
         assert!(bundle.len() > 20, "{} rays", bundle.len());
         let best = bundle
@@ -174,7 +174,7 @@ mod tests {
         // curves away from the lens, the further the more (0.15 mm at 15°,
         // about one depth of focus at 640×480).
         let lens = dgauss50();
-        let conjugate = lens.real_image_z(-2000.0, 0.1).unwrap();
+        let conjugate = lens.real_image_z_mm(-2000.0, 0.1).unwrap();
         let shifts: Vec<f64> = [0.0f64, 5.0, 10.0, 15.0]
             .iter()
             .map(|angle: &f64| {

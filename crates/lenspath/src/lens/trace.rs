@@ -187,7 +187,7 @@ mod tests {
         ];
         for (height, crossing) in rayoptics {
             let (focus_z, _) = lens.real_focus_at_infinity(height).unwrap();
-            let ours = focus_z - lens.rear_z();
+            let ours = focus_z - lens.rear_z_mm();
             assert!(
                 (ours - crossing).abs() < 1e-9,
                 "h {height}: {ours} vs rayoptics {crossing}"
@@ -237,7 +237,7 @@ mod tests {
         ];
         for (start, slope, expected) in rayoptics {
             let out = lens.trace(&LensRay::skew(&lens, start, slope), Direction::ToSensor);
-            let behind = out.and_then(|o| o.at_z(lens.rear_z() + 10.0)).expect("passes");
+            let behind = out.and_then(|o| o.at_z(lens.rear_z_mm() + 10.0)).expect("passes");
             assert!(
                 (behind.x - expected[0]).abs() < 1e-9 && (behind.y - expected[1]).abs() < 1e-9,
                 "{start:?} {slope:?}: {behind} vs rayoptics {expected:?}"
@@ -245,12 +245,12 @@ mod tests {
             // And back: the exit ray traced toward the scene returns to the start.
             let back = lens.trace(
                 &LensRay {
-                    origin: DVec3::new(behind.x, behind.y, lens.rear_z() + 10.0),
+                    origin: DVec3::new(behind.x, behind.y, lens.rear_z_mm() + 10.0),
                     direction: -out.unwrap().direction,
                 },
                 Direction::ToScene,
             );
-            let start_again = back.and_then(|b| b.at_z(lens.front_z() - 50.0)).expect("returns");
+            let start_again = back.and_then(|b| b.at_z(lens.front_z_mm() - 50.0)).expect("returns");
             assert!(
                 (start_again.x - start[0]).abs() < 1e-9 && (start_again.y - start[1]).abs() < 1e-9,
                 "{start:?}: back at {start_again}"
@@ -267,7 +267,7 @@ mod tests {
                 let out = lens
                     .trace(&LensRay::skew(lens, start, slope), Direction::ToSensor)
                     .unwrap();
-                out.at_z(lens.rear_z() + 10.0).unwrap()
+                out.at_z(lens.rear_z_mm() + 10.0).unwrap()
             });
             assert!((a - b).length() < 1e-9, "{start:?} {slope:?}: {a} vs {b}");
         }
@@ -281,26 +281,26 @@ mod tests {
             .map(|(name, _)| (name.to_string(), builtin(name)))
             .chain([("asphere".to_string(), LensSystem::new(&aspheric))]);
         for (name, lens) in lenses {
-            let sensor_z = lens.real_focus_at_infinity(0.1).unwrap().0;
-            let film = DVec3::new(1.3, -0.7, sensor_z);
+            let sensor_depth_mm = lens.real_focus_at_infinity(0.1).unwrap().0;
+            let film = DVec3::new(1.3, -0.7, sensor_depth_mm);
             let mut checked = 0;
             for k in 0..400 {
                 let a = k as f64 * 2.399;
-                let r = lens.rear_aperture_radius() * 0.9 * ((k as f64 + 0.5) / 400.0).sqrt();
-                let ray = LensRay::between(film, DVec3::new(r * a.cos(), r * a.sin(), lens.rear_z()));
+                let r = lens.rear_aperture_radius_mm() * 0.9 * ((k as f64 + 0.5) / 400.0).sqrt();
+                let ray = LensRay::between(film, DVec3::new(r * a.cos(), r * a.sin(), lens.rear_z_mm()));
                 let Some(out) = lens.trace(&ray, Direction::ToScene) else {
                     continue;
                 };
                 // The same ray, with the point where it crossed the stop (at z = 0).
                 let (via, at_stop) = lens.trace_via_stop(&ray, Direction::ToScene).unwrap();
                 assert_eq!((via.origin, via.direction), (out.origin, out.direction));
-                assert!(at_stop.z.abs() < 1e-12 && at_stop.truncate().length() <= lens.stop_radius());
+                assert!(at_stop.z.abs() < 1e-12 && at_stop.truncate().length() <= lens.stop_radius_mm());
                 let back = LensRay {
                     origin: out.origin + out.direction * 25.0,
                     direction: -out.direction,
                 };
                 let returned = lens.trace(&back, Direction::ToSensor).expect("reversible");
-                let hit = returned.at_z(sensor_z).unwrap();
+                let hit = returned.at_z(sensor_depth_mm).unwrap();
                 assert!(
                     (hit - film).length() < 1e-9,
                     "{name}: returned to {hit:?}, not {film:?}"
@@ -321,12 +321,12 @@ mod tests {
     #[test]
     fn tracing_rays_together_gives_each_its_own_result() {
         let lens = builtin("wide22");
-        let sensor_z = lens.real_focus_at_infinity(0.1).unwrap().0;
+        let sensor_depth_mm = lens.real_focus_at_infinity(0.1).unwrap().0;
         let rays: Vec<LensRay> = (0..64)
             .map(|k| {
-                let film = DVec3::new(0.3 * k as f64, -0.1 * k as f64, sensor_z);
+                let film = DVec3::new(0.3 * k as f64, -0.1 * k as f64, sensor_depth_mm);
                 let a = k as f64 * 2.399;
-                let target = DVec3::new(4.0 * a.cos(), 4.0 * a.sin(), lens.rear_z());
+                let target = DVec3::new(4.0 * a.cos(), 4.0 * a.sin(), lens.rear_z_mm());
                 LensRay::between(film, target)
             })
             .collect();
@@ -348,11 +348,15 @@ mod tests {
         // Through the lens at three wavelengths at once (a dispersive one).
         let dgauss = builtin("dgauss50");
         let systems = [400.0, 550.0, 700.0].map(|nm| dgauss.at_wavelength(nm));
-        let sensor_z = dgauss.real_focus_at_infinity(0.1).unwrap().0;
+        let sensor_depth_mm = dgauss.real_focus_at_infinity(0.1).unwrap().0;
         for k in 0..32 {
-            let film = DVec3::new(0.5 * k as f64, 0.2 * k as f64, sensor_z);
+            let film = DVec3::new(0.5 * k as f64, 0.2 * k as f64, sensor_depth_mm);
             let rays = [0.0, 2.1, 4.2].map(|a: f64| {
-                let target = DVec3::new(9.0 * (a + k as f64).cos(), 9.0 * (a + k as f64).sin(), dgauss.rear_z());
+                let target = DVec3::new(
+                    9.0 * (a + k as f64).cos(),
+                    9.0 * (a + k as f64).sin(),
+                    dgauss.rear_z_mm(),
+                );
                 LensRay::between(film, target)
             });
             let together = LensSystem::trace_each([&systems[0], &systems[1], &systems[2]], &rays, Direction::ToScene);
@@ -371,15 +375,15 @@ mod tests {
     fn the_fisheye_covers_its_design_field() {
         // Muller's fisheye is specified for a 155.9° field (Smith, Modern Lens Design, p. 164).
         let lens = builtin("fisheye10");
-        let sensor_z = lens.real_focus_at_infinity(0.1).unwrap().0;
-        let rear = lens.rear_aperture_radius();
+        let sensor_depth_mm = lens.real_focus_at_infinity(0.1).unwrap().0;
+        let rear = lens.rear_aperture_radius_mm();
         let widest = (0..600)
             .flat_map(|k| (0..400).map(move |j| (k, j)))
             .filter_map(|(k, j)| {
-                let film = DVec3::new(0.05 * k as f64, 0.0, sensor_z);
+                let film = DVec3::new(0.05 * k as f64, 0.0, sensor_depth_mm);
                 let x = -rear + 2.0 * rear * j as f64 / 400.0;
                 lens.trace(
-                    &LensRay::between(film, DVec3::new(x, 0.0, lens.rear_z())),
+                    &LensRay::between(film, DVec3::new(x, 0.0, lens.rear_z_mm())),
                     Direction::ToScene,
                 )
             })
@@ -400,12 +404,12 @@ mod tests {
         let table = "10 20 1.9 19.99\n-10 2 1 19.99\n0 0 0 19.9\n";
         let ball = LensPrescription::parse(table, "ball", TableConvention::ThicknessToNext).unwrap();
         let lens = LensSystem::new(&ball);
-        let sensor_z = 3.0;
+        let sensor_depth_mm = 3.0;
         let (mut past_90, mut widest) = (0, 0.0f64);
         for i in 0..200 {
             for j in 0..200 {
-                let film = DVec3::new(-30.0 + 0.3 * i as f64, 0.0, sensor_z);
-                let target = DVec3::new(-9.9 + 0.099 * j as f64, 0.0, lens.rear_z());
+                let film = DVec3::new(-30.0 + 0.3 * i as f64, 0.0, sensor_depth_mm);
+                let target = DVec3::new(-9.9 + 0.099 * j as f64, 0.0, lens.rear_z_mm());
                 let ray = LensRay::between(film, target);
                 let Some(out) = lens.trace(&ray, Direction::ToScene) else {
                     continue;
@@ -419,7 +423,7 @@ mod tests {
                         direction: -out.direction,
                     };
                     let returned = lens.trace(&back, Direction::ToSensor).expect("reversible");
-                    assert!((returned.at_z(sensor_z).unwrap() - film).length() < 1e-9);
+                    assert!((returned.at_z(sensor_depth_mm).unwrap() - film).length() < 1e-9);
                 }
             }
         }

@@ -1,7 +1,6 @@
 //! What controls one render: `RenderSettings` and what its film records
 //! (`FilmResponse`), their checks, and the region a render covers.
 
-use crate::defaults;
 use crate::error::{Error, Result};
 use crate::film::{Filter, PixelRect};
 use crate::guiding::Guide;
@@ -135,19 +134,31 @@ impl FilmResponse {
     }
 }
 
+/// Image size in pixels, (width, height), when neither the caller nor the scene file gives one.
+pub const DEFAULT_IMAGE_SIZE: (u32, u32) = (640, 480);
+/// Samples per pixel when neither the caller nor the scene file gives them.
+pub const DEFAULT_SPP: u32 = 64;
+/// Seed of the sample sequences when neither the caller nor the scene file gives one.
+pub const DEFAULT_SEED: u32 = 0;
+/// Edge of the square tiles a render is cut into, pixels.
+pub const DEFAULT_TILE_SIZE: u32 = 16;
+/// The most shadow rays per light and hit a render takes.
+pub const MAX_LIGHT_SAMPLES: u32 = 1024;
+
 impl Default for RenderSettings {
-    /// The library's defaults ([`crate::defaults`]): box filter, every core, the depth channel.
+    /// The library's defaults: these `DEFAULT_*` values, the path tracer's
+    /// (`integrator::DEFAULT_*`), box filter, every core, the depth channel.
     fn default() -> Self {
         RenderSettings {
-            width: defaults::IMAGE_SIZE.0,
-            height: defaults::IMAGE_SIZE.1,
-            spp: defaults::SPP,
-            integrator: Integrator::path(defaults::MAX_DEPTH, defaults::LIGHT_SAMPLES),
-            seed: defaults::SEED,
-            sampler: defaults::SAMPLER,
+            width: DEFAULT_IMAGE_SIZE.0,
+            height: DEFAULT_IMAGE_SIZE.1,
+            spp: DEFAULT_SPP,
+            integrator: Integrator::default(),
+            seed: DEFAULT_SEED,
+            sampler: SamplerKind::default(),
             filter: Filter::Box,
             threads: None,
-            tile_size: defaults::TILE_SIZE,
+            tile_size: DEFAULT_TILE_SIZE,
             crop: None,
             depth: true,
             film: FilmResponse::Srgb,
@@ -193,9 +204,9 @@ impl RenderSettings {
             ));
         }
         check_max_depth(self.integrator.max_depth())?;
-        if self.integrator.light_samples() > 1024 {
+        if self.integrator.light_samples() > MAX_LIGHT_SAMPLES {
             return fail(format!(
-                "light samples must be at most 1024, got {}",
+                "light samples must be at most {MAX_LIGHT_SAMPLES}, got {}",
                 self.integrator.light_samples()
             ));
         }

@@ -43,7 +43,7 @@ fn focuser_with(
     spp: u32,
 ) -> Focuser<'_> {
     let (width, height) = (320, 240);
-    let mut camera = RealisticCameraSettings::new(lens, (36.0, 27.0), LensFocus::SensorPositionMm(0.0));
+    let mut camera = RealisticCameraSettings::new(lens, (36.0, 27.0), LensFocus::SensorDepthMm(0.0));
     camera.f_number = f_number;
     let settings = AutofocusSettings {
         camera,
@@ -79,7 +79,7 @@ fn every_strategy_focuses_a_plane_at_its_conjugate() {
     let scene = board_at(distance);
     // At f/5.6 the lens's spherical aberration moves its best focus by well under a DoF.
     let mut f = focuser(&scene, Some(5.6), CENTRE, 4);
-    let conjugate = f.sensor_z_for_distance(f64::from(distance)).unwrap();
+    let conjugate = f.sensor_depth_mm_for_distance(f64::from(distance)).unwrap();
     let back = f.focus_distance_at(conjugate).unwrap();
     assert!((back - f64::from(distance)).abs() < 1e-3, "{back}");
     let dof = f.depth_of_focus_mm(conjugate);
@@ -92,7 +92,7 @@ fn every_strategy_focuses_a_plane_at_its_conjugate() {
         Strategy::Depth,
     ] {
         let r = f.run(strategy).unwrap();
-        let error = (r.sensor_z_mm - conjugate) / dof;
+        let error = (r.sensor_depth_mm - conjugate) / dof;
         assert!(error.abs() <= 1.0, "{strategy:?}: {error:+.2} DoF from the conjugate");
         assert!(r.focus_distance.is_some(), "{strategy:?}");
         match strategy {
@@ -139,11 +139,11 @@ fn on_a_lens_with_strong_colour_every_strategy_lands_on_the_sweeps_peak() {
     let singlet = LensPrescription::load(path.to_str().unwrap()).unwrap();
     let mut f = focuser_with(&scene, singlet, None, CENTRE, 4);
     let sweep = f.run(Strategy::Sweep).unwrap();
-    let dof = f.depth_of_focus_mm(sweep.sensor_z_mm);
-    let conjugate = f.sensor_z_for_distance(f64::from(distance)).unwrap();
+    let dof = f.depth_of_focus_mm(sweep.sensor_depth_mm);
+    let conjugate = f.sensor_depth_mm_for_distance(f64::from(distance)).unwrap();
     eprintln!(
         "sweep peak {:.4} mm, the d line's conjugate {conjugate:.4} mm, depth of focus {dof:.4} mm",
-        sweep.sensor_z_mm
+        sweep.sensor_depth_mm
     );
     for strategy in [
         Strategy::EarlyExit { patience: 12 },
@@ -152,10 +152,10 @@ fn on_a_lens_with_strong_colour_every_strategy_lands_on_the_sweeps_peak() {
         Strategy::Depth,
     ] {
         let r = f.run(strategy).unwrap();
-        let error = (r.sensor_z_mm - sweep.sensor_z_mm) / dof;
+        let error = (r.sensor_depth_mm - sweep.sensor_depth_mm) / dof;
         eprintln!(
             "{strategy:?}: {:.4} mm, {error:+.2} DoF from the sweep's peak",
-            r.sensor_z_mm
+            r.sensor_depth_mm
         );
         assert!(
             error.abs() <= 1.0,
@@ -193,7 +193,7 @@ fn depth_focuses_on_the_dominant_surface() {
     add_checkerboard(&mut scene, (-0.2, 0.0135), (-0.2, 0.2), 1.0, 0.005);
     let scene = scene.compile(&BvhSettings::default()).unwrap();
     let mut f = focuser(&scene, None, CENTRE, 4);
-    let conjugate_near = f.sensor_z_for_distance(1.0).unwrap();
+    let conjugate_near = f.sensor_depth_mm_for_distance(1.0).unwrap();
     let z = f.range_focus().unwrap().unwrap().conjugate_z_mm;
     assert!(
         (z - conjugate_near).abs() < 0.5 * f.depth_of_focus_mm(z),
@@ -222,9 +222,9 @@ fn range_focus_predicts_the_contrast_peak_off_axis() {
     let range = f.range_focus().unwrap().unwrap();
     assert!(range.dominant_fraction > 0.99, "{range:?}");
     let truth = f.ground_truth().unwrap();
-    let dof = f.depth_of_focus_mm(truth.sensor_z_mm);
-    let predicted = (range.best_focus_z_mm - truth.sensor_z_mm) / dof;
-    let conjugate = (range.conjugate_z_mm - truth.sensor_z_mm) / dof;
+    let dof = f.depth_of_focus_mm(truth.sensor_depth_mm);
+    let predicted = (range.best_focus_z_mm - truth.sensor_depth_mm) / dof;
+    let conjugate = (range.conjugate_z_mm - truth.sensor_depth_mm) / dof;
     eprintln!("truth {truth:?}: lens best focus {predicted:+.2} DoF, conjugate {conjugate:+.2} DoF");
     assert!(
         predicted.abs() < 0.5,
@@ -253,8 +253,8 @@ fn depth_focuses_on_the_edge_the_contrast_comes_from() {
     // At the command line's 16 samples: at 4, a light field within 2% of
     // the sweep's rays has 5 samples per pixel, and the curve is noise.
     let mut f = focuser(&scene, None, CENTRE_WIDE, 16);
-    let near = f.sensor_z_for_distance(1.0).unwrap();
-    let far = f.sensor_z_for_distance(2.0).unwrap();
+    let near = f.sensor_depth_mm_for_distance(1.0).unwrap();
+    let far = f.sensor_depth_mm_for_distance(2.0).unwrap();
     let dof = f.depth_of_focus_mm(near);
     let ranged = f.range_focus().unwrap().unwrap().conjugate_z_mm;
     assert!(
@@ -262,11 +262,11 @@ fn depth_focuses_on_the_edge_the_contrast_comes_from() {
         "ranged at {ranged} mm, the wall at {far} mm"
     );
     let r = f.run(Strategy::Depth).unwrap();
-    let error = (r.sensor_z_mm - near) / dof;
+    let error = (r.sensor_depth_mm - near) / dof;
     assert!(
         error.abs() <= 1.0,
         "depth at {:.4} mm, {error:+.2} DoF from the board's conjugate {near:.4} (the wall's {far:.4})",
-        r.sensor_z_mm
+        r.sensor_depth_mm
     );
 }
 
@@ -275,7 +275,7 @@ fn depth_focuses_on_the_edge_the_contrast_comes_from() {
 /// cd/m²), the measure reading `signal`.
 fn through_sensor<'a>(scene: &'a CompiledScene, ev: f64, signal: SensorSignal) -> Focuser<'a> {
     let mut f = focuser(scene, Some(5.6), CENTRE, 4);
-    let relative = f.patch_luminance(f.sensor_z_for_distance(1.5).unwrap()).unwrap();
+    let relative = f.patch_luminance(f.sensor_depth_mm_for_distance(1.5).unwrap()).unwrap();
     let sensor = SensorDescription {
         auto_exposure: Some(true),
         white_luminance_cd_m2: Some(ev.exp2() * 0.125 / relative),
@@ -297,7 +297,7 @@ fn through_sensor<'a>(scene: &'a CompiledScene, ev: f64, signal: SensorSignal) -
 fn autofocus_through_a_sensor_focuses_in_good_light_and_holds_a_metered_exposure() {
     let scene = board_at(1.5);
     let conjugate = focuser(&scene, Some(5.6), CENTRE, 4)
-        .sensor_z_for_distance(1.5)
+        .sensor_depth_mm_for_distance(1.5)
         .unwrap();
     let defaults = SensorDescription::default().resolve().unwrap();
     let limits = (
@@ -309,7 +309,7 @@ fn autofocus_through_a_sensor_focuses_in_good_light_and_holds_a_metered_exposure
         let dof = f.depth_of_focus_mm(conjugate);
         for strategy in [Strategy::Sweep, Strategy::Fast, Strategy::Depth] {
             let r = f.run(strategy).unwrap();
-            let error = (r.sensor_z_mm - conjugate) / dof;
+            let error = (r.sensor_depth_mm - conjugate) / dof;
             eprintln!(
                 "{signal:?} {strategy:?}: {error:+.2} DoF, {:?} s at ISO {:?}",
                 r.exposure_time_s, r.iso

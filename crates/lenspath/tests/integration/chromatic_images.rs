@@ -71,15 +71,21 @@ const AXIAL: Shot = Shot {
     dispersion: true,
 };
 
-/// The image at `wavelength_nm` with the sensor `sensor_z_mm` behind the stop.
-fn shoot(scene: &CompiledScene, lens: &LensPrescription, sensor_z_mm: f64, wavelength_nm: f64, shot: &Shot) -> Image {
+/// The image at `wavelength_nm` with the sensor `sensor_depth_mm` behind the stop.
+fn shoot(
+    scene: &CompiledScene,
+    lens: &LensPrescription,
+    sensor_depth_mm: f64,
+    wavelength_nm: f64,
+    shot: &Shot,
+) -> Image {
     let pose = CameraPose::look_at(Vec3::ZERO, Vec3::Z, Vec3::Y);
     let camera_settings = RealisticCameraSettings {
         dispersion: shot.dispersion,
         ..RealisticCameraSettings::new(
             lens.clone(),
             (shot.sensor_mm, shot.sensor_mm),
-            LensFocus::SensorPositionMm(sensor_z_mm),
+            LensFocus::SensorDepthMm(sensor_depth_mm),
         )
     };
     let camera = match shot.crop {
@@ -265,7 +271,7 @@ fn rendered_lateral_colour_matches_the_analysis() {
     let field_height_mm = 10.0;
     let chromatic = ChromaticAnalysis::new(&system, field_height_mm).unwrap();
     let d = chromatic.lines.iter().find(|l| l.line == "d").unwrap();
-    let image_z = system.rear_z() + d.back_focal_distance_mm;
+    let image_z = system.rear_z_mm() + d.back_focal_distance_mm;
     // The object on the camera's +x side (scene −X: the camera's right is
     // forward × up), at the field angle whose d-line image height is 10 mm.
     let tan_field = field_height_mm / d.effective_focal_length_mm;

@@ -45,11 +45,11 @@ fn zemax_files_trace_as_rayoptics_reads_them() {
         assert!((p.back_focal_distance_mm / bfl - 1.0).abs() < 1e-9, "{name}: BFL {p:?}");
         for (height, expected) in [1.0, 4.0].into_iter().zip(heights) {
             let ray = LensRay {
-                origin: DVec3::new(height, 0.0, lens.front_z() - 50.0),
+                origin: DVec3::new(height, 0.0, lens.front_z_mm() - 50.0),
                 direction: DVec3::Z,
             };
             let out = lens.trace(&ray, Direction::ToSensor).expect("passes");
-            let at = out.at_z(lens.rear_z() + 10.0).unwrap().x;
+            let at = out.at_z(lens.rear_z_mm() + 10.0).unwrap().x;
             assert!(
                 (at - expected).abs() < 1e-8,
                 "{name} at {height} mm: {at} vs {expected}"
@@ -83,7 +83,7 @@ fn a_stop_on_a_curved_vertex_clips_at_the_entrance_pupil() {
                     let azimuth = f64::from(*k) * std::f64::consts::TAU / 16.0;
                     let h = fraction * 0.5 * p.entrance_pupil_diameter_mm;
                     let ray = LensRay {
-                        origin: DVec3::new(h * azimuth.cos(), h * azimuth.sin(), lens.front_z() - 10.0),
+                        origin: DVec3::new(h * azimuth.cos(), h * azimuth.sin(), lens.front_z_mm() - 10.0),
                         direction: DVec3::Z,
                     };
                     lens.trace(&ray, Direction::ToSensor).is_some()
@@ -144,11 +144,11 @@ fn a_toroidal_zemax_file_traces_as_rayoptics_reads_it() {
     ];
     for (start, slope, expected) in rayoptics {
         let ray = LensRay {
-            origin: DVec3::new(start[0], start[1], lens.front_z() - 50.0),
+            origin: DVec3::new(start[0], start[1], lens.front_z_mm() - 50.0),
             direction: DVec3::new(slope[0], slope[1], 1.0).normalize(),
         };
         let out = lens.trace(&ray, Direction::ToSensor).expect("passes");
-        let behind = out.at_z(lens.rear_z() + 10.0).unwrap();
+        let behind = out.at_z(lens.rear_z_mm() + 10.0).unwrap();
         assert!(
             (behind.x - expected[0]).abs() < 1e-9 && (behind.y - expected[1]).abs() < 1e-9,
             "{start:?} {slope:?}: {behind} vs rayoptics {expected:?}"

@@ -49,30 +49,30 @@ fn pose() -> CameraPose {
     CameraPose::look_at(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y)
 }
 
-/// dgauss50 with the sensor `sensor_z_mm` behind the stop; its glasses
+/// dgauss50 with the sensor `sensor_depth_mm` behind the stop; its glasses
 /// disperse or, without `dispersion`, each has its d-line index.
-fn settings(dispersion: bool, sensor_z_mm: f64) -> RealisticCameraSettings {
+fn settings(dispersion: bool, sensor_depth_mm: f64) -> RealisticCameraSettings {
     RealisticCameraSettings {
         dispersion,
         ..RealisticCameraSettings::new(
             LensPrescription::load("dgauss50").unwrap(),
             (36.0, 27.0),
-            LensFocus::SensorPositionMm(sensor_z_mm),
+            LensFocus::SensorDepthMm(sensor_depth_mm),
         )
     }
 }
 
-/// `patch` rendered with the sensor at `sensor_z_mm`, RGB row by row.
+/// `patch` rendered with the sensor at `sensor_depth_mm`, RGB row by row.
 fn render_patch(
     scene: &CompiledScene,
     dispersion: bool,
     patch: PixelRect,
-    sensor_z_mm: f64,
+    sensor_depth_mm: f64,
     spp: u32,
     seed: u32,
 ) -> Vec<f32> {
     let camera =
-        RealisticCamera::for_region(pose(), SIZE.0, SIZE.1, &settings(dispersion, sensor_z_mm), patch).unwrap();
+        RealisticCamera::for_region(pose(), SIZE.0, SIZE.1, &settings(dispersion, sensor_depth_mm), patch).unwrap();
     let render_settings = RenderSettings {
         width: SIZE.0,
         height: SIZE.1,
@@ -92,17 +92,17 @@ fn render_patch(
         .rgb
 }
 
-/// A light field of `patch` recorded at `sensor_z_mm` that reaches `reach`.
+/// A light field of `patch` recorded at `sensor_depth_mm` that reaches `reach`.
 fn record(
     scene: &CompiledScene,
     dispersion: bool,
     patch: PixelRect,
-    sensor_z_mm: f64,
+    sensor_depth_mm: f64,
     reach: (f64, f64),
     spp: u32,
     seed: u32,
 ) -> LightField {
-    let settings = settings(dispersion, sensor_z_mm);
+    let settings = settings(dispersion, sensor_depth_mm);
     let patch_camera = RealisticCamera::for_region(pose(), SIZE.0, SIZE.1, &settings, patch).unwrap();
     let region = LightField::region_for(&patch_camera, patch, reach);
     let camera = LightField::recording_camera(pose(), SIZE.0, SIZE.1, &settings, region).unwrap();
@@ -129,7 +129,7 @@ fn difference(a: &[f32], b: &[f32]) -> f64 {
 /// The sensor position focusing `distance` metres, and the DoF (one pixel of blur) there.
 fn focus(distance: f64) -> (f64, f64) {
     let system = LensSystem::new(&LensPrescription::load("dgauss50").unwrap());
-    let z = system.sensor_z_for_focus_distance(distance * 1e3, 0.1).unwrap();
+    let z = system.sensor_depth_mm_for_focus_distance(distance * 1e3, 0.1).unwrap();
     let paraxial = system.paraxial().unwrap();
     let pitch = 36.0f64.hypot(27.0) / f64::from(SIZE.0).hypot(f64::from(SIZE.1));
     (

@@ -117,7 +117,7 @@ fn every_shipped_lens_covers_the_sensor_it_is_listed_with() {
                 lens: &lens.name,
                 sensor_mm: lens.sensor_mm,
                 pixels: (w, h),
-                focus: LensFocus::SensorPositionMm(infinity),
+                focus: LensFocus::SensorDepthMm(infinity),
                 f_number: None,
                 radiometry: Radiometry::Normalized,
                 spp: 64,
@@ -301,17 +301,17 @@ fn spot_diameter_mm(image: &Image, pitch_mm: f64) -> f64 {
 /// blur disc diameter (the image by the Gaussian lens equation about the
 /// principal planes, the cone to it through the exit pupil, cut by the
 /// sensor) and the lateral magnification.
-fn first_order(system: &LensSystem, sensor_z: f64, distance_mm: f64) -> (f64, f64) {
-    first_order_in(&system.paraxial().unwrap(), sensor_z, distance_mm)
+fn first_order(system: &LensSystem, sensor_depth_mm: f64, distance_mm: f64) -> (f64, f64) {
+    first_order_in(&system.paraxial().unwrap(), sensor_depth_mm, distance_mm)
 }
 
 /// [`first_order`] from one meridian's paraxial data.
-fn first_order_in(p: &lenspath::lens::ParaxialData, sensor_z: f64, distance_mm: f64) -> (f64, f64) {
+fn first_order_in(p: &lenspath::lens::ParaxialData, sensor_depth_mm: f64, distance_mm: f64) -> (f64, f64) {
     let f = p.effective_focal_length_mm;
-    let object = (sensor_z - distance_mm - p.front_principal_plane_z_mm).abs();
+    let object = (sensor_depth_mm - distance_mm - p.front_principal_plane_z_mm).abs();
     let image = 1.0 / (1.0 / f - 1.0 / object);
     let image_z = p.rear_principal_plane_z_mm + image;
-    let blur = p.exit_pupil_diameter_mm * (sensor_z - image_z).abs() / (image_z - p.exit_pupil_z_mm);
+    let blur = p.exit_pupil_diameter_mm * (sensor_depth_mm - image_z).abs() / (image_z - p.exit_pupil_z_mm);
     (blur, image / object)
 }
 
@@ -386,7 +386,7 @@ fn defocus_blur_matches_first_order_optics() {
     };
     let cam = camera(&shot);
     for distance_m in [1.2f32, 4.0] {
-        let (predicted, magnification) = first_order(cam.system(), cam.sensor_z_mm(), f64::from(distance_m) * 1e3);
+        let (predicted, magnification) = first_order(cam.system(), cam.sensor_depth_mm(), f64::from(distance_m) * 1e3);
         let radius = source_radius_m(distance_m);
         let image = shoot(point_source(distance_m, radius), &shot);
         let measured = defocus_diameter_mm(&image, f64::from(radius) * 1e3, magnification);
@@ -403,7 +403,7 @@ fn stopping_down_from_f2_to_f8_shrinks_the_blur_fourfold() {
     let blur = |f_number| {
         let shot = point_shot(f_number);
         let cam = camera(&shot);
-        let (_, magnification) = first_order(cam.system(), cam.sensor_z_mm(), f64::from(distance_m) * 1e3);
+        let (_, magnification) = first_order(cam.system(), cam.sensor_depth_mm(), f64::from(distance_m) * 1e3);
         defocus_diameter_mm(
             &shoot(point_source(distance_m, radius), &shot),
             f64::from(radius) * 1e3,
@@ -427,7 +427,7 @@ fn most_generated_rays_get_through_at_the_centre() {
                 lens,
                 sensor_mm: listed_sensor_mm(lens),
                 pixels: (360, 240),
-                focus: LensFocus::SensorPositionMm(infinity),
+                focus: LensFocus::SensorDepthMm(infinity),
                 f_number,
                 radiometry: Radiometry::Normalized,
                 spp: 1,
@@ -448,11 +448,11 @@ fn most_generated_rays_get_through_at_the_centre() {
 /// Irradiance (unnormalised) at the film point (`x_mm`, `y_mm`) by brute
 /// force: ∫ cos⁴θ dA over every point of a fine grid over 1.5× the rear
 /// element that a traced ray gets through.
-fn brute_force_irradiance(system: &LensSystem, sensor_z: f64, x_mm: f64, y_mm: f64) -> f64 {
+fn brute_force_irradiance(system: &LensSystem, sensor_depth_mm: f64, x_mm: f64, y_mm: f64) -> f64 {
     use glam::DVec3;
     use lenspath::lens::{Direction, LensRay};
-    let film = DVec3::new(x_mm, y_mm, sensor_z);
-    let reach = 1.5 * system.rear_aperture_radius();
+    let film = DVec3::new(x_mm, y_mm, sensor_depth_mm);
+    let reach = 1.5 * system.rear_aperture_radius_mm();
     let n = 500;
     let cell = 2.0 * reach / n as f64;
     let mut sum = 0.0;
@@ -461,7 +461,7 @@ fn brute_force_irradiance(system: &LensSystem, sensor_z: f64, x_mm: f64, y_mm: f
             let q = DVec3::new(
                 -reach + (j as f64 + 0.5) * cell,
                 -reach + (i as f64 + 0.5) * cell,
-                system.rear_z(),
+                system.rear_z_mm(),
             );
             let ray = LensRay::between(film, q);
             if system.trace(&ray, Direction::ToScene).is_some() {
@@ -529,14 +529,14 @@ fn pupil_sampling_loses_no_light_across_the_field() {
         assert_eq!(cam.system().is_dispersive(), wavelengths_nm.len() > 1, "{lens}");
         for &nm in wavelengths_nm {
             let system = cam.system().at_wavelength(f64::from(nm));
-            let sensor_z = cam.sensor_z_mm();
-            let centre_brute = brute_force_irradiance(&system, sensor_z, 0.0, 0.0);
+            let sensor_depth_mm = cam.sensor_depth_mm();
+            let centre_brute = brute_force_irradiance(&system, sensor_depth_mm, 0.0, 0.0);
             let centre_estimate = sampled_irradiance(&cam, 180.0, 120.0, nm);
             // Raster points from the centre toward the corner.
             for t in [0.23f32, 0.5, 0.71, 0.93] {
                 let (px, py) = (180.0 * (1.0 + t), 120.0 * (1.0 - t));
                 let (x_mm, y_mm) = film_mm(px, py, (w, h), (36.0, 24.0));
-                let exact = brute_force_irradiance(&system, sensor_z, x_mm, y_mm) / centre_brute;
+                let exact = brute_force_irradiance(&system, sensor_depth_mm, x_mm, y_mm) / centre_brute;
                 let sampled = sampled_irradiance(&cam, px, py, nm) / centre_estimate;
                 assert!(
                     (sampled / exact - 1.0).abs() < 0.01,
@@ -561,8 +561,8 @@ fn pupil_sampling_loses_no_light_through_an_anamorphic_lens() {
         ..anamorphic_shot(sensor_mm, LensFocus::Distance(3.0))
     });
     let system = cam.system().clone();
-    let sensor_z = cam.sensor_z_mm();
-    let centre_brute = brute_force_irradiance(&system, sensor_z, 0.0, 0.0);
+    let sensor_depth_mm = cam.sensor_depth_mm();
+    let centre_brute = brute_force_irradiance(&system, sensor_depth_mm, 0.0, 0.0);
     let centre_estimate = sampled_irradiance(&cam, 110.0, 93.0, D_LINE_NM);
     for (px, py) in [
         (200.0f32, 93.0f32),
@@ -576,7 +576,7 @@ fn pupil_sampling_loses_no_light_through_an_anamorphic_lens() {
         (8.0, 5.0),
     ] {
         let (x_mm, y_mm) = film_mm(px, py, pixels, sensor_mm);
-        let exact = brute_force_irradiance(&system, sensor_z, x_mm, y_mm) / centre_brute;
+        let exact = brute_force_irradiance(&system, sensor_depth_mm, x_mm, y_mm) / centre_brute;
         let sampled = sampled_irradiance(&cam, px, py, D_LINE_NM) / centre_estimate;
         assert!(
             (sampled / exact - 1.0).abs() < 0.01,
@@ -951,7 +951,7 @@ fn an_anamorphic_lens_squeezes_the_image_and_its_bokeh_is_oval() {
     }
     // A small source 1.5 m away with the lens focused at infinity.
     let (distance_m, radius_m) = (1.5f32, 0.004f32);
-    let infinity = system.infinity_focus_z(0.1).unwrap();
+    let infinity = system.infinity_focus_z_mm(0.1).unwrap();
     let [h, v] = Meridian::BOTH.map(|m| system.with_f_number(4.0).unwrap().paraxial_in(m).unwrap());
     let distance_mm = f64::from(distance_m) * 1e3;
     let ((blur_h, magnification_h), (blur_v, magnification_v)) = (
@@ -967,7 +967,7 @@ fn an_anamorphic_lens_squeezes_the_image_and_its_bokeh_is_oval() {
         let shot = Shot {
             f_number: Some(4.0),
             spp: 256,
-            ..anamorphic_shot(sensor_mm, LensFocus::SensorPositionMm(infinity))
+            ..anamorphic_shot(sensor_mm, LensFocus::SensorDepthMm(infinity))
         };
         let image = shoot(point_source(distance_m, radius_m), &shot);
         let measured = aspect(&image, sensor_mm, source_mm);

@@ -442,7 +442,7 @@ fn settings_file_reads_back_exactly() {
         );
         assert_eq!(o.scene_unit_m, Some(written.scene_unit_m));
         let camera = realistic_settings(o, &view, &RealisticDescription::default(), 123, 45).unwrap();
-        assert_eq!(camera.focus, LensFocus::SensorPositionMm(written.sensor_depth_mm));
+        assert_eq!(camera.focus, LensFocus::SensorDepthMm(written.sensor_depth_mm));
         assert_eq!(camera.f_number, written.f_number);
         assert_eq!(camera.sensor_mm.0, written.sensor_width_mm);
         assert_eq!(camera.aperture, written.aperture);

@@ -146,7 +146,7 @@ impl RealisticCamera {
                 let (inside, at_stop) = system.trace_via_stop(&back, Direction::ToSensor)?;
                 self.film_side_of(
                     &inside,
-                    aperture.transmission(at_stop.truncate() / system.stop_radius()),
+                    aperture.transmission(at_stop.truncate() / system.stop_radius_mm()),
                 )
             }
         }
@@ -157,7 +157,7 @@ impl RealisticCamera {
         if inside.direction.z <= 0.0 || transmission <= 0.0 {
             return None;
         }
-        let film = inside.at_z(self.sensor_z_mm)?;
+        let film = inside.at_z(self.sensor_depth_mm)?;
         Some(FilmSide {
             raster: self.raster_point(film),
             film,
@@ -225,7 +225,7 @@ mod tests {
         let camera = dgauss_camera();
         let (blue, red) = (camera.system.at_wavelength(420.0), camera.system.at_wavelength(680.0));
         let map = |v: DVec4| -> Option<(DVec4, f64)> {
-            let film = DVec3::new(v.x, v.y, camera.sensor_z_mm);
+            let film = DVec3::new(v.x, v.y, camera.sensor_depth_mm);
             let start = LensRay::between(film, DVec3::new(v.z, v.w, camera.rear_z_mm));
             let out = blue.trace(&start, Direction::ToScene)?;
             let side = camera.film_side(&red, &out)?;
@@ -244,7 +244,11 @@ mod tests {
             let v = DVec4::new(film.x, film.y, rear.x, rear.y);
             let Some((_, cos_red)) = map(v) else { continue };
             let cos_blue = {
-                let d = DVec3::new(rear.x - film.x, rear.y - film.y, camera.rear_z_mm - camera.sensor_z_mm);
+                let d = DVec3::new(
+                    rear.x - film.x,
+                    rear.y - film.y,
+                    camera.rear_z_mm - camera.sensor_depth_mm,
+                );
                 -d.normalize().z
             };
             let h = 1e-4;
@@ -282,7 +286,7 @@ mod tests {
         let table = "0 2 0 17.9\n51.68 5 1.5168 24 N-BK7\n-51.68 45 1 24\n";
         let lens = LensPrescription::parse(table, "singlet", TableConvention::ThicknessToNext).unwrap();
         // 3 mm in front of the infinity focus (56.16 mm): a blur 15 pixels across.
-        let settings = RealisticCameraSettings::new(lens, (4.8, 4.8), LensFocus::SensorPositionMm(53.0));
+        let settings = RealisticCameraSettings::new(lens, (4.8, 4.8), LensFocus::SensorDepthMm(53.0));
         let pose = CameraPose::look_at(Vec3::ZERO, Vec3::Z, Vec3::Y);
         let camera = RealisticCamera::new(pose, 64, 64, &settings).unwrap();
         // A bright half-plane of the view (x > 0) whose spectrum rises to the red.

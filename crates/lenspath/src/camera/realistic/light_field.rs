@@ -50,20 +50,20 @@ impl RealisticCamera {
 
     /// Where a sample recorded at raster position `film` with its line
     /// through `rear_raster` ([`RealisticCamera::generate_lens_sample`])
-    /// crosses the sensor when the sensor is at `sensor_z_mm` instead: the
+    /// crosses the sensor when the sensor is at `sensor_depth_mm` instead: the
     /// line is the same (the image-space ray between the film and the lens),
     /// only the plane it is cut by moves. Exact for the lens's image space;
     /// it neglects that the lens, which moves to focus, sees the scene from
-    /// `sensor_z_mm − sensor_z` mm nearer or farther (at 1 m and 50 mm focal
+    /// the difference of the two sensor positions nearer or farther (at 1 m and 50 mm focal
     /// length, a hundredth of a DoF per tenth of a mm).
-    pub fn refocused_raster(&self, film: Vec2, rear_raster: Vec2, sensor_z_mm: f64) -> Vec2 {
-        rear_raster + (film - rear_raster) * self.refocus_scale(sensor_z_mm) as f32
+    pub fn refocused_raster(&self, film: Vec2, rear_raster: Vec2, sensor_depth_mm: f64) -> Vec2 {
+        rear_raster + (film - rear_raster) * self.refocus_scale(sensor_depth_mm) as f32
     }
 
-    /// How much farther from the rear plane the sensor at `sensor_z_mm` is
+    /// How much farther from the rear plane the sensor at `sensor_depth_mm` is
     /// than this camera's: the factor lines from the rear plane spread by.
-    pub fn refocus_scale(&self, sensor_z_mm: f64) -> f64 {
-        (sensor_z_mm - self.rear_z_mm) / (self.sensor_z_mm - self.rear_z_mm)
+    pub fn refocus_scale(&self, sensor_depth_mm: f64) -> f64 {
+        (sensor_depth_mm - self.rear_z_mm) / (self.sensor_depth_mm - self.rear_z_mm)
     }
 
     /// The bounding box of the rear element's aperture in raster
@@ -71,7 +71,7 @@ impl RealisticCamera {
     pub fn rear_aperture_raster_bounds(&self) -> (Vec2, Vec2) {
         let (w, h) = self.resolution;
         let (sw, sh) = self.sensor_mm;
-        let radius = self.system.rear_aperture_radius();
+        let radius = self.system.rear_aperture_radius_mm();
         let half = Vec2::new((radius / sw * w) as f32, (radius / sh * h) as f32);
         let centre = Vec2::new((0.5 * w) as f32, (0.5 * h) as f32);
         (centre - half, centre + half)
@@ -84,7 +84,7 @@ impl RealisticCamera {
         let origin = Vec3::new(
             out.origin.x as f32,
             out.origin.y as f32,
-            (self.sensor_z_mm - out.origin.z) as f32,
+            (self.sensor_depth_mm - out.origin.z) as f32,
         ) * self.scene_per_mm as f32;
         let direction = Vec3::new(out.direction.x as f32, out.direction.y as f32, -out.direction.z as f32);
         let m = &self.pose.render_from_camera;

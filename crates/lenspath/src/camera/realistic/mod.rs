@@ -32,7 +32,10 @@ mod settings;
 
 pub use light_field::LensSample;
 use pupil::*;
-pub use settings::{sensor_for_image, LensFocus, Radiometry, RealisticCameraSettings};
+pub use settings::{
+    sensor_for_image, LensFocus, Radiometry, RealisticCameraSettings, DEFAULT_DESQUEEZE, DEFAULT_DISPERSION,
+    DEFAULT_LENS, DEFAULT_SCENE_UNIT_M, DEFAULT_SENSOR_WIDTH_MM,
+};
 
 use glam::{DVec2, DVec3, Vec2, Vec3};
 use rayon::prelude::*;
@@ -126,7 +129,7 @@ pub struct RealisticCamera {
     /// rounded to the nanometre (the index moves by under 2e-4 in half a
     /// nanometre for the densest flints).
     spectral: Option<Arc<[LensSystem]>>,
-    sensor_z_mm: f64,
+    sensor_depth_mm: f64,
     sensor_mm: (f64, f64),
     resolution: (f64, f64),
     scene_per_mm: f64,
@@ -205,20 +208,20 @@ impl RealisticCamera {
             None => wide_open.clone(),
         };
         let mm_per_scene = settings.scene_unit_m * 1e3;
-        let sensor_z_mm = match settings.focus {
+        let sensor_depth_mm = match settings.focus {
             LensFocus::Distance(d) => {
                 if !(d > 0.0 && d.is_finite()) {
                     return Err(Error::InvalidArgument(format!(
                         "focus distance must be positive, got {d}"
                     )));
                 }
-                system.sensor_z_for_focus_distance(d * mm_per_scene, FOCUS_RAY_HEIGHT_MM)?
+                system.sensor_depth_mm_for_focus_distance(d * mm_per_scene, FOCUS_RAY_HEIGHT_MM)?
             }
-            LensFocus::SensorPositionMm(z) => {
-                if !(z > system.rear_z() && z.is_finite()) {
+            LensFocus::SensorDepthMm(z) => {
+                if !(z > system.rear_z_mm() && z.is_finite()) {
                     return Err(Error::InvalidArgument(format!(
                         "sensor position {z} mm must lie behind the rear element ({:.3} mm behind the stop)",
-                        system.rear_z()
+                        system.rear_z_mm()
                     )));
                 }
                 // Newton's equation x' = m f: past m = MAX_MAGNIFICATION the
@@ -235,7 +238,7 @@ impl RealisticCamera {
                 z
             }
         };
-        let rear_z_mm = system.rear_z();
+        let rear_z_mm = system.rear_z_mm();
         let layout = if system.is_rotationally_symmetric() {
             PupilLayout::Bands {
                 width_mm: 0.5 * sw.hypot(sh) / PUPIL_BANDS as f64,
@@ -277,7 +280,7 @@ impl RealisticCamera {
             .into_par_iter()
             .map(|band| {
                 if band == 0 || bands.contains(&band) {
-                    bound_pupil(&bounding, sensor_z_mm, layout.patch(band))
+                    bound_pupil(&bounding, sensor_depth_mm, layout.patch(band))
                 } else {
                     PupilGrid::EMPTY
                 }
@@ -285,7 +288,7 @@ impl RealisticCamera {
             .collect::<Vec<_>>();
         if pupils[0].cells.is_empty() {
             return Err(Error::InvalidArgument(format!(
-                "no light reaches the sensor centre through {} with the sensor {sensor_z_mm:.3} mm behind the stop",
+                "no light reaches the sensor centre through {} with the sensor {sensor_depth_mm:.3} mm behind the stop",
                 settings.lens.name()
             )));
         }
@@ -294,7 +297,7 @@ impl RealisticCamera {
             let maps = pupils
                 .par_iter()
                 .enumerate()
-                .map(|(band, grid)| fit_stop_map(&system, sensor_z_mm, grid, layout.patch(band)))
+                .map(|(band, grid)| fit_stop_map(&system, sensor_depth_mm, grid, layout.patch(band)))
                 .collect();
             (Arc::new(aperture), maps)
         });
@@ -306,7 +309,7 @@ impl RealisticCamera {
             pose,
             system,
             spectral,
-            sensor_z_mm,
+            sensor_depth_mm,
             sensor_mm: settings.sensor_mm,
             resolution: (f64::from(width), f64::from(height)),
             scene_per_mm: 1.0 / mm_per_scene,
@@ -321,7 +324,11 @@ impl RealisticCamera {
         // with this lens as set, or wide open for physical exposure.
         let centre_irradiance = match (settings.radiometry, settings.f_number) {
             (Radiometry::Physical, Some(_)) => {
-                let pupil = bound_pupil(&bounding_systems(&wide_open, disperses), sensor_z_mm, layout.patch(0));
+                let pupil = bound_pupil(
+                    &bounding_systems(&wide_open, disperses),
+                    sensor_depth_mm,
+                    layout.patch(0),
+                );
                 RealisticCamera {
                     system: wide_open,
                     pupils: vec![pupil],
@@ -379,8 +386,8 @@ impl RealisticCamera {
     }
 
     /// Sensor position behind the aperture stop, mm.
-    pub fn sensor_z_mm(&self) -> f64 {
-        self.sensor_z_mm
+    pub fn sensor_depth_mm(&self) -> f64 {
+        self.sensor_depth_mm
     }
 
     /// The film point (lens coordinates, mm) of a raster position. The lens
@@ -390,7 +397,7 @@ impl RealisticCamera {
         let (sw, sh) = self.sensor_mm;
         let x = (f64::from(film.x) / w - 0.5) * sw;
         let y = (0.5 - f64::from(film.y) / h) * sh;
-        DVec3::new(-x, -y, self.sensor_z_mm)
+        DVec3::new(-x, -y, self.sensor_depth_mm)
     }
 
     /// The sensor patch of a film point (lens coordinates), the point in
@@ -420,7 +427,7 @@ impl RealisticCamera {
         let q = frame.film_from_grid(grid.sample(u, local));
         let ray = LensRay::between(p_film, DVec3::new(q.x, q.y, self.rear_z_mm));
         let cos_theta = -ray.direction.z;
-        let d = self.sensor_z_mm - self.rear_z_mm;
+        let d = self.sensor_depth_mm - self.rear_z_mm;
         let weight = cos_theta.powi(4) * grid.area() / (d * d);
         Some((ray, weight))
     }
@@ -444,13 +451,13 @@ impl RealisticCamera {
             return None;
         }
         let (a, b) = map.at(local);
-        let stop_radius = self.system.stop_radius();
+        let stop_radius_mm = self.system.stop_radius_mm();
         let ux = f64::from(u.x);
         let q = if ux < GRID_SHARE {
             grid.sample(Vec2::new((ux / GRID_SHARE) as f32, u.y), local)
         } else {
             let (s, _) = aperture.sample(Vec2::new(((ux - GRID_SHARE) / (1.0 - GRID_SHARE)) as f32, u.y));
-            a.inverse() * (frame.grid_from_film(s * stop_radius) - b)
+            a.inverse() * (frame.grid_from_film(s * stop_radius_mm) - b)
         };
         let pdf = self.shaped_density(aperture, grid, map, local, frame, q);
         if pdf <= 0.0 {
@@ -461,9 +468,9 @@ impl RealisticCamera {
         let out = system
             .trace_via_stop(&ray, Direction::ToScene)
             .and_then(|(out, at_stop)| {
-                let transmission = aperture.transmission(at_stop.truncate() / stop_radius);
+                let transmission = aperture.transmission(at_stop.truncate() / stop_radius_mm);
                 let cos_theta = -ray.direction.z;
-                let d = self.sensor_z_mm - self.rear_z_mm;
+                let d = self.sensor_depth_mm - self.rear_z_mm;
                 (transmission > 0.0).then(|| (out, transmission * cos_theta.powi(4) / (d * d * pdf)))
             });
         Some((ray, out))
@@ -482,9 +489,9 @@ impl RealisticCamera {
         q: DVec2,
     ) -> f64 {
         let (a, b) = map.at(local);
-        let stop_radius = self.system.stop_radius();
-        let predicted_stop = frame.film_from_grid(a * q + b) / stop_radius;
-        let from_shape = aperture.pdf(predicted_stop) * a.determinant().abs() / (stop_radius * stop_radius);
+        let stop_radius_mm = self.system.stop_radius_mm();
+        let predicted_stop = frame.film_from_grid(a * q + b) / stop_radius_mm;
+        let from_shape = aperture.pdf(predicted_stop) * a.determinant().abs() / (stop_radius_mm * stop_radius_mm);
         let from_grid = if grid.contains(q, local) {
             1.0 / grid.area()
         } else {
@@ -496,7 +503,7 @@ impl RealisticCamera {
     /// ∫ cos⁴θ / d² dA over the open pupil from the sensor centre (16 points per cell).
     fn centre_irradiance(&self) -> f64 {
         let grid = &self.pupils[0];
-        let p = DVec3::new(0.0, 0.0, self.sensor_z_mm);
+        let p = DVec3::new(0.0, 0.0, self.sensor_depth_mm);
         let n = grid.cells.len() * 16;
         let sum: f64 = (0..n)
             .into_par_iter()

@@ -183,17 +183,20 @@ pub(super) fn bounding_systems(system: &LensSystem, disperses: bool) -> Vec<Lens
 /// The pupil grid for the film points of `patch`: the cells a ray gets
 /// through at any of `systems` (one lens at several wavelengths,
 /// [`bounding_systems`]).
-pub(super) fn bound_pupil(systems: &[LensSystem], sensor_z: f64, patch: FilmPatch) -> PupilGrid {
+pub(super) fn bound_pupil(systems: &[LensSystem], sensor_depth_mm: f64, patch: FilmPatch) -> PupilGrid {
     let films = patch.film_points();
     let system = &systems[0];
-    let rear_z = system.rear_z();
+    let rear_z_mm = system.rear_z_mm();
     let passes_from = |film: DVec2, q: DVec2| {
-        let ray = LensRay::between(DVec3::new(film.x, film.y, sensor_z), DVec3::new(q.x, q.y, rear_z));
+        let ray = LensRay::between(
+            DVec3::new(film.x, film.y, sensor_depth_mm),
+            DVec3::new(q.x, q.y, rear_z_mm),
+        );
         systems.iter().any(|s| s.trace(&ray, Direction::ToScene).is_some())
     };
     // 1. Where each film position's pupil lies, on a coarse grid over 1.5×
     // the rear aperture (pbrt's margin): the centroids of passing points.
-    let reach = 1.5 * system.rear_aperture_radius();
+    let reach = 1.5 * system.rear_aperture_radius_mm();
     let coarse = 2.0 * reach / (BOUNDING_GRID - 1) as f64;
     let scan = |film: DVec2, lo: DVec2, step: DVec2| {
         let mut points = Vec::new();
@@ -319,7 +322,12 @@ impl StopMap {
 }
 
 /// Fits the [`StopMap`] of a patch from rays through its grid's usable cells.
-pub(super) fn fit_stop_map(system: &LensSystem, sensor_z: f64, grid: &PupilGrid, patch: FilmPatch) -> Option<StopMap> {
+pub(super) fn fit_stop_map(
+    system: &LensSystem,
+    sensor_depth_mm: f64,
+    grid: &PupilGrid,
+    patch: FilmPatch,
+) -> Option<StopMap> {
     let fit_at = |film: DVec2| {
         // Normal equations of the two least-squares problems s.x, s.y ~ (q.x, q.y, 1).
         let (mut m, mut rhs_x, mut rhs_y, mut n) = (DMat3::ZERO, DVec3::ZERO, DVec3::ZERO, 0);
@@ -327,8 +335,8 @@ pub(super) fn fit_stop_map(system: &LensSystem, sensor_z: f64, grid: &PupilGrid,
             let (row, column) = ((k as usize / PUPIL_GRID) as f64, (k as usize % PUPIL_GRID) as f64);
             let q = grid.centre_at(film) + grid.min + (DVec2::new(column, row) + 0.5) * grid.cell;
             let ray = LensRay::between(
-                DVec3::new(film.x, film.y, sensor_z),
-                DVec3::new(q.x, q.y, system.rear_z()),
+                DVec3::new(film.x, film.y, sensor_depth_mm),
+                DVec3::new(q.x, q.y, system.rear_z_mm()),
             );
             if let Some((_, s)) = system.trace_via_stop(&ray, Direction::ToScene) {
                 let v = DVec3::new(q.x, q.y, 1.0);

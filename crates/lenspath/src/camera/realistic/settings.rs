@@ -2,8 +2,22 @@
 //! f-number, the scene unit, the radiometry and the aperture's shape.
 
 use crate::camera::ApertureShape;
-use crate::defaults;
 use crate::lens::LensPrescription;
+use crate::names::Named;
+
+/// The realistic camera's lens when the scene file names none: a 50 mm f/2 Double-Gauss.
+pub const DEFAULT_LENS: &str = "dgauss50";
+/// The sensor's width when the scene file gives none (a full-frame 35 mm
+/// sensor's), mm; its height follows the image's aspect.
+pub const DEFAULT_SENSOR_WIDTH_MM: f64 = crate::lens::FULL_FRAME_MM.0;
+/// Metres per scene unit when the scene file does not say.
+pub const DEFAULT_SCENE_UNIT_M: f64 = 1.0;
+/// Whether a lens's glasses disperse (each ray traced at its own
+/// wavelength) unless the caller or the scene file says not.
+pub const DEFAULT_DISPERSION: bool = true;
+/// Whether an anamorphic lens's image is desqueezed (its width stretched by
+/// the lens's squeeze) rather than shown as the sensor records it.
+pub const DEFAULT_DESQUEEZE: bool = false;
 
 /// Where the sensor goes.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -12,16 +26,25 @@ pub enum LensFocus {
     /// exact real-ray conjugate.
     Distance(f64),
     /// Put the sensor this many mm behind the aperture stop.
-    SensorPositionMm(f64),
+    SensorDepthMm(f64),
 }
 
 /// What a reading of 1 means.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Radiometry {
-    /// The image centre reads the radiance of a uniform scene at any f-number.
+    /// The image centre reads the radiance of a uniform scene at any f-number (the default).
+    #[default]
     Normalized,
     /// Normalised wide open: stopping down from N₁ to N₂ darkens by (N₂/N₁)², as on a real camera.
     Physical,
+}
+
+impl Named for Radiometry {
+    const WHAT: &'static str = "radiometry";
+    const NAMED: &'static [(Radiometry, &'static str)] = &[
+        (Radiometry::Normalized, "normalized"),
+        (Radiometry::Physical, "physical"),
+    ];
 }
 
 /// Everything that defines a realistic camera.
@@ -59,10 +82,10 @@ impl RealisticCameraSettings {
             sensor_mm,
             focus,
             f_number: None,
-            scene_unit_m: defaults::SCENE_UNIT_M,
-            radiometry: Radiometry::Normalized,
+            scene_unit_m: DEFAULT_SCENE_UNIT_M,
+            radiometry: Radiometry::default(),
             aperture: ApertureShape::Circle,
-            dispersion: defaults::LENS_DISPERSION,
+            dispersion: DEFAULT_DISPERSION,
         }
     }
 }

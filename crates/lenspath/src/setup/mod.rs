@@ -8,34 +8,31 @@
 //! gives the same image from every front end.
 //!
 //! Autofocus is set up the same way ([`AutofocusOverrides`],
-//! [`resolve_autofocus`]): its patch renders have defaults of their own,
-//! since the scene file's integrator settings are for the final image.
+//! [`resolve_autofocus`], in `autofocus.rs`): its patch renders have
+//! defaults of their own, since the scene file's integrator settings are for
+//! the final image. What an image records of its setup is
+//! [`RenderSetup::image_header`] (`header.rs`).
 
-use std::collections::BTreeMap;
 use std::sync::Arc;
 
-use glam::{Mat4, Vec4};
-
-use crate::autofocus::{AutofocusSettings, FocusMeasure, FocusSensor, SensorSignal, Strategy};
 use crate::camera::{
     sensor_for_image, Aperture, ApertureShape, Camera, CameraPose, LensFocus, PerspectiveCamera, Radiometry,
     RealisticCamera, RealisticCameraSettings,
 };
 use crate::defaults;
 use crate::error::{Error, Result};
-use crate::film::{Filter, Image, NormalizedRect, PixelRect};
+use crate::film::{Filter, Image, PixelRect};
 use crate::integrator::{Integrator, IntegratorKind, PathSettings};
-use crate::io::exr::HeaderValue;
-use crate::io::image::ImageHeader;
 use crate::lens::{LensPrescription, LensSystem};
-use crate::names::Named;
 use crate::options::SceneOptions;
 use crate::render::{FilmResponse, RenderSettings};
 use crate::sampling::SamplerKind;
 use crate::scene::SceneView;
-use crate::sensor::{
-    capture_through, needs_a_lens, Development, Exposure, RawFrame, SensorDescription, SensorSettings,
-};
+use crate::sensor::{capture_through, needs_a_lens, Development, RawFrame, SensorDescription, SensorSettings};
+
+mod autofocus;
+mod header;
+pub use autofocus::{autofocus_before_render, autofocus_setup, resolve_autofocus, AutofocusOverrides, AutofocusSetup};
 
 // ---------------------------------------------------------------------------
 // What a caller asks for
@@ -224,114 +221,6 @@ impl RenderSetup {
         let frame = capture_through(camera, image, origin, sensor)?;
         Ok(Some((frame, sensor.development)))
     }
-
-    /// The EXR header of this setup's render of `scene_name` (taken with
-    /// `exposure` through a sensor): a crop's place in the full frame, the
-    /// OpenEXR standard attributes that apply (`worldToCamera`; `worldToNDC`
-    /// for the projective cameras, which a real lens's distortion is not;
-    /// `focus` in metres and `aperture` as an f-number for a real lens;
-    /// `expTime` and `isoSpeed` through a sensor; `software`, `comments`),
-    /// and the settings under `lenspath/`. No `owner`: lenspath does not
-    /// know who owns the image.
-    pub fn image_header(&self, scene_name: &str, exposure: Option<&Exposure>) -> Result<ImageHeader> {
-        use HeaderValue::{Float, Int, Matrix, Text};
-        let s = &self.settings;
-        let (width, height) = (s.width, s.height);
-        let mut a = BTreeMap::new();
-        let mut put = |name: &str, value: HeaderValue| a.insert(name.to_string(), value);
-        let camera_from_render = Mat4::from(self.pose.render_from_camera.inverse());
-        put("worldToCamera", Matrix(camera_from_render.to_cols_array()));
-        put("software", Text(format!("lenspath {}", env!("CARGO_PKG_VERSION"))));
-        put("lenspath/scene", Text(scene_name.to_string()));
-        let camera_kind = match &self.camera {
-            CameraSettings::Pinhole { .. } => "pinhole",
-            CameraSettings::ThinLens { .. } => "thin-lens",
-            CameraSettings::Realistic(_) => "realistic",
-        };
-        put("lenspath/camera", Text(camera_kind.to_string()));
-        let mut comments = format!("{scene_name} through a {camera_kind} camera");
-        match &self.camera {
-            CameraSettings::Pinhole { fov_y_deg } | CameraSettings::ThinLens { fov_y_deg, .. } => {
-                put(
-                    "worldToNDC",
-                    Matrix((ndc_from_camera(*fov_y_deg, width, height) * camera_from_render).to_cols_array()),
-                );
-                put("lenspath/fovYDeg", Float(*fov_y_deg));
-                if let CameraSettings::ThinLens {
-                    aperture_radius,
-                    focus_distance,
-                    ..
-                } = &self.camera
-                {
-                    put("lenspath/apertureRadius", Float(*aperture_radius));
-                    put("lenspath/focusDistance", Float(*focus_distance));
-                }
-            }
-            CameraSettings::Realistic(r) => {
-                let system = LensSystem::new(&r.lens);
-                let f_number = match r.f_number {
-                    Some(n) => n,
-                    None => system.paraxial()?.f_number,
-                };
-                put("aperture", Float(f_number as f32));
-                put("lenspath/lens", Text(r.lens.name().to_string()));
-                put("lenspath/sceneUnitM", Float(r.scene_unit_m as f32));
-                match r.focus {
-                    LensFocus::Distance(d) => {
-                        put("focus", Float((d * r.scene_unit_m) as f32));
-                        put("lenspath/focusDistance", Float(d as f32));
-                    }
-                    LensFocus::SensorPositionMm(mm) => {
-                        put("lenspath/sensorDepthMm", Float(mm as f32));
-                    }
-                }
-                comments += &format!(" ({} at f/{f_number:.2})", r.lens.name());
-            }
-        }
-        if let Some(exposure) = exposure {
-            put("expTime", Float(exposure.exposure_time_s as f32));
-            put("isoSpeed", Float(exposure.iso as f32));
-            put("lenspath/sensor", Text(exposure.sensor_name.clone()));
-        }
-        let path = s.integrator.path_settings();
-        put("lenspath/integrator", Text(s.integrator.kind().name().to_string()));
-        put("lenspath/maxDepth", Int(path.max_depth.min(i32::MAX as u32) as i32));
-        put(
-            "lenspath/lightSamples",
-            Int(path.light_samples.min(i32::MAX as u32) as i32),
-        );
-        put("lenspath/sampler", Text(s.sampler.name().to_string()));
-        // An int when it fits (every seed a front end defaults to), else a double (exact for a u32).
-        put(
-            "lenspath/seed",
-            i32::try_from(s.seed).map_or(HeaderValue::Double(f64::from(s.seed)), Int),
-        );
-        if let Some(nm) = s.film.wavelength_nm() {
-            put("lenspath/wavelengthNm", Float(nm));
-        }
-        comments += &format!(", {} spp of the {} integrator", s.spp, s.integrator.kind().name());
-        put("comments", Text(comments));
-        Ok(ImageHeader {
-            frame: s.crop.map(|c| ((width, height), (c.x0 as i32, c.y0 as i32))),
-            attributes: a,
-        })
-    }
-}
-
-/// The perspective cameras' projection from camera space to OpenEXR's NDC
-/// (0, 0) at the display window's top-left corner, (1, 1) at its bottom
-/// right; w is the depth along the view): `x/(2 tan(fov_x/2) z) + 1/2` and
-/// `−y/(2 tan(fov_y/2) z) + 1/2`, the inverse of
-/// `PerspectiveCamera::direction_through`.
-fn ndc_from_camera(fov_y_deg: f32, width: u32, height: u32) -> Mat4 {
-    let tan_y = (0.5 * fov_y_deg.to_radians()).tan();
-    let tan_x = tan_y * width as f32 / height as f32;
-    Mat4::from_cols(
-        Vec4::new(0.5 / tan_x, 0.0, 0.0, 0.0),
-        Vec4::new(0.0, -0.5 / tan_y, 0.0, 0.0),
-        Vec4::new(0.5, 0.5, 0.0, 1.0),
-        Vec4::new(0.0, 0.0, 1.0, 0.0),
-    )
 }
 
 // ---------------------------------------------------------------------------
@@ -363,7 +252,7 @@ pub fn resolve(options: &SceneOptions, view: &SceneView, overrides: &RenderOverr
 }
 
 /// The caller's sensor description over the scene file's, field by field.
-fn over_file_sensor(asked: Option<&SensorDescription>, options: &SceneOptions) -> Option<SensorDescription> {
+pub(super) fn over_file_sensor(asked: Option<&SensorDescription>, options: &SceneOptions) -> Option<SensorDescription> {
     match (asked, &options.sensor) {
         (Some(asked), Some(file)) => Some(asked.over(file)),
         (asked, file) => asked.cloned().or_else(|| file.clone()),
@@ -380,10 +269,7 @@ pub fn resolve_settings(options: &SceneOptions, overrides: &RenderOverrides) -> 
         height,
         spp: overrides.spp.or(options.spp).unwrap_or(defaults::SPP),
         integrator: Integrator::new(
-            overrides
-                .integrator
-                .or(options.integrator)
-                .unwrap_or(defaults::INTEGRATOR),
+            overrides.integrator.or(options.integrator).unwrap_or_default(),
             PathSettings {
                 max_depth: overrides.max_depth.or(options.max_depth).unwrap_or(defaults::MAX_DEPTH),
                 light_samples: overrides
@@ -394,7 +280,7 @@ pub fn resolve_settings(options: &SceneOptions, overrides: &RenderOverrides) -> 
             defaults::GUIDE_TRAINING_SPP,
         ),
         seed: overrides.seed.or(options.seed).unwrap_or(defaults::SEED),
-        sampler: overrides.sampler.or(options.sampler).unwrap_or(defaults::SAMPLER),
+        sampler: overrides.sampler.or(options.sampler).unwrap_or_default(),
         filter: overrides.filter.unwrap_or(library.filter),
         threads: overrides.threads,
         crop: overrides.crop,
@@ -407,7 +293,7 @@ pub fn resolve_settings(options: &SceneOptions, overrides: &RenderOverrides) -> 
 }
 
 /// The image size the caller asks for, else the scene file's, else the default.
-fn image_size(asked: Option<(u32, u32)>, options: &SceneOptions) -> (u32, u32) {
+pub(super) fn image_size(asked: Option<(u32, u32)>, options: &SceneOptions) -> (u32, u32) {
     asked.or(options.resolution).unwrap_or(defaults::IMAGE_SIZE)
 }
 
@@ -490,7 +376,7 @@ pub fn realistic_settings(
         )));
     }
     let focus = description.focus.unwrap_or(match file.sensor_depth_mm {
-        Some(mm) => LensFocus::SensorPositionMm(mm),
+        Some(mm) => LensFocus::SensorDepthMm(mm),
         None => LensFocus::Distance(file.focus_distance.unwrap_or(f64::from(view.focus_distance))),
     });
     let scene_unit_m = description
@@ -531,136 +417,6 @@ fn file_aperture(options: &SceneOptions) -> ApertureShape {
         .as_ref()
         .and_then(|l| l.aperture.clone())
         .unwrap_or(ApertureShape::Circle)
-}
-
-// ---------------------------------------------------------------------------
-// Autofocus
-
-/// What a caller asks of an autofocus search; `None` means the default.
-#[derive(Clone, Debug, Default)]
-pub struct AutofocusOverrides {
-    /// Image size the patch is a part of (default: the scene file's, else [`defaults::IMAGE_SIZE`]).
-    pub resolution: Option<(u32, u32)>,
-    /// Samples per pixel of each patch render (default [`defaults::AUTOFOCUS_PATCH_SPP`]).
-    pub spp: Option<u32>,
-    /// Maximum path depth of the patch renders (default [`defaults::AUTOFOCUS_PATCH_MAX_DEPTH`]).
-    pub max_depth: Option<u32>,
-    /// Seed of the patch renders (default [`defaults::AUTOFOCUS_SEED`]).
-    pub seed: Option<u32>,
-    /// Worker threads (`None`: every core).
-    pub threads: Option<usize>,
-    /// Focus measure name (default [`defaults::AUTOFOCUS_METRIC`]).
-    pub metric: Option<String>,
-    /// Strategy name (default [`defaults::AUTOFOCUS_STRATEGY`]).
-    pub strategy: Option<String>,
-    /// The early-exit strategy's patience (default [`defaults::AUTOFOCUS_PATIENCE`]).
-    pub patience: Option<usize>,
-    /// The realistic camera; its focus is what the search sets, and is ignored.
-    pub camera: RealisticDescription,
-    /// Contrast autofocus through this sensor (over the scene file's
-    /// `[sensor]`, field by field); without either, on the noiseless film.
-    pub sensor: Option<SensorDescription>,
-    /// What the measure reads of the sensor's frames (default
-    /// [`defaults::AUTOFOCUS_SENSOR_SIGNAL`]).
-    pub sensor_signal: Option<String>,
-}
-
-/// An autofocus search, resolved: what to search with and how.
-#[derive(Clone, Debug)]
-pub struct AutofocusSetup {
-    /// The search's settings (camera, patch, measure, patch renders).
-    pub settings: AutofocusSettings,
-    /// The strategy.
-    pub strategy: Strategy,
-    /// Where the camera is.
-    pub pose: CameraPose,
-}
-
-/// The search of `patch` that `overrides` asks for, of a scene whose file
-/// says `options` and whose view is `view`; patch renders trace one shadow
-/// ray per light.
-pub fn resolve_autofocus(
-    options: &SceneOptions,
-    view: &SceneView,
-    patch: NormalizedRect,
-    overrides: &AutofocusOverrides,
-) -> Result<AutofocusSetup> {
-    let size = image_size(overrides.resolution, options);
-    let camera = realistic_settings(options, view, &overrides.camera, size.0, size.1)?;
-    let overrides = AutofocusOverrides {
-        sensor: over_file_sensor(overrides.sensor.as_ref(), options),
-        ..overrides.clone()
-    };
-    autofocus_setup(camera, size, patch, &overrides, view.pose)
-}
-
-/// The search of `patch` of a `width` × `height` image through `camera` (a
-/// camera already resolved, as the viewer's) at `pose`; `overrides.camera`
-/// and `overrides.resolution` are not read, nor a scene file's sensor.
-pub fn autofocus_setup(
-    camera: RealisticCameraSettings,
-    (width, height): (u32, u32),
-    patch: NormalizedRect,
-    overrides: &AutofocusOverrides,
-    pose: CameraPose,
-) -> Result<AutofocusSetup> {
-    let measure = FocusMeasure::parse(overrides.metric.as_deref().unwrap_or(defaults::AUTOFOCUS_METRIC))?;
-    let strategy = Strategy::from_name(
-        overrides.strategy.as_deref().unwrap_or(defaults::AUTOFOCUS_STRATEGY),
-        overrides.patience.unwrap_or(defaults::AUTOFOCUS_PATIENCE),
-    )?;
-    // Checked by `Focuser::new`, with the rest of the search's settings.
-    let settings = AutofocusSettings {
-        camera,
-        width,
-        height,
-        patch: patch.to_pixels(width, height),
-        measure,
-        spp: overrides.spp.unwrap_or(defaults::AUTOFOCUS_PATCH_SPP),
-        integrator: Integrator::path(overrides.max_depth.unwrap_or(defaults::AUTOFOCUS_PATCH_MAX_DEPTH), 1),
-        seed: overrides.seed.unwrap_or(defaults::AUTOFOCUS_SEED),
-        threads: overrides.threads,
-        sensor: overrides
-            .sensor
-            .as_ref()
-            .map(|described| -> Result<FocusSensor> {
-                Ok(FocusSensor {
-                    sensor: described.resolve()?,
-                    signal: SensorSignal::parse(
-                        overrides
-                            .sensor_signal
-                            .as_deref()
-                            .unwrap_or(defaults::AUTOFOCUS_SENSOR_SIGNAL),
-                    )?,
-                })
-            })
-            .transpose()?,
-    };
-    Ok(AutofocusSetup {
-        settings,
-        strategy,
-        pose,
-    })
-}
-
-/// The autofocus of `lenspath render --autofocus`: the default strategy and
-/// measure on `patch` through the render's camera, its patch renders with the
-/// render's seed and threads and its depth capped at
-/// [`defaults::AUTOFOCUS_PATCH_MAX_DEPTH`]; through the render's sensor,
-/// when it has one (the frame a camera focuses on is its sensor's).
-pub fn autofocus_before_render(setup: &RenderSetup, patch: NormalizedRect) -> Result<AutofocusSetup> {
-    let CameraSettings::Realistic(camera) = &setup.camera else {
-        return Err(Error::InvalidArgument("autofocus needs the realistic camera".into()));
-    };
-    let s = &setup.settings;
-    let overrides = AutofocusOverrides {
-        max_depth: Some(s.integrator.max_depth().min(defaults::AUTOFOCUS_PATCH_MAX_DEPTH)),
-        seed: Some(s.seed),
-        threads: s.threads,
-        sensor: setup.sensor.as_ref().map(SensorSettings::description),
-        ..AutofocusOverrides::default()
-    };
-    autofocus_setup(camera.clone(), (s.width, s.height), patch, &overrides, setup.pose)
 }
 
 #[cfg(test)]
@@ -706,7 +462,7 @@ mod tests {
         };
         assert_eq!(camera.lens.name(), "wide22");
         assert_eq!(camera.f_number, Some(8.0));
-        assert_eq!(camera.focus, LensFocus::SensorPositionMm(30.0));
+        assert_eq!(camera.focus, LensFocus::SensorDepthMm(30.0));
         assert_eq!(camera.scene_unit_m, 0.5);
         assert_eq!(
             camera.sensor_mm,
@@ -780,7 +536,7 @@ mod tests {
         assert_eq!((s.width, s.height), defaults::IMAGE_SIZE);
         assert_eq!(
             (s.spp, s.seed, s.sampler),
-            (defaults::SPP, defaults::SEED, defaults::SAMPLER)
+            (defaults::SPP, defaults::SEED, SamplerKind::default())
         );
         assert_eq!(
             s.integrator,
