@@ -224,41 +224,6 @@ def render(
     as ``lenspath render --out`` writes it.
     """
     callback = _tqdm_progress() if progress is True else (progress or None)
-    if sensor is not None and aovs is not None:
-        raise ValueError("a sensor render gives a raw frame, without AOVs: render the depth without the sensor")
-    if sensor is not None:
-        return _core.render(
-            _as_scene(scene),
-            camera,
-            spp=spp,
-            resolution=resolution,
-            seed=seed,
-            max_depth=max_depth,
-            light_samples=light_samples,
-            threads=threads,
-            crop=crop,
-            progress=callback,
-            sampler=sampler,
-            wavelength_nm=wavelength_nm,
-            integrator=integrator,
-            sensor=sensor,
-        )
-    if aovs is None:
-        return _core.render(
-            _as_scene(scene),
-            camera,
-            spp=spp,
-            resolution=resolution,
-            seed=seed,
-            max_depth=max_depth,
-            light_samples=light_samples,
-            threads=threads,
-            crop=crop,
-            progress=callback,
-            sampler=sampler,
-            wavelength_nm=wavelength_nm,
-            integrator=integrator,
-        )
     return _core.render(
         _as_scene(scene),
         camera,
@@ -268,12 +233,13 @@ def render(
         max_depth=max_depth,
         light_samples=light_samples,
         threads=threads,
-        aovs=list(aovs),
+        aovs=None if aovs is None else list(aovs),
         crop=crop,
         progress=callback,
         sampler=sampler,
         wavelength_nm=wavelength_nm,
         integrator=integrator,
+        sensor=sensor,
     )
 
 

@@ -446,6 +446,25 @@ def render(
     integrator: Literal["path", "guided"] | None = None,
     sensor: None = None,
 ) -> dict[str, npt.NDArray[np.float32]]: ...
+@overload
+def render(
+    scene: Scene,
+    camera: Camera | None = None,
+    *,
+    spp: int | None = None,
+    resolution: tuple[int, int] | None = None,
+    seed: int | None = None,
+    max_depth: int | None = None,
+    light_samples: int | None = None,
+    threads: int | None = None,
+    aovs: list[str] | None = None,
+    crop: tuple[int, int, int, int] | None = None,
+    progress: Callable[[int, int], Any] | None = None,
+    sampler: Literal["sobol", "independent"] | None = None,
+    wavelength_nm: float | None = None,
+    integrator: Literal["path", "guided"] | None = None,
+    sensor: Sensor | None = None,
+) -> npt.NDArray[np.float32] | dict[str, npt.NDArray[np.float32]] | RawFrame: ...
 def guide_map(
     scene: Scene,
     camera: Camera | None = None,

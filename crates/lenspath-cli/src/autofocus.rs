@@ -35,32 +35,32 @@ pub struct AutofocusArgs {
     sensor: SensorFlags,
     /// Sensor: what contrast autofocus reads of its frames: raw-green (the green pixels, undeveloped)
     /// or luminance (the developed frame's).
-    #[arg(long, value_name = "SIGNAL", value_parser = named::<SensorSignal>(), default_value = SensorSignal::default().name())]
-    af_signal: SensorSignal,
+    #[arg(long, value_name = "SIGNAL", value_parser = named::<SensorSignal>())]
+    af_signal: Option<SensorSignal>,
     /// The patch to focus on, X,Y,W,H in fractions of the image (0 to 1), such as 0.55,0.7,0.1,0.12.
     #[arg(long, value_name = "X,Y,W,H", value_parser = parse_patch)]
     patch: NormalizedRect,
     /// Focus measure.
-    #[arg(long, value_parser = named::<FocusMeasure>(), default_value = FocusMeasure::default().name())]
-    metric: FocusMeasure,
+    #[arg(long, value_parser = named::<FocusMeasure>())]
+    metric: Option<FocusMeasure>,
     /// Search: sweep, early-exit, fast, rangefinder (probe rays and the lens model) or depth (range finder, then a short contrast refinement).
-    #[arg(long, value_parser = named::<Strategy>(), default_value = Strategy::default().name())]
-    strategy: Strategy,
+    #[arg(long, value_parser = named::<Strategy>())]
+    strategy: Option<Strategy>,
     /// early-exit: stop after this many steps without a new best.
-    #[arg(long, default_value_t = defaults::AUTOFOCUS_PATIENCE)]
-    patience: usize,
+    #[arg(long)]
+    patience: Option<usize>,
     /// Samples per pixel of each patch render.
-    #[arg(long, default_value_t = defaults::AUTOFOCUS_PATCH_SPP)]
-    spp: u32,
+    #[arg(long)]
+    spp: Option<u32>,
     /// Image size, WIDTHxHEIGHT.
     #[arg(long, value_parser = parse_resolution)]
     res: Option<Resolution>,
     /// Maximum path depth of the patch renders.
-    #[arg(long, default_value_t = defaults::AUTOFOCUS_PATCH_MAX_DEPTH)]
-    max_depth: u32,
-    /// Seed of the patch renders.
-    #[arg(long, default_value_t = defaults::AUTOFOCUS_SEED)]
-    seed: u32,
+    #[arg(long)]
+    max_depth: Option<u32>,
+    /// Seed of the patch renders (and of --render).
+    #[arg(long)]
+    seed: Option<u32>,
     /// Worker threads, for the BVH build and the rendering (default: all cores).
     #[arg(long)]
     threads: Option<usize>,
@@ -124,7 +124,7 @@ pub fn run(args: AutofocusArgs) -> Result<Outcome> {
     let compiled = scene.compile_on(&BvhSettings::default(), args.threads)?;
     let (width, height) = (search.settings.width, search.settings.height);
     let lens = search.settings.camera.clone();
-    let strategy = search.strategy;
+    let (strategy, measure, seed) = (search.strategy, search.settings.measure, search.settings.seed);
     let mut focuser = Focuser::new(&compiled, view.pose, search.settings)?;
     let result = focuser.run(strategy)?;
     if args.json {
@@ -134,7 +134,7 @@ pub fn run(args: AutofocusArgs) -> Result<Outcome> {
             "sensor_position_mm": result.sensor_depth_mm,
             "focus_distance": result.focus_distance,
             "focus_distance_m": result.focus_distance.map(|d| d * lens.scene_unit_m),
-            "metric": args.metric.name(),
+            "metric": measure.name(),
             "strategy": result.strategy,
             "evaluations": result.evaluations.len(),
             "patch_renders": result.patch_renders(),
@@ -149,7 +149,7 @@ pub fn run(args: AutofocusArgs) -> Result<Outcome> {
         });
         println!("{}", serde_json::to_string_pretty(&out).expect("JSON serializes"));
     } else {
-        println!("{}", summary_line(&result, args.metric, lens.scene_unit_m));
+        println!("{}", summary_line(&result, measure, lens.scene_unit_m));
     }
     if let Some(path) = &args.plot {
         let sweep = if strategy == Strategy::Sweep {
@@ -157,12 +157,7 @@ pub fn run(args: AutofocusArgs) -> Result<Outcome> {
         } else {
             focuser.run(Strategy::Sweep)?
         };
-        let title = format!(
-            "{} on {} ({})",
-            result.strategy,
-            args.metric.name(),
-            patch_label(&patch)
-        );
+        let title = format!("{} on {} ({})", result.strategy, measure.name(), patch_label(&patch));
         let svg = focus_curve_svg(
             &title,
             &[
@@ -188,7 +183,7 @@ pub fn run(args: AutofocusArgs) -> Result<Outcome> {
             width,
             height,
             spp: args.render_spp,
-            seed: args.seed,
+            seed,
             threads: args.threads,
             ..Default::default()
         };
@@ -222,16 +217,16 @@ pub fn run(args: AutofocusArgs) -> Result<Outcome> {
 fn overrides(args: &AutofocusArgs) -> Result<AutofocusOverrides> {
     Ok(AutofocusOverrides {
         resolution: args.res.map(|r| (r.width, r.height)),
-        spp: Some(args.spp),
-        max_depth: Some(args.max_depth),
-        seed: Some(args.seed),
+        spp: args.spp,
+        max_depth: args.max_depth,
+        seed: args.seed,
         threads: args.threads,
-        metric: Some(args.metric),
-        strategy: Some(args.strategy),
-        patience: Some(args.patience),
+        metric: args.metric,
+        strategy: args.strategy,
+        patience: args.patience,
         camera: args.lens.description()?,
         sensor: args.sensor.description()?,
-        sensor_signal: Some(args.af_signal),
+        sensor_signal: args.af_signal,
     })
 }
 

@@ -305,7 +305,7 @@ fn blurred_header(mut header: ImageHeader, args: &BokehArgs) -> ImageHeader {
 /// The shape of `--mask`: an image file, or else a named shape.
 fn load_shape(mask: &str) -> Result<ApertureShape> {
     if PathBuf::from(mask).exists() {
-        return ApertureShape::load_mask(std::path::Path::new(mask));
+        return lenspath::io::image::read_aperture_mask(std::path::Path::new(mask));
     }
     ApertureShape::parse(mask).map_err(|e| {
         Error::InvalidArgument(format!(

@@ -428,7 +428,7 @@ impl ApertureFlags {
             other => other,
         };
         if let Some(path) = &self.aperture_mask {
-            return ApertureShape::load_mask(path).map(Some);
+            return lenspath::io::image::read_aperture_mask(path).map(Some);
         }
         let shape = match (self.blades, self.star) {
             (Some(count), _) => ApertureShape::Blades {

@@ -18,6 +18,7 @@ mod render;
 mod view;
 
 use clap::{Args, CommandFactory, FromArgMatches, Parser, Subcommand};
+use lenspath::autofocus::{FocusMeasure, SensorSignal, Strategy};
 use lenspath::integrator::IntegratorKind;
 use lenspath::names::Named;
 use lenspath::sampling::SamplerKind;
@@ -119,9 +120,21 @@ fn command() -> clap::Command {
         ),
         ("max_iso", d::SENSOR_MAX_ISO.to_string()),
     ];
-    let with_defaults = |mut c: clap::Command| {
-        for (id, value) in &defaults {
-            if c.get_arguments().any(|a| a.get_id() == id) {
+    // An autofocus search's patch renders have defaults of their own (not the scene file's).
+    let patch_renders = [
+        ("spp", d::AUTOFOCUS_PATCH_SPP.to_string()),
+        ("max_depth", d::AUTOFOCUS_PATCH_MAX_DEPTH.to_string()),
+        ("seed", d::AUTOFOCUS_SEED.to_string()),
+        ("patience", d::AUTOFOCUS_PATIENCE.to_string()),
+        ("metric", FocusMeasure::default().name().to_string()),
+        ("strategy", Strategy::default().name().to_string()),
+        ("af_signal", SensorSignal::default().name().to_string()),
+    ];
+    // The first table that names an argument gives its default.
+    let with_defaults = |tables: &[&[(&str, String)]], mut c: clap::Command| {
+        let ids: Vec<String> = c.get_arguments().map(|a| a.get_id().to_string()).collect();
+        for id in ids {
+            if let Some((_, value)) = tables.iter().flat_map(|t| t.iter()).find(|(name, _)| *name == id) {
                 c = c.mut_arg(id, |a| {
                     let help = a.get_help().map(ToString::to_string).unwrap_or_default();
                     a.help(format!("{help} [default: {value}]"))
@@ -131,8 +144,8 @@ fn command() -> clap::Command {
         c
     };
     Cli::command()
-        .mut_subcommand("render", with_defaults)
-        .mut_subcommand("autofocus", with_defaults)
+        .mut_subcommand("render", |c| with_defaults(&[&defaults], c))
+        .mut_subcommand("autofocus", |c| with_defaults(&[&patch_renders, &defaults], c))
 }
 
 /// Runs the command line `args` (the program's name first, as `std::env::args_os` gives it) and

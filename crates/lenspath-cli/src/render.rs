@@ -8,25 +8,21 @@ use std::time::Duration;
 use clap::Args;
 use lenspath::accel::BvhSettings;
 use lenspath::autofocus::Focuser;
-use lenspath::camera::{ApertureShape, LensFocus};
+use lenspath::camera::LensFocus;
 use lenspath::film::{Filter, NormalizedRect, PixelRect};
 use lenspath::integrator::{guiding_can_help, IntegratorKind};
-use lenspath::io::checkpoint::{read_checkpoint, write_checkpoint};
+use lenspath::io::checkpoint::{resume_state, write_checkpoint};
 use lenspath::io::image::{check_output_path, write_image_with_header};
-use lenspath::render::{
-    guide_map_at_pixel, render_from, train_guide, Accumulation, Checkpoints, Continuation, RenderSettings,
-};
+use lenspath::render::{guide_map_at_pixel, render_from, train_guide, Accumulation, Checkpoints, Continuation};
 use lenspath::sampling::SamplerKind;
-use lenspath::scene::Scene;
 use lenspath::sensor::develop::develop;
 use lenspath::sensor::raw_file::{write_raw, RawFormat};
 use lenspath::sensor::{RawFrame, SensorDescription};
 use lenspath::setup::{
     autofocus_before_render, resolve, CameraDescription, CameraSettings, RealisticDescription, RenderOverrides,
+    SceneHash,
 };
 use lenspath::{Error, Result};
-
-use sha2::{Digest, Sha256};
 
 use crate::flags::{
     named, parse_crop, parse_duration, parse_image_point, parse_patch, parse_resolution, ApertureFlags, CameraKind,
@@ -137,73 +133,6 @@ pub struct RenderArgs {
     /// --checkpoint names another.
     #[arg(long, value_name = "FILE")]
     resume: Option<PathBuf>,
-}
-
-/// A hash of the scene's content: every mesh array, material, light and the
-/// view (what [`fingerprint`] starts from).
-fn scene_hasher(scene: &Scene) -> Sha256 {
-    let mut hasher = Sha256::new();
-    for mesh in &scene.meshes {
-        let mut bytes = Vec::with_capacity(12 * mesh.positions.len() + 12 * mesh.indices.len());
-        let floats = mesh
-            .positions
-            .iter()
-            .chain(mesh.normals.iter().flatten())
-            .flat_map(|v| v.to_array())
-            .chain(mesh.uvs.iter().flatten().flat_map(|v| v.to_array()));
-        for f in floats {
-            bytes.extend_from_slice(&f.to_le_bytes());
-        }
-        for i in mesh.indices.iter().flatten() {
-            bytes.extend_from_slice(&i.to_le_bytes());
-        }
-        hasher.update(&bytes);
-        hasher.update(format!("{:?} {:?}", mesh.material, mesh.emission));
-    }
-    hasher.update(format!(
-        "{:?} {:?} {:?} {:?}",
-        scene.spheres, scene.materials, scene.lights, scene.view
-    ));
-    hasher
-}
-
-/// What a render's image depends on, except its sample count: the scene's
-/// content ([`scene_hasher`]), the settings and the camera. A readable head
-/// and a SHA-256 of it all; checkpoints carry it so that `--resume` never
-/// continues another render.
-fn fingerprint(mut hasher: Sha256, scene_name: &str, settings: &RenderSettings, camera: &CameraSettings) -> String {
-    // A mask's Debug form gives only its size: its values go in as bytes.
-    if let ApertureShape::Mask(mask) = camera.aperture() {
-        let bytes: Vec<u8> = mask.values.iter().flat_map(|v| v.to_le_bytes()).collect();
-        hasher.update(&bytes);
-    }
-    let described = RenderSettings {
-        spp: 0,
-        threads: None,
-        ..*settings
-    };
-    hasher.update(format!("{described:?} {camera:?}"));
-    let digest: String = hasher.finalize().iter().map(|b| format!("{b:02x}")).collect();
-    format!(
-        "lenspath {} render of {scene_name}, {}x{}, seed {}; sha256 {digest}",
-        env!("CARGO_PKG_VERSION"),
-        settings.width,
-        settings.height,
-        settings.seed
-    )
-}
-
-/// The state saved in `path`, checked to be of the render `fingerprint` describes.
-fn resume_state(path: &Path, fingerprint: &str) -> Result<Accumulation> {
-    let (saved, state) = read_checkpoint(path)?;
-    if saved != fingerprint {
-        return Err(Error::InvalidArgument(format!(
-            "{} is the checkpoint of another render (the scene, camera or settings differ, or \
-             another lenspath made it):\n  saved:    {saved}\n  this one: {fingerprint}",
-            path.display()
-        )));
-    }
-    Ok(state)
 }
 
 /// The render the flags ask for: each flag maps onto the library's
@@ -318,7 +247,7 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
         }
     }
     // Hashed only for checkpoints: a million triangles take a tenth of a second.
-    let scene_hash = checkpoint_path.is_some().then(|| scene_hasher(&scene));
+    let scene_hash = checkpoint_path.is_some().then(|| SceneHash::of(&scene));
     let compiled = scene.compile_on(&BvhSettings::default(), args.threads)?;
     if let Some(patch) = args.autofocus {
         let search = autofocus_before_render(&setup, patch)?;
@@ -334,7 +263,7 @@ pub fn run(args: RenderArgs) -> Result<Outcome> {
     // The checkpoint file and this render's fingerprint, when checkpointing.
     let checkpointing: Option<(PathBuf, String)> = checkpoint_path
         .zip(scene_hash)
-        .map(|(path, hash)| (path, fingerprint(hash, &scene_name, &settings, &setup.camera)));
+        .map(|(path, hash)| (path, setup.fingerprint(hash, &scene_name)));
     let start = match (&args.resume, &checkpointing) {
         (Some(resume), Some((_, fingerprint))) => {
             let state = resume_state(resume, fingerprint)?;

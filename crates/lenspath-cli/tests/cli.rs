@@ -295,6 +295,44 @@ fn usage_errors_name_the_argument_and_what_was_meant() {
     }
 }
 
+/// Each flag's help states the one default the library applies: a render's
+/// settings fall back on the scene file's, an autofocus search's patch
+/// renders have their own (a flag's help once said both).
+#[test]
+fn the_help_states_each_default_once() {
+    let help = |command: &str, flag: &str| {
+        let o = lenspath(&[command, "--help"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let text = String::from_utf8_lossy(&o.stdout).into_owned();
+        let at = text
+            .find(&format!("      {flag} "))
+            .unwrap_or_else(|| panic!("{command}: no {flag}"));
+        // The flag's line and its help, up to the next flag.
+        let mut lines = text[at..].lines();
+        let head = lines.next().unwrap_or_default();
+        let rest = lines.take_while(|l| !l.trim_start().starts_with('-'));
+        let entry = std::iter::once(head).chain(rest).collect::<Vec<_>>().join("\n");
+        assert_eq!(entry.matches("[default:").count(), 1, "{command} {flag}: {entry}");
+        entry
+    };
+    let lens = lenspath::defaults::LENS;
+    assert!(help("render", "--spp").contains("[default: the scene file's, else 64]"));
+    assert!(help("render", "--lens").contains(&format!("else {lens}]")));
+    for (flag, default) in [
+        ("--spp", "16"),
+        ("--max-depth", "8"),
+        ("--seed", "0"),
+        ("--patience", "12"),
+    ] {
+        assert!(
+            help("autofocus", flag).contains(&format!("[default: {default}]")),
+            "{flag}"
+        );
+    }
+    assert!(help("autofocus", "--metric").contains("[default: tenengrad]"));
+    assert!(help("autofocus", "--res").contains("[default: the scene file's, else 640x480]"));
+}
+
 #[test]
 fn failed_write_keeps_the_previous_image() {
     let dir = tempfile::tempdir().unwrap();

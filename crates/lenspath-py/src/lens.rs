@@ -1,6 +1,7 @@
 //! Lenses: prescriptions, their analysis, tracing and drawings.
 
 use std::path::PathBuf;
+use std::sync::OnceLock;
 
 use glam::DVec3;
 use lenspath::glass::check_wavelength_nm;
@@ -28,6 +29,9 @@ pub(crate) struct Lens {
     pub(crate) analysis: LensAnalysis,
     /// The f-number it was stopped down to (None: wide open).
     pub(crate) stopped_to: Option<f64>,
+    /// Its report as JSON, made the first time `analysis()` asks (it
+    /// traces for up to a second) and kept: the lens does not change.
+    pub(crate) report_json: OnceLock<String>,
 }
 
 impl Lens {
@@ -55,6 +59,7 @@ impl Lens {
             system,
             analysis,
             stopped_to: None,
+            report_json: OnceLock::new(),
         })
     }
 }
@@ -173,12 +178,20 @@ impl Lens {
     /// serialisation of the library's analysis, read back by Python's json,
     /// so the two front ends cannot drift apart (floats round-trip exactly).
     pub(crate) fn analysis<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let report = guarded(|| {
-            LensReport::new(&self.system, &LensReportSettings::default())
-                .and_then(|r| r.with_passing_fractions(&self.prescription, self.stopped_to))
-        })?
-        .map_err(to_py)?;
-        let text = report.to_json();
+        let text = match self.report_json.get() {
+            Some(text) => text,
+            None => {
+                let report = py
+                    .detach(|| {
+                        guarded(|| {
+                            LensReport::new(&self.system, &LensReportSettings::default())
+                                .and_then(|r| r.with_passing_fractions(&self.prescription, self.stopped_to))
+                        })
+                    })?
+                    .map_err(to_py)?;
+                self.report_json.get_or_init(|| report.to_json())
+            }
+        };
         Ok(py
             .import("json")?
             .call_method1("loads", (text,))?

@@ -6,8 +6,6 @@
 
 use glam::DVec3;
 
-use crate::film::Image;
-
 /// Relative luminance Y of a linear sRGB colour: the Y row of the sRGB
 /// (Rec. 709 primaries, D65) to CIE XYZ matrix, IEC 61966-2-1.
 pub fn luminance(rgb: [f32; 3]) -> f32 {
@@ -32,11 +30,11 @@ pub fn srgb_to_linear(x: f32) -> f32 {
     }
 }
 
-/// 8-bit sRGB bytes of the image after an exposure of `exposure` stops.
-pub fn to_srgb8(image: &Image, exposure: f32) -> Vec<u8> {
+/// 8-bit sRGB bytes of linear values (an image's RGB) after an exposure of
+/// `exposure` stops.
+pub fn to_srgb8(linear: &[f32], exposure: f32) -> Vec<u8> {
     let scale = exposure.exp2();
-    image
-        .rgb
+    linear
         .iter()
         .map(|&v| (linear_to_srgb(v * scale) * 255.0 + 0.5).clamp(0.0, 255.0) as u8)
         .collect()

@@ -11,6 +11,24 @@ use glam::Vec2;
 use crate::error::{Error, Result};
 use crate::sampling::{erf, erf_inv};
 
+/// The light a camera's film reading stands for.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FilmRadiometry {
+    /// Sensor irradiance per unit scene radiance that a reading of 1
+    /// stands for, sr (π/(4N²) on the axis of a lens at f-number N focused
+    /// at infinity: the camera equation, Slater, *Remote Sensing*, 1980).
+    pub irradiance_per_reading_sr: f64,
+    /// Pixel pitch (width, height), µm: the sensor's size over the image's.
+    pub pixel_pitch_um: (f64, f64),
+}
+
+impl FilmRadiometry {
+    /// A pixel's area, µm².
+    pub fn pixel_area_um2(&self) -> f64 {
+        self.pixel_pitch_um.0 * self.pixel_pitch_um.1
+    }
+}
+
 /// A pixel reconstruction filter.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Filter {

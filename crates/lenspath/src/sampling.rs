@@ -53,10 +53,9 @@ impl Named for SamplerKind {
 /// under a seed of its own (the index shuffled and the digits scrambled
 /// afresh), so each set is a stratified 4D point set of the pixel's samples
 /// and the sets are independent of one another, with no limit on their
-/// number. On the Cornell box this leaves 0.84–0.98× the error of taking the
-/// sets as consecutive dimensions of one 256-dimensional sequence at 64–256
-/// spp (the same at 4–16), whose higher dimensions' 2D projections are
-/// poorly stratified (BENCHMARKS.md).
+/// number. This leaves less error than taking the sets as consecutive
+/// dimensions of one 256-dimensional sequence, whose higher dimensions' 2D
+/// projections are poorly stratified (BENCHMARKS.md).
 pub struct Sampler(Source);
 
 /// Where a [`Sampler`]'s numbers come from.
@@ -129,7 +128,7 @@ struct SobolStream {
     /// The sets after them, made one refill before they are used: their
     /// chain of dependent multiplies (some hundred cycles) then runs beside
     /// the path's other work instead of holding up the first dimension
-    /// asked of them. Measured: renders 0.94-0.96x the time (BENCHMARKS.md).
+    /// asked of them (BENCHMARKS.md, "the Sobol sets made a refill ahead").
     ahead: [[f32; 4]; SETS_DRAWN_TOGETHER],
 }
 
@@ -378,8 +377,8 @@ pub fn concentric_disk(u: Vec2) -> Vec2 {
         return Vec2::ZERO;
     }
     // The angle from the major axis is π/4 · minor/major, within ±π/4, where
-    // two short polynomials give its sine and cosine (no libm call: that
-    // was 3% of a render).
+    // two short polynomials give its sine and cosine (no libm call, which
+    // showed in render profiles).
     // Selects, not branches: which axis is major is a coin toss per sample,
     // and a mispredicted branch costs more than the selects.
     let x_major = o.x.abs() > o.y.abs();

@@ -253,6 +253,11 @@ struct Config {
 /// Largest dropped lens table, bytes.
 pub const MAX_LENS_TABLE_BYTES: usize = 64 * 1024;
 
+/// Samples per pixel the preview refines to unless the page stops it
+/// sooner: the viewer's own (a scene file's `spp` is for its final render),
+/// enough for a picture that no longer visibly changes.
+const DEFAULT_MAX_SPP: u32 = 1024;
+
 impl Session {
     /// A viewer of `scene` as `source` describes it, `resolution` pixels,
     /// offering the lens tables `lens_files` besides the built-ins.
@@ -723,7 +728,7 @@ fn initial_settings(options: &SceneOptions, view: &SceneView, resolution: (u32, 
         eye: eye.to_array(),
         target: target.to_array(),
         up: Vec3::from(m.y_axis).to_array(),
-        max_spp: 1024,
+        max_spp: DEFAULT_MAX_SPP,
         max_depth: s.integrator.max_depth(),
         light_samples: s.integrator.light_samples(),
         seed: s.seed,

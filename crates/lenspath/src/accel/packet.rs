@@ -15,14 +15,10 @@
 //! leaves its single-ray traversal visits, so every answer is
 //! [`Bvh::intersect_any`]'s, bit for bit; what is shared is the walk.
 //!
-//! Measured on the course's dragon setting (480×360, 4 spp, 16 light
-//! samples, one thread, the same image byte for byte): 8.5 s → 6.4 s for the
-//! render with the rays' bits sorted into lanes in a loop, 4.4 s with the
-//! AVX2 lane bits (and one shadow ray for the scene's point light). A
-//! frustum instead of the per-ray tests (Reshetov et al. 2005: six planes
-//! culling boxes for the whole packet, rays tested only at leaves) took
-//! 15.1 s: its frustum entered 26 nodes a packet where each ray enters
-//! four, and every ray then tested each leaf-parent node.
+//! Per-ray tests, not a frustum (Reshetov et al. 2005: six planes culling
+//! boxes for the whole packet): shadow rays from one point to a light
+//! spread so that a packet's frustum enters many more nodes than each ray
+//! does (BENCHMARKS.md, "Shadow rays in packets").
 
 use std::mem::MaybeUninit;
 

@@ -11,9 +11,9 @@
 //! field's groups) share that exposure's time, so every strategy collects
 //! one exposure's light per position and pays the read noise once per frame.
 
-use crate::camera::FilmRadiometry;
 use crate::color::luminance;
 use crate::error::Result;
+use crate::film::FilmRadiometry;
 use crate::film::{Image, PixelRect};
 use crate::names::Named;
 use crate::sampling::mix64;

@@ -67,17 +67,6 @@ impl ApertureMask {
 }
 
 impl ApertureShape {
-    /// A [`ApertureShape::Mask`] from a grayscale PNG, JPEG or EXR image
-    /// (read by [`crate::io::image::read_gray`]; values above 1 count as 1).
-    pub fn load_mask(path: &std::path::Path) -> Result<ApertureShape> {
-        let (width, height, values) = crate::io::image::read_gray(path)?;
-        ApertureShape::mask(width, height, values).map_err(|e| Error::Parse {
-            kind: crate::FileKind::Image,
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        })
-    }
-
     /// A [`ApertureShape::Mask`] from `width` × `height` transmissions, row
     /// by row from the top (values above 1 count as 1).
     pub fn mask(width: usize, height: usize, values: Vec<f32>) -> Result<ApertureShape> {

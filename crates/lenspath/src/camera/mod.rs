@@ -17,6 +17,7 @@ use crate::spectrum::SampledWavelengths;
 
 mod aperture;
 mod realistic;
+pub use crate::film::FilmRadiometry;
 pub use aperture::{Aperture, ApertureMask, ApertureShape};
 pub use realistic::{
     sensor_for_image, LensFocus, LensSample, Radiometry, RealisticCamera, RealisticCameraSettings, DEFAULT_DESQUEEZE,
@@ -94,24 +95,6 @@ pub trait Camera: Send + Sync {
     /// scene's radiance with no optics behind it.
     fn film_radiometry(&self) -> Option<FilmRadiometry> {
         None
-    }
-}
-
-/// The light a camera's film reading stands for.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FilmRadiometry {
-    /// Sensor irradiance per unit scene radiance that a reading of 1
-    /// stands for, sr (π/(4N²) on the axis of a lens at f-number N focused
-    /// at infinity: the camera equation, Slater, *Remote Sensing*, 1980).
-    pub irradiance_per_reading_sr: f64,
-    /// Pixel pitch (width, height), µm: the sensor's size over the image's.
-    pub pixel_pitch_um: (f64, f64),
-}
-
-impl FilmRadiometry {
-    /// A pixel's area, µm².
-    pub fn pixel_area_um2(&self) -> f64 {
-        self.pixel_pitch_um.0 * self.pixel_pitch_um.1
     }
 }
 

@@ -17,8 +17,9 @@
 //! make) is refused rather than continued into a wrong image.
 //!
 //! The fingerprint is the caller's: the CLI puts there everything the image
-//! depends on except the sample count, so a checkpoint is never continued
-//! with another scene, camera or seed.
+//! depends on except the sample count (`setup::RenderSetup::fingerprint`),
+//! so a checkpoint is never continued with another scene, camera or seed
+//! ([`resume_state`]).
 
 use std::io::{Read, Write};
 use std::path::Path;
@@ -32,6 +33,19 @@ use crate::render::Accumulation;
 
 const MAGIC: &[u8; 20] = b"lenspath checkpoint\n";
 const VERSION: u32 = 2;
+
+/// The state saved in `path`, checked to be of the render `fingerprint` describes.
+pub fn resume_state(path: &Path, fingerprint: &str) -> Result<Accumulation> {
+    let (saved, state) = read_checkpoint(path)?;
+    if saved != fingerprint {
+        return Err(Error::InvalidArgument(format!(
+            "{} is the checkpoint of another render (the scene, camera or settings differ, or \
+             another lenspath made it):\n  saved:    {saved}\n  this one: {fingerprint}",
+            path.display()
+        )));
+    }
+    Ok(state)
+}
 
 /// Writes `state` and its `fingerprint` to `path` atomically (temporary file + rename).
 pub fn write_checkpoint(path: &Path, fingerprint: &str, state: &Accumulation) -> Result<()> {

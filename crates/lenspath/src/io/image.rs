@@ -8,10 +8,12 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use super::exr::{encode_exr, read_exr_image, ExrImage, HeaderValue};
+use crate::camera::ApertureShape;
 use crate::color::{srgb_to_linear, to_srgb8};
 use crate::error::{Error, Result};
 use crate::film::Image;
 use crate::fs::{io_error, write_atomically};
+use crate::FileKind;
 
 /// EXR attribute: the samples per pixel every pixel reached.
 pub const SPP_ATTRIBUTE: &str = "lenspath/spp";
@@ -97,6 +99,18 @@ pub fn read_image(path: &Path) -> Result<ReadImage> {
         },
         display_referred: true,
         header: ImageHeader::default(),
+    })
+}
+
+/// An aperture mask ([`ApertureShape::Mask`]) from a grayscale PNG, JPEG
+/// or EXR image ([`read_gray`]; values above 1 count as 1); a bad mask is an
+/// error naming the file.
+pub fn read_aperture_mask(path: &Path) -> Result<ApertureShape> {
+    let (width, height, values) = read_gray(path)?;
+    ApertureShape::mask(width, height, values).map_err(|e| Error::Parse {
+        kind: FileKind::Image,
+        path: path.to_path_buf(),
+        message: e.to_string(),
     })
 }
 
@@ -196,7 +210,7 @@ pub fn exr_of_image(image: &Image, header: &ImageHeader) -> ExrImage {
 }
 
 fn encode_8bit(image: &Image, exposure: f32, format: ::image::ImageFormat) -> Result<Vec<u8>> {
-    let bytes = to_srgb8(image, exposure);
+    let bytes = to_srgb8(&image.rgb, exposure);
     let mut out = std::io::Cursor::new(Vec::new());
     ::image::write_buffer_with_format(
         &mut out,

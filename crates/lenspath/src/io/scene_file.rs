@@ -639,7 +639,7 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
                 Ok(shape) => shape,
                 Err(_) if text.contains(['.', '/', '\\']) && !text.contains(':') => {
                     let dir = path.parent().unwrap_or(Path::new(""));
-                    ApertureShape::load_mask(&dir.join(text))?
+                    crate::io::image::read_aperture_mask(&dir.join(text))?
                 }
                 Err(e) => return Err(fail(format!("[camera]: {e}"))),
             }),

@@ -8,7 +8,8 @@ use rand_xoshiro::SplitMix64;
 use rayon::prelude::*;
 
 use super::{Cfa, SensorSettings};
-use crate::camera::{Camera, FilmRadiometry};
+use crate::camera::Camera;
+use crate::film::FilmRadiometry;
 use crate::film::Image;
 use crate::names::Named;
 use crate::sampling::mix64;

@@ -39,7 +39,7 @@ pub use develop::{Demosaic, Development, ToneCurve};
 pub use response::SpectralResponse;
 pub use white_balance::WhiteBalance;
 
-use crate::camera::FilmRadiometry;
+use crate::film::FilmRadiometry;
 use crate::film::Image;
 use crate::names::Named;
 use crate::spectrum::cie;

@@ -31,8 +31,10 @@ use crate::scene::SceneView;
 use crate::sensor::{capture_through, needs_a_lens, Development, RawFrame, SensorDescription, SensorSettings};
 
 mod autofocus;
+mod fingerprint;
 mod header;
 pub use autofocus::{autofocus_before_render, autofocus_setup, resolve_autofocus, AutofocusOverrides, AutofocusSetup};
+pub use fingerprint::SceneHash;
 
 // ---------------------------------------------------------------------------
 // What a caller asks for

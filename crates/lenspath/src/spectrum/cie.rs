@@ -188,10 +188,9 @@ impl CieTables {
     /// vector-valued case of importance sampling; Veach 1997, §2.5); the four
     /// rotations already spread the wavelengths over the range, and for them
     /// a flatter density, visiting the blue and red ends more, leaves less:
-    /// the square root (the best of the powers 0.3–1 tried) gives 0.22× the
-    /// norm's colour variance for D65 white and 0.4× at the median over random
-    /// smooth reflectances under D65 (`bench/wavelength_density.py`;
-    /// BENCHMARKS.md also measures the renders). pbrt-v4's luminance-shaped density (∝ 1 / cosh²(0.0072
+    /// the square root, the best of the powers tried, for D65 white and for
+    /// random smooth reflectances under D65 (`bench/wavelength_density.py`;
+    /// the figures and the renders in BENCHMARKS.md). pbrt-v4's luminance-shaped density (∝ 1 / cosh²(0.0072
     /// (λ − 538))) is further off still. The floor of `WavelengthCells`
     /// keeps every wavelength of 360–830 nm possible (a dispersive path
     /// carries what it is given).

@@ -485,7 +485,7 @@ mod tests {
     /// The density samples where R and B need it, not only where luminance
     /// does: the colour noise of D65's sRGB estimate (four hero-rotated
     /// wavelengths, u stratified) is under 0.3× what the density ∝
-    /// ‖(r̄, ḡ, b̄)‖ gives (0.22× measured), which is itself under half of
+    /// ‖(r̄, ḡ, b̄)‖ gives, which is itself under half of
     /// pbrt-v4's luminance-shaped density's; all three are unbiased.
     #[test]
     fn wavelength_sampling_lowers_colour_noise() {
