@@ -644,11 +644,13 @@ def bokeh(
     aperture: str | None = None,
     mask: npt.ArrayLike | None = None,
     diameter_px: float | None = None,
-    edges: Literal["renormalize", "black"] = "renormalize",
-    method: Literal["auto", "direct", "fft"] = "auto",
+    edges: Literal["renormalize", "black"] | None = None,
+    method: Literal["auto", "direct", "fft"] | None = None,
 ) -> npt.NDArray[np.float32]:
     """Blurs an image (RGB or grey, as ``write`` takes) with a bokeh kernel: an ``aperture`` shape ``diameter_px``
-    across, or a 2-D ``mask`` (resized so its longer side is ``diameter_px``, if given)."""
+    across, or a 2-D ``mask`` (resized so its longer side is ``diameter_px``, if given). ``edges``: "renormalize"
+    (the default: no dark border) or "black"; ``method``: "auto" (the default: whichever is faster), "direct"
+    or "fft"."""
 
 @final
 class AutofocusResult:

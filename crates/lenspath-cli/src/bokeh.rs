@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use clap::{Args, ValueEnum};
+use clap::Args;
 use lenspath::bokeh::{
     check_blur_memory, check_kernel_diameter, choose_method, convolve_planes, depth_blur, interleave_planes,
     lift_highlights, rgb_planes, CircleOfConfusion, Edges, Kernel, KernelSize, Method, MAX_KERNEL_SIDE_PX,
@@ -12,29 +12,11 @@ use lenspath::camera::{Aperture, ApertureShape};
 use lenspath::io::exr::HeaderValue;
 use lenspath::io::image::{check_output_path, read_exr, read_gray, read_image, write_image_with_header, ImageHeader};
 use lenspath::lens::{LensPrescription, LensSystem};
+use lenspath::names::Named;
 use lenspath::{Error, Result};
 
+use crate::flags::named;
 use crate::Outcome;
-
-/// Convolution methods.
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub enum MethodKind {
-    /// Shift-and-add over the open mask pixels (the reference).
-    Direct,
-    /// FFT with zero padding.
-    Fft,
-    /// Whichever is faster for this image and kernel.
-    Auto,
-}
-
-/// What lies beyond the image's edges.
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub enum EdgesKind {
-    /// Divide by the share of the kernel inside the image: no dark border.
-    Renormalize,
-    /// Black beyond the edges (OpenCV's BORDER_CONSTANT): the border darkens.
-    Black,
-}
 
 /// Kernel size: pixels of its longer side, or the image's size.
 #[derive(Clone, Copy, Debug)]
@@ -71,12 +53,14 @@ pub struct BokehArgs {
     /// height [default: a mask image's own size; 64 for a shape].
     #[arg(long, value_parser = parse_size)]
     size: Option<SizeArg>,
-    /// How to convolve.
-    #[arg(long, value_enum, default_value = "auto")]
-    method: MethodKind,
-    /// What lies beyond the image's edges.
-    #[arg(long, value_enum, default_value = "renormalize")]
-    edges: EdgesKind,
+    /// How to convolve: auto (whichever is faster for this image and kernel), direct
+    /// (shift-and-add over the open mask pixels, the reference) or fft (with zero padding).
+    #[arg(long, value_parser = named::<Method>(), default_value = Method::default().name())]
+    method: Method,
+    /// What lies beyond the image's edges: renormalize (divide by the share of the kernel inside
+    /// the image: no dark border) or black (OpenCV's BORDER_CONSTANT: the border darkens).
+    #[arg(long, value_parser = named::<Edges>(), default_value = Edges::default().name())]
+    edges: Edges,
     /// PNG or JPEG input: multiply its highlights by up to GAIN before blurring, so small
     /// lights bloom into bright discs as they would from a linear image.
     #[arg(long, value_name = "GAIN")]
@@ -207,15 +191,11 @@ pub fn run(args: BokehArgs) -> Result<Outcome> {
     }
     let kernel = load_kernel(&args.mask, size)?;
     let method = match args.method {
-        MethodKind::Direct => Method::Direct,
-        MethodKind::Fft => Method::Fft,
-        MethodKind::Auto => choose_method(width, height, &kernel),
+        Method::Auto => choose_method(width, height, &kernel),
+        chosen => chosen,
     };
     check_blur_memory(width, height, &kernel, method)?;
-    let edges = match args.edges {
-        EdgesKind::Renormalize => Edges::Renormalize,
-        EdgesKind::Black => Edges::Black,
-    };
+    let edges = args.edges;
     let mut output = input.image;
     // Timed: the convolution alone, not the change of pixel layout around it.
     let planes = rgb_planes(&output.rgb);

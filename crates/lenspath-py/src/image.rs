@@ -269,15 +269,15 @@ pub(crate) fn focus_measures() -> Vec<&'static str> {
 /// ("circle", "blades:6", "star:5:0.4") `diameter_px` across, or `mask` a 2-D
 /// array (resized so its longer side is `diameter_px`, if given).
 #[pyfunction]
-#[pyo3(signature = (image, *, aperture = None, mask = None, diameter_px = None, edges = "renormalize", method = "auto"))]
+#[pyo3(signature = (image, *, aperture = None, mask = None, diameter_px = None, edges = None, method = None))]
 pub(crate) fn bokeh<'py>(
     py: Python<'py>,
     image: &Bound<'_, PyAny>,
     aperture: Option<&str>,
     mask: Option<PyArrayLike2<'_, f32, AllowTypeChange>>,
     diameter_px: Option<f64>,
-    edges: &str,
-    method: &str,
+    edges: Option<&str>,
+    method: Option<&str>,
 ) -> PyResult<Bound<'py, PyArray3<f32>>> {
     let kernel = match (aperture, &mask) {
         (Some(_), Some(_)) => return Err(value_error("give aperture or mask, not both")),
@@ -301,25 +301,8 @@ pub(crate) fn bokeh<'py>(
             Kernel::from_mask(w, h, &values, size).map_err(to_py)?
         }
     };
-    let edges = match edges {
-        "renormalize" => Edges::Renormalize,
-        "black" => Edges::Black,
-        other => {
-            return Err(value_error(format!(
-                "edges must be 'renormalize' or 'black', got '{other}'"
-            )))
-        }
-    };
-    let method = match method {
-        "auto" => Method::Auto,
-        "direct" => Method::Direct,
-        "fft" => Method::Fft,
-        other => {
-            return Err(value_error(format!(
-                "method must be 'auto', 'direct' or 'fft', got '{other}'"
-            )))
-        }
-    };
+    let edges = named::<Edges>(edges)?.unwrap_or_default();
+    let method = named::<Method>(method)?.unwrap_or_default();
     let mut image = image_from_py(image)?;
     let (w, h) = (image.width as usize, image.height as usize);
     check_blur_memory(w, h, &kernel, method).map_err(to_py)?;

@@ -15,27 +15,41 @@ use realfft::{ComplexToReal, RealFftPlanner, RealToComplex};
 use rustfft::{Fft, FftPlanner};
 
 use super::kernel::Kernel;
+use crate::names::Named;
 
 /// How the convolution is computed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Method {
     /// Shift-and-add over the open kernel pixels: the reference.
     Direct,
     /// Products of spectra (realfft), zero-padded so nothing wraps around.
     Fft,
-    /// Whichever the cost model says is faster.
+    /// Whichever the cost model says is faster (the default).
+    #[default]
     Auto,
 }
 
+impl Named for Method {
+    const WHAT: &'static str = "convolution method";
+    const NAMED: &'static [(Method, &'static str)] =
+        &[(Method::Auto, "auto"), (Method::Direct, "direct"), (Method::Fft, "fft")];
+}
+
 /// What lies beyond the image's edges.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Edges {
     /// Black: edges darken where the kernel reaches past them (OpenCV's
     /// `BORDER_CONSTANT` with 0).
     Black,
     /// Each pixel divided by the share of the kernel that fell inside the
-    /// image, so a uniform image stays uniform up to its edges.
+    /// image, so a uniform image stays uniform up to its edges (the default).
+    #[default]
     Renormalize,
+}
+
+impl Named for Edges {
+    const WHAT: &'static str = "edge treatment";
+    const NAMED: &'static [(Edges, &'static str)] = &[(Edges::Renormalize, "renormalize"), (Edges::Black, "black")];
 }
 
 /// Operations of one multiply-add, relative to one butterfly-point of the
