@@ -269,7 +269,7 @@ fn repo_root() -> PathBuf {
 /// Every strategy on every evaluation patch, against ground truth.
 fn evaluate(args: &Args) -> Result<()> {
     for name in &args.strategies {
-        Strategy::from_name(name, args.patience)?;
+        Strategy::parse(name)?;
     }
     let (width, height) = args.res.unwrap_or(defaults::IMAGE_SIZE);
     let earlier_truths = args
@@ -452,10 +452,7 @@ fn run_strategies(
             }
             let strategy = match strategy {
                 Strategy::Sweep | Strategy::EarlyExit { .. } if run > 0 => continue,
-                Strategy::EarlyExit { .. } => Strategy::EarlyExit {
-                    patience: args.patience,
-                },
-                s => s,
+                s => s.with_patience(args.patience),
             };
             results.push((seed, focuser.run(strategy)?));
         }

@@ -121,12 +121,12 @@ impl Named for Strategy {
 }
 
 impl Strategy {
-    /// The strategy called `name` ([`Named::parse`]), early-exit's patience `patience`.
-    pub fn from_name(name: &str, patience: usize) -> Result<Strategy> {
-        Ok(match Strategy::parse(name)? {
+    /// The same strategy, early-exit's with patience `patience` (the others have none).
+    pub fn with_patience(self, patience: usize) -> Strategy {
+        match self {
             Strategy::EarlyExit { .. } => Strategy::EarlyExit { patience },
             s => s,
-        })
+        }
     }
 }
 
@@ -747,15 +747,15 @@ mod tests {
     #[test]
     pub(super) fn strategy_names_round_trip() {
         for &(s, name) in Strategy::NAMED {
-            assert_eq!(Strategy::from_name(name, 12).unwrap(), s);
+            assert_eq!(Strategy::parse(name).unwrap().with_patience(12), s);
             assert_eq!(s.name(), name);
             assert_eq!(
-                Strategy::from_name(name, 3).unwrap().name(),
+                Strategy::parse(name).unwrap().with_patience(3).name(),
                 name,
                 "whatever the patience"
             );
         }
-        let err = Strategy::from_name("phase", 12).unwrap_err().to_string();
+        let err = Strategy::parse("phase").unwrap_err().to_string();
         assert!(
             err.contains("use one of sweep, early-exit, fast, rangefinder, depth"),
             "{err}"

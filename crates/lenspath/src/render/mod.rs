@@ -23,8 +23,8 @@ pub use output::{
     check_checkpoint_interval, Accumulation, Checkpoints, RenderOutput, RenderStats, MIN_CHECKPOINT_INTERVAL,
 };
 pub use settings::{
-    check_max_depth, FilmResponse, RenderSettings, DEFAULT_IMAGE_SIZE, DEFAULT_SEED, DEFAULT_SPP, DEFAULT_TILE_SIZE,
-    MAX_LIGHT_SAMPLES, MAX_PATH_DEPTH,
+    FilmResponse, RenderSettings, DEFAULT_IMAGE_SIZE, DEFAULT_SEED, DEFAULT_SPP, DEFAULT_TILE_SIZE, MAX_LIGHT_SAMPLES,
+    MAX_PATH_DEPTH,
 };
 use tiles::{render_in_pool, tiles, Shot};
 use training::train_in_pool;

@@ -203,7 +203,13 @@ impl RenderSettings {
                 self.spp
             ));
         }
-        check_max_depth(self.integrator.max_depth())?;
+        // 0, emitters only, is a depth.
+        if self.integrator.max_depth() > MAX_PATH_DEPTH {
+            return fail(format!(
+                "max depth must be at most {MAX_PATH_DEPTH}, got {}",
+                self.integrator.max_depth()
+            ));
+        }
         if self.integrator.light_samples() > MAX_LIGHT_SAMPLES {
             return fail(format!(
                 "light samples must be at most {MAX_LIGHT_SAMPLES}, got {}",
@@ -250,17 +256,6 @@ impl RenderSettings {
 /// The deepest path a render may ask for (scattering events): deeper paths
 /// carry nothing Russian roulette would not have ended long before.
 pub const MAX_PATH_DEPTH: u32 = 1024;
-
-/// Fails for a maximum path depth over [`MAX_PATH_DEPTH`] (0, emitters
-/// only, is a depth).
-pub fn check_max_depth(max_depth: u32) -> Result<()> {
-    if max_depth > MAX_PATH_DEPTH {
-        return Err(Error::InvalidArgument(format!(
-            "max depth must be at most {MAX_PATH_DEPTH}, got {max_depth}"
-        )));
-    }
-    Ok(())
-}
 
 /// The region a render covers: its crop, else the whole image.
 pub(super) fn region(settings: &RenderSettings) -> PixelRect {

@@ -82,10 +82,8 @@ pub fn autofocus_setup(
     overrides: &AutofocusOverrides,
     pose: CameraPose,
 ) -> Result<AutofocusSetup> {
-    let strategy = match (overrides.strategy.unwrap_or_default(), overrides.patience) {
-        (Strategy::EarlyExit { .. }, Some(patience)) => Strategy::EarlyExit { patience },
-        (strategy, _) => strategy,
-    };
+    let strategy = overrides.strategy.unwrap_or_default();
+    let strategy = overrides.patience.map_or(strategy, |p| strategy.with_patience(p));
     // Checked by `Focuser::new`, with the rest of the search's settings.
     let settings = AutofocusSettings {
         camera,
