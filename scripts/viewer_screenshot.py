@@ -3,7 +3,7 @@ default scene stopped down a little, autofocused by a click on the nearer
 sphere, refined to 64 samples per pixel.
 
 Usage: target/python-venv/bin/python scripts/viewer_screenshot.py
-(`cargo build --release` and `bash scripts/test.sh`, which makes the venv with Playwright, first.)
+(`cargo build --release --features viewer` and `bash scripts/test.sh`, which makes the venv with Playwright, first.)
 """
 
 from __future__ import annotations

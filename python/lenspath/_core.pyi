@@ -737,8 +737,8 @@ def lens_blur(
     focal_length_mm: float | None = None,
     aperture_radius: float | None = None,
     fov_deg: float | None = None,
-    sensor_width_mm: float = 36.0,
-    scene_unit_m: float = 1.0,
+    sensor_width_mm: float | None = None,
+    scene_unit_m: float | None = None,
     aperture: str | npt.ArrayLike | None = None,
 ) -> npt.NDArray[np.float32]:
     """Depth-aware lens blur (``lenspath bokeh --focus-distance``): each pixel of the (H, W, 3)
@@ -746,5 +746,6 @@ def lens_blur(
     along the view axis, scene units, as ``render(..., aovs=["depth"])`` gives), in the
     ``aperture``'s shape, the foreground not bleeding into a sharp background. The lens: ``lens``
     (its paraxial focal length and f-number; ``f_number`` stops it down), or ``focal_length_mm``
-    with ``f_number``, both on a ``sensor_width_mm`` sensor with ``scene_unit_m`` metres per unit;
+    with ``f_number``, both on a ``sensor_width_mm`` sensor (default 36 mm) with ``scene_unit_m``
+    metres per unit (default 1: the realistic camera's defaults);
     or the thin-lens camera's ``aperture_radius`` (scene units) with its ``fov_deg``."""

@@ -99,10 +99,10 @@ struct DepthFlags {
     #[arg(long, value_name = "DEG", requires = "aperture_radius")]
     fov: Option<f64>,
     /// Width of the sensor the image covers, mm (for --focal-length and --lens).
-    #[arg(long, value_name = "MM", default_value_t = 36.0)]
+    #[arg(long, value_name = "MM", default_value_t = lenspath::camera::DEFAULT_SENSOR_WIDTH_MM)]
     sensor_width: f64,
     /// Metres per scene unit of the depths and --focus-distance (for --focal-length and --lens).
-    #[arg(long, value_name = "M", default_value_t = 1.0)]
+    #[arg(long, value_name = "M", default_value_t = lenspath::camera::DEFAULT_SCENE_UNIT_M)]
     scene_unit: f64,
 }
 

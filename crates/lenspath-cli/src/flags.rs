@@ -9,11 +9,10 @@ use std::time::Duration;
 
 use clap::builder::{PossibleValue, TypedValueParser};
 use clap::error::ErrorKind;
-use clap::{Args, ValueEnum};
+use clap::Args;
 use lenspath::builtin::DEFAULT_MESH_TRIANGLES;
 use lenspath::camera::{Aperture, ApertureShape, Radiometry};
 use lenspath::film::{NormalizedRect, PixelRect};
-use lenspath::io::builtin_scene_named;
 use lenspath::io::{load_named_scene, LoadedScene};
 use lenspath::lens::LensPrescription;
 use lenspath::names::Named;
@@ -22,17 +21,6 @@ use lenspath::scene::Scene;
 use lenspath::sensor::{Cfa, Demosaic, SensorDescription, ToneCurve, WhiteBalance};
 use lenspath::setup::RealisticDescription;
 use lenspath::{Error, Result};
-
-/// Camera models.
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub enum CameraKind {
-    /// Ideal pinhole: everything in focus.
-    Pinhole,
-    /// Ideal thin lens: depth of field from --aperture-radius and --focus-distance.
-    ThinLens,
-    /// A real lens prescription (--lens), traced surface by surface.
-    Realistic,
-}
 
 /// Sensor size as WIDTHxHEIGHT in mm.
 #[derive(Clone, Copy, Debug)]
@@ -66,15 +54,6 @@ pub fn parse_sensor(s: &str) -> std::result::Result<SensorSize, String> {
         width_mm: parse(w)?,
         height_mm: parse(h)?,
     })
-}
-
-/// Pixel filters.
-#[derive(Clone, Copy, Debug, ValueEnum)]
-pub enum FilterKind {
-    /// Box of one pixel.
-    Box,
-    /// Gaussian, sigma 0.5 px, radius 1.5 px.
-    Gaussian,
 }
 
 /// The value parser of a flag choosing a library value by name
@@ -214,10 +193,11 @@ impl AllowRead {
 
 impl SceneArgs {
     /// The built-in scene these flags name (by --scene, or by its name as the file), if any.
+    #[cfg(feature = "viewer")]
     pub fn builtin(&self) -> Option<&str> {
         match &self.file {
             None => Some(&self.scene),
-            Some(file) => builtin_scene_named(file),
+            Some(file) => lenspath::io::builtin_scene_named(file),
         }
     }
 

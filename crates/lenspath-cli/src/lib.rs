@@ -87,6 +87,8 @@ fn command() -> clap::Command {
             "integrator",
             scene_file_else(IntegratorKind::default().name().to_string()),
         ),
+        ("camera", lenspath::setup::CameraKind::default().name().to_string()),
+        ("filter", lenspath::film::Filter::default().name().to_string()),
         ("lens", scene_file_else(d::LENS.to_string())),
         ("sensor", scene_file_else(format!("{} mm wide", d::SENSOR_WIDTH_MM))),
         ("scene_unit", scene_file_else(d::SCENE_UNIT_M.to_string())),

@@ -19,14 +19,14 @@ use lenspath::sensor::develop::develop;
 use lenspath::sensor::raw_file::{write_raw, RawFormat};
 use lenspath::sensor::{RawFrame, SensorDescription};
 use lenspath::setup::{
-    autofocus_before_render, resolve, CameraDescription, CameraSettings, RealisticDescription, RenderOverrides,
-    SceneHash,
+    autofocus_before_render, resolve, CameraDescription, CameraKind, CameraSettings, RealisticDescription,
+    RenderOverrides, SceneHash,
 };
 use lenspath::{Error, Result};
 
 use crate::flags::{
-    named, parse_crop, parse_duration, parse_image_point, parse_patch, parse_resolution, ApertureFlags, CameraKind,
-    FilterKind, LensFlags, Resolution, SceneArgs, SensorFlags,
+    named, parse_crop, parse_duration, parse_image_point, parse_patch, parse_resolution, ApertureFlags, LensFlags,
+    Resolution, SceneArgs, SensorFlags,
 };
 use crate::guide_map::{write_guide_map, MAP_SIZE};
 use crate::progress::Progress;
@@ -85,9 +85,11 @@ pub struct RenderArgs {
     /// Exposure in stops applied to PNG output.
     #[arg(long, default_value_t = 0.0)]
     exposure: f32,
-    /// Camera model.
-    #[arg(long, value_enum, default_value = "realistic")]
-    camera: CameraKind,
+    /// Camera model: pinhole (everything in focus), thin-lens (depth of field from
+    /// --aperture-radius and --focus-distance) or realistic (a real lens prescription, --lens,
+    /// traced surface by surface).
+    #[arg(long, value_parser = named::<CameraKind>())]
+    camera: Option<CameraKind>,
     #[command(flatten)]
     lens: LensFlags,
     #[command(flatten)]
@@ -114,9 +116,10 @@ pub struct RenderArgs {
     /// Focus distance from the sensor, scene units (default: the scene's subject distance).
     #[arg(long)]
     focus_distance: Option<f32>,
-    /// Pixel reconstruction filter.
-    #[arg(long, value_enum, default_value = "box")]
-    filter: FilterKind,
+    /// Pixel reconstruction filter: box (each pixel averages its own area) or gaussian (pbrt's:
+    /// sigma 0.5 px, radius 1.5 px).
+    #[arg(long, value_parser = named::<Filter>())]
+    filter: Option<Filter>,
     /// Render only this rectangle of the image, X,Y,WIDTH,HEIGHT in pixels; its pixels are exactly
     /// those of the full render.
     #[arg(long, value_name = "X,Y,W,H", value_parser = parse_crop)]
@@ -140,7 +143,8 @@ pub struct RenderArgs {
 /// library's default.
 fn overrides(args: &RenderArgs) -> Result<RenderOverrides> {
     let aperture = args.aperture.shape()?;
-    let camera = match args.camera {
+    let kind = args.camera.unwrap_or_default();
+    let camera = match kind {
         CameraKind::Pinhole => {
             if aperture.is_some() {
                 return Err(Error::InvalidArgument(
@@ -174,7 +178,7 @@ fn overrides(args: &RenderArgs) -> Result<RenderOverrides> {
             })
         }
     };
-    if args.autofocus.is_some() && !matches!(args.camera, CameraKind::Realistic) {
+    if args.autofocus.is_some() && kind != CameraKind::Realistic {
         return Err(Error::InvalidArgument("--autofocus needs --camera realistic".into()));
     }
     Ok(RenderOverrides {
@@ -185,10 +189,7 @@ fn overrides(args: &RenderArgs) -> Result<RenderOverrides> {
         seed: args.seed,
         sampler: args.sampler,
         integrator: args.integrator,
-        filter: Some(match args.filter {
-            FilterKind::Box => Filter::Box,
-            FilterKind::Gaussian => Filter::GAUSSIAN,
-        }),
+        filter: args.filter,
         threads: args.threads,
         crop: args.crop,
         depth: Some(true),

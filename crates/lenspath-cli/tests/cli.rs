@@ -264,14 +264,18 @@ fn usage_errors_name_the_argument_and_what_was_meant() {
             vec!["render", "--sp", "2"],
             vec!["unexpected argument '--sp'", "similar argument exists: '--spp'"],
         ),
+        // A library choice: its names and message are the library's (`Named`).
         (
             vec!["render", "--camera", "thinlens"],
             vec![
-                "invalid value 'thinlens'",
-                "possible values: pinhole, thin-lens, realistic",
+                "invalid value for '--camera <CAMERA>'",
+                "unknown camera 'thinlens'; use one of pinhole, thin-lens, realistic",
             ],
         ),
-        // A library choice: its names and message are the library's (`Named`).
+        (
+            vec!["render", "--filter", "tent"],
+            vec!["unknown filter 'tent'; use one of box, gaussian"],
+        ),
         (
             vec!["render", "--sampler", "bogus"],
             vec![

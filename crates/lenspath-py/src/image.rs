@@ -8,7 +8,7 @@ use lenspath::bokeh::{
     check_blur_memory, check_kernel_diameter, convolve_rgb, depth_blur, CircleOfConfusion, Edges, Kernel, KernelSize,
     Method,
 };
-use lenspath::camera::{Aperture, ApertureShape};
+use lenspath::camera::{self, Aperture, ApertureShape};
 use lenspath::color::srgb_to_linear;
 use lenspath::film::Image;
 use lenspath::io::exr::{self, read_exr_image, ExrImage, HeaderValue};
@@ -313,7 +313,7 @@ pub(crate) fn bokeh<'py>(
 /// Depth-aware lens blur of an (H, W, 3) image by its (H, W) depths (see the stub).
 #[pyfunction]
 #[pyo3(signature = (image, depth, focus_distance, *, lens = None, f_number = None, focal_length_mm = None,
-                    aperture_radius = None, fov_deg = None, sensor_width_mm = 36.0, scene_unit_m = 1.0,
+                    aperture_radius = None, fov_deg = None, sensor_width_mm = None, scene_unit_m = None,
                     aperture = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn lens_blur<'py>(
@@ -326,10 +326,12 @@ pub(crate) fn lens_blur<'py>(
     focal_length_mm: Option<f64>,
     aperture_radius: Option<f64>,
     fov_deg: Option<f64>,
-    sensor_width_mm: f64,
-    scene_unit_m: f64,
+    sensor_width_mm: Option<f64>,
+    scene_unit_m: Option<f64>,
     aperture: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Bound<'py, PyArray3<f32>>> {
+    let sensor_width_mm = sensor_width_mm.unwrap_or(camera::DEFAULT_SENSOR_WIDTH_MM);
+    let scene_unit_m = scene_unit_m.unwrap_or(camera::DEFAULT_SCENE_UNIT_M);
     let image = image_from_py(image)?;
     let (width, height) = (image.width, image.height);
     if depth.shape() != [height as usize, width as usize] {

@@ -9,6 +9,7 @@
 use glam::Vec2;
 
 use crate::error::{Error, Result};
+use crate::names::Named;
 use crate::sampling::{erf, erf_inv};
 
 /// The light a camera's film reading stands for.
@@ -30,9 +31,10 @@ impl FilmRadiometry {
 }
 
 /// A pixel reconstruction filter.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum Filter {
     /// Box of radius 0.5 pixel: each pixel averages its own area.
+    #[default]
     Box,
     /// Gaussian truncated at `radius` pixels.
     Gaussian {
@@ -41,6 +43,11 @@ pub enum Filter {
         /// Truncation radius in pixels (pbrt's default 1.5).
         radius: f32,
     },
+}
+
+impl Named for Filter {
+    const WHAT: &'static str = "filter";
+    const NAMED: &'static [(Filter, &'static str)] = &[(Filter::Box, "box"), (Filter::GAUSSIAN, "gaussian")];
 }
 
 impl Filter {

@@ -62,17 +62,6 @@ pub enum Direction {
     ToScene,
 }
 
-impl Direction {
-    /// Whether light going this way moves toward +z: the one rule the tracer
-    /// takes its sense of travel from (which cap of a sphere it meets, which
-    /// way it must cross a stop). Every surface refracts, so light keeps its
-    /// sense through the whole lens; a mirror would flip it from there on.
-    #[inline(always)]
-    pub fn toward_positive_z(self) -> bool {
-        self == Direction::ToSensor
-    }
-}
-
 /// How a surface is intersected.
 #[derive(Clone, Copy, Debug)]
 pub(super) enum Intersection {
@@ -112,6 +101,45 @@ pub(super) struct Surface {
     /// The index ratios n₁/n₂ each way, precomputed for tracing.
     pub(super) eta_to_sensor: f64,
     pub(super) eta_to_scene: f64,
+    /// Whether light meets this surface moving toward +z, going to the
+    /// sensor and going to the scene: which cap of a sphere it meets, which
+    /// way it must cross a stop. Set from the vertices' order
+    /// ([`set_senses_of_travel`]), not from the direction alone, so a lens
+    /// whose surfaces run toward −z (negative thicknesses) traces as well.
+    pub(super) arrives_toward_positive_z_to_sensor: bool,
+    pub(super) arrives_toward_positive_z_to_scene: bool,
+}
+
+impl Surface {
+    /// The sense in which light going `direction` meets this surface.
+    #[inline(always)]
+    pub(super) fn arrives_toward_positive_z(&self, direction: Direction) -> bool {
+        match direction {
+            Direction::ToSensor => self.arrives_toward_positive_z_to_sensor,
+            Direction::ToScene => self.arrives_toward_positive_z_to_scene,
+        }
+    }
+}
+
+/// Sets each surface's sense of arrival from the vertices' order. Light
+/// going to the sensor crosses each gap from one vertex toward the next, so
+/// the gap's sign is its sense there (and light going to the scene crosses
+/// it the other way); a gap of no length (a stop on a vertex) keeps the
+/// sense before it, and light enters the lens in the sense of its first gap.
+fn set_senses_of_travel(surfaces: &mut [Surface]) {
+    let gap_sense = |k: usize| {
+        let gap = surfaces[k + 1].vertex.z_mm - surfaces[k].vertex.z_mm;
+        (gap != 0.0 && !gap.is_nan()).then_some(gap > 0.0)
+    };
+    let gaps: Vec<Option<bool>> = (0..surfaces.len().saturating_sub(1)).map(gap_sense).collect();
+    let mut sense = gaps.iter().flatten().next().copied().unwrap_or(true);
+    for (k, surface) in surfaces.iter_mut().enumerate() {
+        surface.arrives_toward_positive_z_to_sensor = sense;
+        if let Some(Some(leaving)) = gaps.get(k) {
+            sense = *leaving;
+        }
+        surface.arrives_toward_positive_z_to_scene = !sense;
+    }
 }
 
 /// A lens ready to trace, at one wavelength: each glass's index is the
@@ -162,7 +190,7 @@ impl LensSystem {
         let before_stop: f64 = prescription.surfaces[..stop].iter().map(|s| s.thickness_mm).sum();
         let mut z = -before_stop;
         let mut ior_front = 1.0;
-        let surfaces = prescription
+        let mut surfaces = prescription
             .surfaces
             .iter()
             .map(|s| {
@@ -191,12 +219,15 @@ impl LensSystem {
                     ior_back: ior,
                     eta_to_sensor: ior_front / ior,
                     eta_to_scene: ior / ior_front,
+                    arrives_toward_positive_z_to_sensor: true,
+                    arrives_toward_positive_z_to_scene: false,
                 };
                 z += s.thickness_mm;
                 ior_front = ior;
                 surface
             })
-            .collect();
+            .collect::<Vec<_>>();
+        set_senses_of_travel(&mut surfaces);
         LensSystem {
             prescription: prescription.clone(),
             surfaces,

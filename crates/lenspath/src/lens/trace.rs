@@ -82,7 +82,7 @@ impl LensSystem {
         direction: Direction,
         visit: &mut impl FnMut(DVec3),
     ) -> Option<LensRay> {
-        let (origin, toward_positive_z) = (ray.origin, direction.toward_positive_z());
+        let (origin, toward_positive_z) = (ray.origin, surface.arrives_toward_positive_z(direction));
         let (t, normal) = match &surface.intersection {
             Intersection::Aperture => {
                 let forward = match toward_positive_z {
@@ -148,7 +148,7 @@ fn refract(d: DVec3, normal: DVec3, eta: f64) -> Option<DVec3> {
 #[cfg(test)]
 mod tests {
     use super::super::prescription::{LensPrescription, BUILTIN_LENSES};
-    use super::super::surface::Meridian;
+    use super::super::surface::{Meridian, SurfaceShape};
     use super::super::system::test_support::*;
     use super::super::TableConvention;
     use super::*;
@@ -428,5 +428,82 @@ mod tests {
             }
         }
         assert!(past_90 > 10, "only {past_90} rays left past 90° (widest {widest}°)");
+    }
+
+    /// `prescription` laid out the other way along the axis: every
+    /// thickness negative and every surface bent the other way, so its
+    /// vertices run toward −z and light goes to the sensor toward −z.
+    fn mirrored_in_z(prescription: &LensPrescription) -> LensPrescription {
+        let mut mirrored = prescription.clone();
+        for s in &mut mirrored.surfaces {
+            s.radius_mm = -s.radius_mm;
+            s.thickness_mm = -s.thickness_mm;
+            match &mut s.shape {
+                SurfaceShape::EvenAsphere(asphere) => asphere.coefficients = asphere.coefficients.map(|a| -a),
+                SurfaceShape::Toric(toric) => toric.rotation_radius_mm = -toric.rotation_radius_mm,
+                SurfaceShape::Spherical | SurfaceShape::Cylindrical(_) => {}
+            }
+        }
+        mirrored
+    }
+
+    /// The tracer takes each surface's sense of travel from the vertices'
+    /// order, not from the direction of tracing: a lens whose surfaces run
+    /// toward −z (what a mirror's negative thicknesses make) traces as the
+    /// mirror image of the same lens laid out toward +z, for spheres,
+    /// aspheres, torics and cylinders, both ways, and blocks the same rays.
+    #[test]
+    fn a_lens_laid_out_toward_negative_z_traces_as_its_mirror_image() {
+        let flip = |v: DVec3| DVec3::new(v.x, v.y, -v.z);
+        let flip_ray = |r: LensRay| LensRay {
+            origin: flip(r.origin),
+            direction: flip(r.direction),
+        };
+        let parse = |table: &str| LensPrescription::parse(table, "test", TableConvention::ThicknessToNext).unwrap();
+        let prescriptions = [
+            LensPrescription::load("dgauss50").unwrap(),
+            LensPrescription::load("asph31").unwrap(),
+            LensPrescription::load("lentil:2004").unwrap(),
+            parse(TORIC_DOUBLET),
+        ];
+        for prescription in prescriptions {
+            let lens = LensSystem::new(&prescription);
+            let mirrored = LensSystem::new(&mirrored_in_z(&prescription));
+            assert_eq!(mirrored.front_z_mm(), -lens.front_z_mm(), "{}", prescription.name);
+            let (mut passed, mut blocked) = (0, 0);
+            for k in 0..300 {
+                let a = k as f64 * 2.399;
+                let r = lens.front_aperture_radius_mm() * ((k as f64 + 0.5) / 300.0).sqrt();
+                let start = [r * a.cos(), r * a.sin()];
+                let slope = [0.004 * (k % 7) as f64 - 0.012, 0.003 * (k % 5) as f64 - 0.006];
+                let ray = LensRay::skew(&lens, start, slope);
+                let out = lens.trace(&ray, Direction::ToSensor);
+                let out_mirrored = mirrored.trace(&flip_ray(ray), Direction::ToSensor);
+                assert_eq!(out.is_some(), out_mirrored.is_some(), "{} ray {k}", prescription.name);
+                let (Some(out), Some(out_mirrored)) = (out, out_mirrored) else {
+                    blocked += 1;
+                    continue;
+                };
+                passed += 1;
+                assert!((flip(out_mirrored.origin) - out.origin).length() < 1e-9);
+                assert!((flip(out_mirrored.direction) - out.direction).length() < 1e-12);
+                // And back toward the scene, crossing the stop at the same place.
+                let back = LensRay {
+                    origin: out.origin + out.direction * 5.0,
+                    direction: -out.direction,
+                };
+                let (returned, at_stop) = lens.trace_via_stop(&back, Direction::ToScene).expect("reversible");
+                let (returned_mirrored, at_stop_mirrored) = mirrored
+                    .trace_via_stop(&flip_ray(back), Direction::ToScene)
+                    .expect("reversible");
+                assert!((flip(returned_mirrored.origin) - returned.origin).length() < 1e-9);
+                assert!((flip(at_stop_mirrored) - at_stop).length() < 1e-9);
+            }
+            assert!(
+                passed > 20 && blocked > 0,
+                "{}: {passed} passed, {blocked} blocked: both cases matter",
+                prescription.name
+            );
+        }
     }
 }

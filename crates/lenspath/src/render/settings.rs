@@ -156,7 +156,7 @@ impl Default for RenderSettings {
             integrator: Integrator::default(),
             seed: DEFAULT_SEED,
             sampler: SamplerKind::default(),
-            filter: Filter::Box,
+            filter: Filter::default(),
             threads: None,
             tile_size: DEFAULT_TILE_SIZE,
             crop: None,

@@ -33,11 +33,7 @@ impl RenderSetup {
         put("worldToCamera", Matrix(camera_from_render.to_cols_array()));
         put("software", Text(format!("lenspath {}", env!("CARGO_PKG_VERSION"))));
         put("lenspath/scene", Text(scene_name.to_string()));
-        let camera_kind = match &self.camera {
-            CameraSettings::Pinhole { .. } => "pinhole",
-            CameraSettings::ThinLens { .. } => "thin-lens",
-            CameraSettings::Realistic(_) => "realistic",
-        };
+        let camera_kind = self.camera.kind().name();
         put("lenspath/camera", Text(camera_kind.to_string()));
         let mut comments = format!("{scene_name} through a {camera_kind} camera");
         match &self.camera {

@@ -24,6 +24,7 @@ use crate::error::{Error, Result};
 use crate::film::{Filter, Image, PixelRect};
 use crate::integrator::{Integrator, IntegratorKind, PathSettings};
 use crate::lens::{LensPrescription, LensSystem};
+use crate::names::Named;
 use crate::options::SceneOptions;
 use crate::render::{FilmResponse, RenderSettings};
 use crate::sampling::SamplerKind;
@@ -73,6 +74,27 @@ pub struct RenderOverrides {
     /// scene file's `[sensor]` (`None` and no `[sensor]`: linear sRGB
     /// radiance).
     pub sensor: Option<SensorDescription>,
+}
+
+/// The kinds of camera, as every front end names them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum CameraKind {
+    /// An ideal pinhole: everything in focus.
+    Pinhole,
+    /// An ideal thin lens: depth of field from its aperture and focus distance.
+    ThinLens,
+    /// A real lens prescription, traced surface by surface.
+    #[default]
+    Realistic,
+}
+
+impl Named for CameraKind {
+    const WHAT: &'static str = "camera";
+    const NAMED: &'static [(CameraKind, &'static str)] = &[
+        (CameraKind::Pinhole, "pinhole"),
+        (CameraKind::ThinLens, "thin-lens"),
+        (CameraKind::Realistic, "realistic"),
+    ];
 }
 
 /// A camera as a caller describes it; what it leaves out comes from the
@@ -163,6 +185,15 @@ pub enum CameraSettings {
 }
 
 impl CameraSettings {
+    /// Which kind of camera it is.
+    pub fn kind(&self) -> CameraKind {
+        match self {
+            CameraSettings::Pinhole { .. } => CameraKind::Pinhole,
+            CameraSettings::ThinLens { .. } => CameraKind::ThinLens,
+            CameraSettings::Realistic(_) => CameraKind::Realistic,
+        }
+    }
+
     /// The camera at `pose` for a `width` × `height` image.
     pub fn build(&self, pose: CameraPose, width: u32, height: u32) -> Result<Arc<dyn Camera>> {
         Ok(match self {

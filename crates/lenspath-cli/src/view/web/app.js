@@ -116,8 +116,8 @@ function showState(s) {
     [canvas.width, canvas.height] = s.resolution;
   }
   fillSelect($("lens"), s.lenses, settings.lens);
-  fillSelect($("af-metric"), s.metrics, $("af-metric").value || "tenengrad");
-  fillSelect($("af-strategy"), s.strategies, $("af-strategy").value || "fast");
+  fillSelect($("af-metric"), s.metrics, $("af-metric").value || s.metric_default);
+  fillSelect($("af-strategy"), s.strategies, $("af-strategy").value || s.strategy_default);
   $("lens-facts").textContent =
     `${s.focal_length_mm.toFixed(1)} mm, f/${s.wide_open_f_number.toFixed(2)} wide open, ` +
     `sensor ${s.sensor_mm[0].toFixed(1)}×${s.sensor_mm[1].toFixed(1)} mm` +
@@ -145,6 +145,7 @@ function showState(s) {
   setValue(sensor, s.sensor_depth_mm);
   $("sensor-depth-value").textContent = `${s.sensor_depth_mm.toFixed(3)} mm`;
   setValue($("focus-distance"), s.focus_distance_m == null ? "" : s.focus_distance_m.toFixed(3));
+  $("max-spp").max = s.max_spp_limit;
   setValue($("max-spp"), settings.max_spp);
   fillSelect($("integrator"), s.integrators, settings.integrator);
   showSensor(s);
