@@ -3,7 +3,7 @@
 # and full Cornell-box renders. Run from the repository root on an idle machine.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cargo build --profile dist --quiet
+cargo build --profile dist --features x86-64-v3 --quiet
 bin=target/dist/lenspath
 dragon=../shared/meshes/dragon_100k.ply
 

@@ -14,7 +14,7 @@ camera again) and orbits (which move it). For each it records:
   request, the WebSocket and decoding.
 
 Usage: target/python-venv/bin/python bench/viewer_latency.py [--changes 30] [--json FILE]
-(`cargo build --profile dist` and `bash scripts/test.sh`, which makes the venv, first.)
+(`cargo build --profile dist --features viewer,x86-64-v3` and `bash scripts/test.sh`, which makes the venv, first.)
 """
 
 from __future__ import annotations

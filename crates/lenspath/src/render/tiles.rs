@@ -136,11 +136,14 @@ fn accumulation(tiles: &[Tile], region: PixelRect) -> Accumulation {
 
 /// Renders the samples `tile.spp_done..pass_end` of every pixel of `tile`
 /// (and its depth, when it has no samples yet); returns (rays, invalid samples).
-// Compiled twice, for the baseline and for x86-64-v3 (AVX2, FMA: Haswell,
-// Zen and later), and run in the copy the CPU can: the path tracer is
-// inlined into both, and the v3 copy is 5% faster (BENCHMARKS.md). No
+// With the `x86-64-v3` feature, compiled twice, for the baseline and for
+// x86-64-v3 (AVX2, FMA: Haswell, Zen and later), and run in the copy the CPU
+// can: the path tracer is inlined into both, the v3 copy the faster. No
 // fused multiply-adds are written or contracted, so both give bit-identical images.
-#[multiversion::multiversion(targets("x86_64+avx+avx2+fma+bmi1+bmi2+lzcnt+movbe+f16c"))]
+#[cfg_attr(
+    feature = "x86-64-v3",
+    multiversion::multiversion(targets("x86_64+avx+avx2+fma+bmi1+bmi2+lzcnt+movbe+f16c"))
+)]
 fn render_tile(shot: &Shot<'_>, tile: &mut Tile, pass_end: u32) -> (u64, u64) {
     let Shot {
         scene,
