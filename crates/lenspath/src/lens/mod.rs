@@ -1,27 +1,33 @@
 //! Real compound lenses: prescriptions, exact tracing, first-order and
-//! real-ray analysis, focusing, and the layout plot.
+//! real-ray analysis, focusing, wave optics (wavefront, PSF, MTF), and the layout plot.
 
 pub mod chromatic;
 pub mod focusing;
 pub mod iset;
 pub mod lentil;
 pub mod library;
+pub mod mtf;
 pub mod paraxial;
 pub mod plot;
 pub mod prescription;
+pub mod psf;
 pub mod surface;
 pub mod system;
 pub mod table;
 pub mod through_focus;
 pub mod trace;
+pub mod wavefront;
 pub mod zemax;
 
+pub use mtf::{diffraction_limited_mtf, Mtf};
 pub use paraxial::ParaxialData;
 pub use prescription::{LensPrescription, LensSurface, BUILTIN_LENSES};
+pub use psf::PointSpread;
 pub use surface::{CylinderAxis, EvenAsphere, Meridian, SurfaceShape};
 pub use system::{Direction, LensRay, LensSystem};
 pub use table::TableConvention;
 pub use through_focus::SpotBundle;
+pub use wavefront::Wavefront;
 
 use std::path::Path;
 

@@ -25,6 +25,25 @@ impl LensSystem {
         Some(ray)
     }
 
+    /// [`LensSystem::trace`], also returning the ray's optical path length
+    /// from its origin to the last surface crossed: the sum of each medium's
+    /// index times the distance travelled in it, mm (a stop bends nothing
+    /// and adds nothing).
+    pub fn trace_optical_path(&self, ray: &LensRay, direction: Direction) -> Option<(LensRay, f64)> {
+        let (mut ray, mut path_mm) = (*ray, 0.0);
+        for k in 0..self.surfaces.len() {
+            let surface = self.surface_in_travel_order(k, direction);
+            let next = self.cross(surface, &ray, direction, &mut |_| {})?;
+            let index = match direction {
+                Direction::ToSensor => surface.ior_front,
+                Direction::ToScene => surface.ior_back,
+            };
+            path_mm += index * next.origin.distance(ray.origin);
+            ray = next;
+        }
+        Some((ray, path_mm))
+    }
+
     /// [`LensSystem::trace`], also returning where the ray crossed the
     /// aperture stop (what a shaped aperture's transmission is read at).
     pub fn trace_via_stop(&self, ray: &LensRay, direction: Direction) -> Option<(LensRay, DVec3)> {
