@@ -16,8 +16,10 @@ pub mod system;
 pub mod table;
 pub mod through_focus;
 pub mod trace;
+pub mod wave_analysis;
 pub mod wavefront;
 pub mod zemax;
+pub mod zernike;
 
 pub use mtf::{diffraction_limited_mtf, Mtf};
 pub use paraxial::ParaxialData;

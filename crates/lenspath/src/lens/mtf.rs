@@ -45,6 +45,19 @@ impl Mtf {
         self.section(frequency_per_mm, 0)
     }
 
+    /// The lowest frequency where the tangential (`axis` 1) or sagittal
+    /// (`axis` 0) MTF falls to 0.5, linearly interpolated between samples:
+    /// MTF50, the figure ISO 12233 and lens reviews quote. `None` when it
+    /// stays above 0.5 over the grid.
+    pub fn mtf50_per_mm(&self, axis: usize) -> Option<f64> {
+        let step = self.spacing_per_mm[axis];
+        let value = |k: usize| self.section(k as f64 * step, axis);
+        (1..self.size / 2).find_map(|k| {
+            let (above, below) = (value(k - 1), value(k));
+            (below <= 0.5).then(|| step * ((k - 1) as f64 + (above - 0.5) / (above - below)))
+        })
+    }
+
     /// The highest frequency the grid holds along each axis, cycles per mm.
     pub fn max_frequency_per_mm(&self) -> [f64; 2] {
         self.spacing_per_mm.map(|d| d * (self.size / 2 - 1) as f64)
@@ -105,6 +118,25 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn a_perfect_lens_has_the_published_mtf50() {
+        // The circular pupil's MTF is 0.5 at ν = 0.4040 ν_c (solving 2/π·(φ − cos φ sin φ) = ½).
+        let (f_number, wavelength_nm) = (8.0, 550.0);
+        let mtf = Wavefront::diffraction_limited(128, f_number, wavelength_nm)
+            .psf(4)
+            .unwrap()
+            .mtf();
+        let expected = 0.4040 / (wavelength_nm * 1e-6 * f_number);
+        for axis in [0, 1] {
+            let mtf50 = mtf.mtf50_per_mm(axis).unwrap();
+            assert!(
+                (mtf50 / expected - 1.0).abs() < 0.01,
+                "MTF50 {mtf50} against {expected}"
+            );
+        }
+        assert!((diffraction_limited_mtf(expected, wavelength_nm, f_number) - 0.5).abs() < 1e-3);
     }
 
     #[test]

@@ -8,6 +8,11 @@
 //! for a perfect lens at working f-number N that is λN/padding (a padding of
 //! 4 puts five samples inside the Airy disc's first dark ring, at 1.22λN).
 //! The PSF is in the sensor's plane, centred on the chief ray's image point.
+//!
+//! The polychromatic PSF is the weighted sum of monochromatic ones, each
+//! resampled (bilinearly, its energy kept) onto the first wavelength's grid
+//! and placed by its own chief ray's image point, so lateral colour
+//! separates the colours' peaks as it does on the sensor.
 
 use rustfft::num_complex::Complex64;
 use rustfft::FftPlanner;
@@ -22,6 +27,8 @@ pub struct PointSpread {
     spacing_mm: [f64; 2],
     intensity: Vec<f64>,
     strehl_ratio: f64,
+    /// The chief ray's image point (x, y) on the sensor, mm: the grid's centre.
+    centre_mm: [f64; 2],
 }
 
 impl Wavefront {
@@ -62,6 +69,7 @@ impl Wavefront {
             intensity,
             // A perfect pupil of the same shape peaks at (ΣA)².
             strehl_ratio: peak / (amplitude_sum * amplitude_sum),
+            centre_mm: [self.image_point_mm().x, self.image_point_mm().y],
         })
     }
 }
@@ -85,6 +93,66 @@ impl PointSpread {
     /// The PSF's peak over a perfect lens's of the same pupil (the Strehl ratio).
     pub fn strehl_ratio(&self) -> f64 {
         self.strehl_ratio
+    }
+
+    /// The chief ray's image point (x, y) on the sensor, mm, where the grid is centred.
+    pub fn centre_mm(&self) -> [f64; 2] {
+        self.centre_mm
+    }
+
+    /// The spectrum-weighted sum of `parts` (a PSF and its weight each, at
+    /// one field and sensor position), on the first part's grid and unit
+    /// sum. Its Strehl ratio is the weighted mean of the parts'. Fails for
+    /// no parts or weights that do not sum to a positive number.
+    pub fn polychromatic(parts: &[(PointSpread, f64)]) -> Result<PointSpread> {
+        let total_weight: f64 = parts.iter().map(|(_, w)| w).sum();
+        let Some((reference, _)) = parts.first().filter(|_| total_weight > 0.0 && total_weight.is_finite()) else {
+            return Err(Error::InvalidArgument(format!(
+                "a polychromatic PSF needs wavelengths with positive weights, got {} weighing {total_weight}",
+                parts.len()
+            )));
+        };
+        let (size, [dx, dy]) = (reference.size, reference.spacing_mm);
+        let centre = (size / 2) as f64;
+        let mut intensity = vec![0.0; size * size];
+        for (part, weight) in parts {
+            let [px, py] = part.spacing_mm;
+            let part_centre = (part.size / 2) as f64;
+            // Bilinear samples of a density: scaled by the area ratio to keep the energy.
+            let scale = weight * (dx * dy) / (px * py);
+            for (k, value) in intensity.iter_mut().enumerate() {
+                let x_mm = reference.centre_mm[0] + ((k % size) as f64 - centre) * dx;
+                let y_mm = reference.centre_mm[1] + ((k / size) as f64 - centre) * dy;
+                let u = (x_mm - part.centre_mm[0]) / px + part_centre;
+                let v = (y_mm - part.centre_mm[1]) / py + part_centre;
+                *value += scale * part.bilinear(u, v);
+            }
+        }
+        let sum: f64 = intensity.iter().sum();
+        intensity.iter_mut().for_each(|v| *v /= sum);
+        Ok(PointSpread {
+            size,
+            spacing_mm: reference.spacing_mm,
+            intensity,
+            strehl_ratio: parts.iter().map(|(p, w)| p.strehl_ratio * w).sum::<f64>() / total_weight,
+            centre_mm: reference.centre_mm,
+        })
+    }
+
+    /// The intensity at fractional grid position (u columns, v rows); 0 outside.
+    fn bilinear(&self, u: f64, v: f64) -> f64 {
+        let (u0, v0) = (u.floor(), v.floor());
+        let (fu, fv) = (u - u0, v - v0);
+        let at = |i: f64, j: f64| {
+            let inside = i >= 0.0 && j >= 0.0 && i < self.size as f64 && j < self.size as f64;
+            if inside {
+                self.intensity[j as usize * self.size + i as usize]
+            } else {
+                0.0
+            }
+        };
+        (at(u0, v0) * (1.0 - fu) + at(u0 + 1.0, v0) * fu) * (1.0 - fv)
+            + (at(u0, v0 + 1.0) * (1.0 - fu) + at(u0 + 1.0, v0 + 1.0) * fu) * fv
     }
 
     /// The fraction of the energy within `radius_mm` of the image point.
@@ -154,6 +222,27 @@ mod tests {
         let energy = psf.encircled_energy(first_zero_mm);
         assert!((energy - 0.838).abs() < 0.01, "encircled energy {energy}");
         assert!((psf.strehl_ratio() - 1.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_polychromatic_perfect_psf_has_the_mean_airy_radius_and_keeps_its_energy() {
+        // Equal weights at 450 and 650 nm: the encircled energy at each wavelength's first zero
+        // is the mean of the two Airy patterns' there (Born & Wolf §8.5.2, L(v) = 1 − J0² − J1²).
+        let f_number = 8.0;
+        let part = |nm: f64| (Wavefront::diffraction_limited(128, f_number, nm).psf(8).unwrap(), 1.0);
+        let (blue, red) = (part(450.0), part(650.0));
+        let mixed = PointSpread::polychromatic(&[blue.clone(), red.clone()]).unwrap();
+        assert!((mixed.intensity().iter().sum::<f64>() - 1.0).abs() < 1e-12);
+        assert_eq!(mixed.spacing_mm(), blue.0.spacing_mm());
+        for radius_mm in [1.22e-6 * 450.0 * f_number, 1.22e-6 * 650.0 * f_number, 0.02] {
+            let expected = 0.5 * (blue.0.encircled_energy(radius_mm) + red.0.encircled_energy(radius_mm));
+            let got = mixed.encircled_energy(radius_mm);
+            assert!(
+                (got - expected).abs() < 0.01,
+                "at {radius_mm} mm: {got}, expected {expected}"
+            );
+        }
+        assert!(PointSpread::polychromatic(&[(blue.0, 0.0)]).is_err());
     }
 
     #[test]

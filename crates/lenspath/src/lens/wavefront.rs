@@ -270,6 +270,14 @@ impl Wavefront {
         inside as f64 / (std::f64::consts::FRAC_PI_4 * (self.grid * self.grid) as f64)
     }
 
+    /// Replaces each OPD sample inside the pupil by `f(index, opd)`.
+    #[cfg(test)]
+    pub(super) fn map_opd(&mut self, f: impl Fn(usize, f64) -> f64) {
+        for (k, w) in self.opd_waves.iter_mut().enumerate().filter(|(_, w)| !w.is_nan()) {
+            *w = f(k, *w);
+        }
+    }
+
     /// RMS wavefront error about its mean (piston removed), waves.
     pub fn rms_waves(&self) -> f64 {
         let inside: Vec<f64> = self.opd_waves.iter().copied().filter(|w| !w.is_nan()).collect();
