@@ -6,6 +6,8 @@ use std::path::PathBuf;
 use clap::Args;
 use lenspath::fs::write_text;
 use lenspath::lens::plot::{focal_shift_svg, layout_svg};
+use lenspath::lens::wave_analysis::{WaveAnalysis, WaveAnalysisSettings, WeightedWavelength};
+use lenspath::lens::wave_plot::{mtf_svg, psf_svg};
 use lenspath::lens::{AnalysisSettings, LensPrescription, LensSystem, FULL_FRAME_MM};
 use lenspath::lens_report::{LensReport, LensReportSettings};
 use lenspath::{Error, Result};
@@ -56,6 +58,33 @@ pub struct LensArgs {
     /// Also print the focus distance (m, from the sensor) of a sensor this many mm behind the stop.
     #[arg(long, value_name = "MM")]
     sensor_depth: Option<f64>,
+    /// Also the wave-optics analysis at these field angles (degrees, comma-separated): RMS wavefront, Strehl, Zernike, MTF and MTF50, with the sensor at --sensor-depth or the infinity focus.
+    #[arg(long, value_name = "FIELD_DEG", value_delimiter = ',')]
+    mtf: Vec<f64>,
+    /// Also the PSF at this field angle (degrees); its figures join --mtf's, and --psf-plot draws it.
+    #[arg(long, value_name = "FIELD_DEG")]
+    psf: Option<f64>,
+    /// Wavelengths of the wave-optics analysis, nm (comma-separated; default: the lens's design wavelength).
+    #[arg(long, value_name = "NM", value_delimiter = ',')]
+    wavelength_nm: Vec<f64>,
+    /// Weights of --wavelength-nm, one each (default: equal).
+    #[arg(long, value_name = "W", value_delimiter = ',', requires = "wavelength_nm")]
+    wavelength_weights: Vec<f64>,
+    /// The MTF's frequencies, cycles per mm (comma-separated; default: 0 to 100 every 5).
+    #[arg(long, value_name = "PER_MM", value_delimiter = ',')]
+    mtf_frequencies: Vec<f64>,
+    /// Also the MTF through focus at this frequency (cycles per mm), over ±4 Rayleigh depths of focus.
+    #[arg(long, value_name = "PER_MM")]
+    through_focus: Option<f64>,
+    /// Pupil samples a side for the wave-optics analysis.
+    #[arg(long, value_name = "N", default_value_t = WaveAnalysisSettings::default().pupil_samples)]
+    pupil_samples: usize,
+    /// Write the MTF of the --mtf fields as SVG.
+    #[arg(long, value_name = "FILE", requires = "mtf")]
+    mtf_plot: Option<PathBuf>,
+    /// Write sections of the --psf field's PSF as SVG.
+    #[arg(long, value_name = "FILE", requires = "psf")]
+    psf_plot: Option<PathBuf>,
 }
 
 /// Prints the shipped lenses: a header line, then one line each (or a JSON array).
@@ -126,6 +155,25 @@ pub fn run(mut args: LensArgs) -> Result<Outcome> {
         sensor_depth_mm: args.sensor_depth,
     };
     let report = LensReport::new(&system, &settings)?.with_passing_fractions(&prescription, args.fstop)?;
+    let wave_settings = wave_settings(&args)?;
+    let mut fields_deg = args.mtf.clone();
+    fields_deg.extend(args.psf.filter(|f| !args.mtf.contains(f)));
+    let report = report.with_wave_analysis(&system, &fields_deg, &wave_settings)?;
+    if let Some(path) = &args.mtf_plot {
+        let mtf_fields: Vec<WaveAnalysis> = report.wave[..args.mtf.len()].to_vec();
+        write_text(path, &mtf_svg(prescription.name(), &mtf_fields))?;
+    }
+    if let (Some(path), Some(field_deg)) = (&args.psf_plot, args.psf) {
+        let result = WaveAnalysis::with_psf(
+            &system,
+            &WaveAnalysisSettings {
+                field_deg,
+                through_focus_frequency_per_mm: None,
+                ..wave_settings.clone()
+            },
+        )?;
+        write_text(path, &psf_svg(prescription.name(), &result))?;
+    }
 
     if let Some(path) = &args.plot {
         let diagonal = sensor_mm.0.hypot(sensor_mm.1);
@@ -147,6 +195,38 @@ pub fn run(mut args: LensArgs) -> Result<Outcome> {
     }
     print_report(&report);
     Ok(Outcome::Done)
+}
+
+/// The wave-optics settings the flags ask for (the field is set per field).
+fn wave_settings(args: &LensArgs) -> Result<WaveAnalysisSettings> {
+    let weights = match args.wavelength_weights.len() {
+        0 => vec![1.0; args.wavelength_nm.len()],
+        n if n == args.wavelength_nm.len() => args.wavelength_weights.clone(),
+        n => {
+            return Err(Error::InvalidArgument(format!(
+                "--wavelength-weights gives {n} weights for {} wavelengths",
+                args.wavelength_nm.len()
+            )))
+        }
+    };
+    let defaults = WaveAnalysisSettings::default();
+    Ok(WaveAnalysisSettings {
+        spectrum: args
+            .wavelength_nm
+            .iter()
+            .zip(weights)
+            .map(|(&wavelength_nm, weight)| WeightedWavelength { wavelength_nm, weight })
+            .collect(),
+        sensor_depth_mm: args.sensor_depth,
+        pupil_samples: args.pupil_samples,
+        frequencies_per_mm: if args.mtf_frequencies.is_empty() {
+            defaults.frequencies_per_mm.clone()
+        } else {
+            args.mtf_frequencies.clone()
+        },
+        through_focus_frequency_per_mm: args.through_focus,
+        ..defaults
+    })
 }
 
 /// `report` as the text `lenspath lens` prints.
@@ -241,6 +321,54 @@ fn print_report(report: &LensReport) {
         match d {
             Some(m) => println!("sensor at {z} mm          focuses at {m:.6} m"),
             None => println!("sensor at {z} mm          focuses beyond infinity (nearer than the infinity focus)"),
+        }
+    }
+    report.wave.iter().for_each(print_wave_analysis);
+}
+
+/// One field's wave-optics figures as text.
+fn print_wave_analysis(w: &WaveAnalysis) {
+    println!(
+        "wave optics at {}°          sensor at {:.4} mm, f/{:.3} working, PSF samples {:.3} x {:.3} µm",
+        w.field_deg, w.sensor_depth_mm, w.working_f_number, w.psf_spacing_um[0], w.psf_spacing_um[1]
+    );
+    println!("  wavelength (nm)  weight  RMS (waves)  Strehl  pupil through");
+    for m in &w.wavelengths {
+        println!(
+            "  {:>15.2}  {:>6.3}  {:>11.4}  {:>6.4}  {:>12.1}%",
+            m.wavelength_nm,
+            m.weight,
+            m.rms_wavefront_waves,
+            m.strehl_ratio,
+            100.0 * m.pupil_passing_fraction
+        );
+    }
+    let per_mm = |f: Option<f64>| f.map_or("beyond the grid".to_string(), |f| format!("{f:.1}/mm"));
+    println!(
+        "  Strehl {:.4}, MTF50 tangential {}, sagittal {}",
+        w.strehl_ratio,
+        per_mm(w.mtf50_tangential_per_mm),
+        per_mm(w.mtf50_sagittal_per_mm)
+    );
+    println!("  cycles/mm  tangential  sagittal  diffraction limit");
+    for s in &w.mtf {
+        println!(
+            "  {:>9.1}  {:>10.4}  {:>8.4}  {:>17.4}",
+            s.frequency_per_mm, s.tangential, s.sagittal, s.diffraction_limit
+        );
+    }
+    if let Some(frequency) = w.through_focus_frequency_per_mm {
+        let best = |pick: fn(&lenspath::lens::wave_analysis::ThroughFocusSample) -> f64| {
+            w.through_focus
+                .iter()
+                .max_by(|a, b| pick(a).total_cmp(&pick(b)))
+                .map(|s| (s.sensor_depth_mm, pick(s)))
+        };
+        if let (Some(t), Some(s)) = (best(|s| s.tangential), best(|s| s.sagittal)) {
+            println!(
+                "  through focus at {frequency}/mm: tangential peaks {:.4} at {:.4} mm, sagittal {:.4} at {:.4} mm",
+                t.1, t.0, s.1, s.0
+            );
         }
     }
 }

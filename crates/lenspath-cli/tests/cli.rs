@@ -182,6 +182,23 @@ fn bad_input_gives_one_error_line_and_exit_code_2() {
             "--ray-height-mm must be positive",
         ),
         (
+            vec!["lens", "dgauss50", "--mtf", "95"],
+            "a field angle lies within ±90°, got 95",
+        ),
+        (
+            vec![
+                "lens",
+                "dgauss50",
+                "--psf",
+                "0",
+                "--wavelength-nm",
+                "500,600",
+                "--wavelength-weights",
+                "1",
+            ],
+            "--wavelength-weights gives 1 weights for 2 wavelengths",
+        ),
+        (
             vec!["render", "--scene", "teapot-nope", "--out", ok],
             "unknown scene 'teapot-nope'",
         ),
@@ -579,6 +596,61 @@ fn lens_reports_json_and_plots_the_layout() {
         "six glass elements"
     );
     assert!(drawing.matches("<polyline").count() >= 15, "three ray fans");
+}
+
+/// The wave-optics analysis: one entry per field (the PSF's field shared
+/// with --mtf's), per-wavelength figures, an MTF no better than a perfect
+/// lens's, and both plots drawn.
+#[test]
+fn lens_reports_the_wave_optics_at_each_field_and_plots_mtf_and_psf() {
+    let dir = tempfile::tempdir().unwrap();
+    let (mtf_svg, psf_svg) = (dir.path().join("mtf.svg"), dir.path().join("psf.svg"));
+    let o = lenspath(&[
+        "lens",
+        "dgauss50",
+        "--fstop",
+        "8",
+        "--json",
+        "--mtf",
+        "0,15",
+        "--psf",
+        "0",
+        "--wavelength-nm",
+        "486.13,587.56,656.27",
+        "--pupil-samples",
+        "64",
+        "--mtf-plot",
+        mtf_svg.to_str().unwrap(),
+        "--psf-plot",
+        psf_svg.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let json: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let wave = json["wave"].as_array().unwrap();
+    assert_eq!(wave.len(), 2, "the PSF's field 0 is --mtf's first");
+    for field in wave {
+        let strehl = field["strehl_ratio"].as_f64().unwrap();
+        assert!(strehl > 0.0 && strehl <= 1.0, "{strehl}");
+        assert_eq!(field["wavelengths"].as_array().unwrap().len(), 3);
+        for sample in field["mtf"].as_array().unwrap() {
+            let (mtf, limit) = (
+                sample["tangential"].as_f64().unwrap(),
+                sample["diffraction_limit"].as_f64().unwrap(),
+            );
+            assert!(mtf <= limit + 0.01, "{sample}");
+        }
+    }
+    assert!(
+        wave[0]["mtf50_tangential_per_mm"].as_f64().unwrap() > wave[1]["mtf50_tangential_per_mm"].as_f64().unwrap()
+    );
+    assert_eq!(
+        std::fs::read_to_string(&mtf_svg).unwrap().matches("<polyline").count(),
+        5
+    );
+    assert_eq!(
+        std::fs::read_to_string(&psf_svg).unwrap().matches("<polyline").count(),
+        3
+    );
 }
 
 /// `render FILE` takes the file's film and integrator settings (a flag wins),

@@ -4,7 +4,8 @@
 //! ([`LensAnalysis`]), the colour lines ([`ChromaticAnalysis`]), the share
 //! of rays the camera lets through, and the two focus questions a caller may
 //! ask (where the sensor goes for a distance, what distance a sensor depth
-//! focuses).
+//! focuses), and on request the wave-optics figures at chosen fields
+//! ([`WaveAnalysis`]).
 
 use std::collections::BTreeMap;
 
@@ -14,6 +15,7 @@ use serde::Serialize;
 use crate::camera::{CameraPose, LensFocus, RealisticCamera, RealisticCameraSettings};
 use crate::error::{Error, Result};
 use crate::lens::chromatic::{ChromaticAnalysis, LineFocus};
+use crate::lens::wave_analysis::{WaveAnalysis, WaveAnalysisSettings};
 use crate::lens::{AnalysisSettings, LensAnalysis, LensPrescription, LensSystem};
 
 /// Camera samples each passing fraction is estimated from.
@@ -94,6 +96,10 @@ pub struct LensReport {
     /// The focus questions' answers.
     #[serde(flatten)]
     pub focus: FocusAnswers,
+    /// The wave-optics figures at the fields asked
+    /// ([`LensReport::with_wave_analysis`]); absent unless asked.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub wave: Vec<WaveAnalysis>,
 }
 
 impl LensReport {
@@ -136,6 +142,7 @@ impl LensReport {
                 sensor_depth_mm: settings.sensor_depth_mm,
                 focus_distance_for_sensor_depth_m,
             },
+            wave: Vec::new(),
         })
     }
 
@@ -165,6 +172,29 @@ impl LensReport {
             passing_fraction_centre: camera.passing_fraction(centre, PASSING_SAMPLES),
             passing_fraction_corner: camera.passing_fraction(Vec2::splat(0.5), PASSING_SAMPLES),
         });
+        Ok(self)
+    }
+
+    /// This report with the wave-optics analysis of `system` at each of
+    /// `fields_deg`, the rest as `settings` asks.
+    pub fn with_wave_analysis(
+        mut self,
+        system: &LensSystem,
+        fields_deg: &[f64],
+        settings: &WaveAnalysisSettings,
+    ) -> Result<Self> {
+        self.wave = fields_deg
+            .iter()
+            .map(|&field_deg| {
+                WaveAnalysis::new(
+                    system,
+                    &WaveAnalysisSettings {
+                        field_deg,
+                        ..settings.clone()
+                    },
+                )
+            })
+            .collect::<Result<_>>()?;
         Ok(self)
     }
 

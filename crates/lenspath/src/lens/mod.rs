@@ -17,6 +17,7 @@ pub mod table;
 pub mod through_focus;
 pub mod trace;
 pub mod wave_analysis;
+pub mod wave_plot;
 pub mod wavefront;
 pub mod zemax;
 pub mod zernike;

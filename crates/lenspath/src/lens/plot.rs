@@ -362,7 +362,7 @@ pub fn focal_shift_svg(system: &LensSystem) -> Result<String> {
 }
 
 /// 1, 2 or 5 times a power of ten, at least `x`.
-fn nice_step(x: f64) -> f64 {
+pub(super) fn nice_step(x: f64) -> f64 {
     let power = 10f64.powf(x.log10().floor());
     [1.0, 2.0, 5.0, 10.0]
         .iter()
@@ -372,7 +372,7 @@ fn nice_step(x: f64) -> f64 {
 }
 
 /// A tick label without trailing zeros.
-fn format_number(v: f64) -> String {
+pub(super) fn format_number(v: f64) -> String {
     let s = format!("{v:.3}");
     s.trim_end_matches('0').trim_end_matches('.').to_string()
 }
