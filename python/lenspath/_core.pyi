@@ -338,6 +338,41 @@ class Lens:
         focus), ``rays`` ((field fraction, wavelength in nm, colour, path) tuples: at the d line,
         or at the F, d and C lines when the glasses disperse), ``z_range_mm``,
         ``half_height_mm``, ``title``. ``lenspath.plot.lens_layout`` draws it with matplotlib."""
+    def psf(
+        self,
+        field_deg: float = 0.0,
+        wavelength_nm: float | Sequence[float] | None = None,
+        weights: Sequence[float] | None = None,
+        sensor_depth_mm: float | None = None,
+        pupil_samples: int | None = None,
+        padding: int | None = None,
+    ) -> tuple[npt.NDArray[np.float64], tuple[float, float]]:
+        """The polychromatic PSF at ``field_deg`` by FFT of the real lens's pupil function (as
+        ``lenspath lens --psf``): a unit-sum square array, rows along y (tangential), centred on
+        the chief ray's image point, and its sample spacing (x, y) in um. ``wavelength_nm``: one
+        or several (default: the lens's wavelength), ``weights`` one each (default: equal);
+        ``sensor_depth_mm`` behind the stop (default: the infinity focus); ``pupil_samples`` a
+        side and the zero ``padding`` default to the library's (128, 4). Raises ValueError for
+        a bad field, wavelength or depth."""
+    def mtf(
+        self,
+        field_deg: float = 0.0,
+        frequencies_per_mm: Sequence[float] | None = None,
+        wavelength_nm: float | Sequence[float] | None = None,
+        weights: Sequence[float] | None = None,
+        sensor_depth_mm: float | None = None,
+        through_focus_per_mm: float | None = None,
+        pupil_samples: int | None = None,
+        padding: int | None = None,
+    ) -> dict[str, Any]:
+        """The wave-optics figures at ``field_deg``, as ``lenspath lens --mtf --json`` gives one
+        field: ``strehl_ratio``, ``working_f_number``, ``sensor_depth_mm``, ``psf_spacing_um``,
+        ``mtf50_tangential_per_mm`` / ``mtf50_sagittal_per_mm`` (None beyond the grid),
+        ``wavelengths`` (per wavelength: ``rms_wavefront_waves``, ``strehl_ratio``,
+        ``pupil_passing_fraction``, ``zernike_fringe_waves`` Z1..Z37), ``through_focus`` when
+        ``through_focus_per_mm`` is given; and the MTF as arrays ``frequencies_per_mm``
+        (default 0 to 100 every 5), ``tangential``, ``sagittal``, ``diffraction_limit``.
+        Other arguments as ``psf``'s."""
 
 def builtin_lenses() -> list[str]:
     """The shipped lenses' names (``lenspath lens --list``): the built-in tables, then the

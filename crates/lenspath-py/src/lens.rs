@@ -19,6 +19,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
 use crate::error::{deprecated, guarded, to_py, value_error};
+use crate::wave::{self, SampledPsf, WaveQuestion};
 
 /// A real compound lens: its prescription, placed wide open (or stopped down).
 #[pyclass(module = "lenspath._core")]
@@ -411,6 +412,54 @@ impl Lens {
         d.set_item("z_range_mm", l.z_range_mm)?;
         d.set_item("half_height_mm", l.half_height_mm)?;
         Ok(d)
+    }
+
+    /// The polychromatic PSF at `field_deg` (the wave-optics analysis of
+    /// `lenspath lens --psf`): a unit-sum square array, rows along y
+    /// (tangential), centred on the chief ray's image point, and its sample
+    /// spacing (x, y) in µm. `wavelength_nm`: a number or a sequence (default:
+    /// the lens's wavelength), `weights` one each (default: equal);
+    /// `sensor_depth_mm` behind the stop (default: the infinity focus).
+    #[pyo3(signature = (field_deg = 0.0, wavelength_nm = None, weights = None, sensor_depth_mm = None, pupil_samples = None, padding = None))]
+    #[allow(clippy::too_many_arguments)] // Python's keywords, mapped onto one WaveQuestion.
+    pub(crate) fn psf<'py>(
+        &self,
+        py: Python<'py>,
+        field_deg: f64,
+        wavelength_nm: Option<Bound<'py, PyAny>>,
+        weights: Option<Vec<f64>>,
+        sensor_depth_mm: Option<f64>,
+        pupil_samples: Option<usize>,
+        padding: Option<usize>,
+    ) -> PyResult<SampledPsf<'py>> {
+        let question =
+            WaveQuestion::new(field_deg, wavelength_nm, weights, sensor_depth_mm).sampled(pupil_samples, padding);
+        wave::psf(py, &self.system, &question)
+    }
+
+    /// The wave-optics figures at `field_deg` as `lenspath lens --mtf
+    /// --json` gives one field (RMS wavefront, Strehl and Fringe Zernikes per
+    /// wavelength, MTF50, through focus when `through_focus_per_mm` is set),
+    /// with the MTF as arrays: `frequencies_per_mm`, `tangential`,
+    /// `sagittal`, `diffraction_limit`. Arguments as `psf`'s.
+    #[pyo3(signature = (field_deg = 0.0, frequencies_per_mm = None, wavelength_nm = None, weights = None, sensor_depth_mm = None, through_focus_per_mm = None, pupil_samples = None, padding = None))]
+    #[allow(clippy::too_many_arguments)] // Python's keywords, mapped onto one WaveQuestion.
+    pub(crate) fn mtf<'py>(
+        &self,
+        py: Python<'py>,
+        field_deg: f64,
+        frequencies_per_mm: Option<Vec<f64>>,
+        wavelength_nm: Option<Bound<'py, PyAny>>,
+        weights: Option<Vec<f64>>,
+        sensor_depth_mm: Option<f64>,
+        through_focus_per_mm: Option<f64>,
+        pupil_samples: Option<usize>,
+        padding: Option<usize>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let question = WaveQuestion::new(field_deg, wavelength_nm, weights, sensor_depth_mm)
+            .sampled(pupil_samples, padding)
+            .at_frequencies(frequencies_per_mm, through_focus_per_mm);
+        wave::mtf(py, &self.system, &question)
     }
 
     pub(crate) fn __repr__(&self) -> String {

@@ -23,6 +23,7 @@ mod lens;
 mod render;
 mod scene;
 mod sensor;
+mod wave;
 
 use pyo3::prelude::*;
 

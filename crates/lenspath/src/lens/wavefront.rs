@@ -8,11 +8,13 @@
 //! Conventions, chosen once here:
 //! - the object is at infinity, `field_deg` off the axis in the vertical
 //!   (y) meridian, so the tangential direction is y and the sagittal x;
-//! - the grid spans the paraxial entrance pupil's diameter, centred where the
-//!   real chief ray (aimed through the stop's centre) crosses the entrance
-//!   pupil's plane; samples whose rays the lens blocks are outside the pupil,
-//!   so vignetting shapes it (pupil distortion is not corrected: on a
-//!   wide-angle lens the real pupil may reach past the grid's circle);
+//! - the chief ray is aimed through the stop's centre; the grid spans the
+//!   real entrance pupil in the pupil's plane, the ellipse through the four
+//!   points whose rays graze the stop's rim above, below and beside the chief
+//!   ray (aimed as OpticStudio's ray aiming aims them, other apertures
+//!   ignored), so pupil distortion and pupil coma size it as they size the
+//!   real beam; samples whose rays the lens blocks are outside the pupil, so
+//!   vignetting shapes it;
 //! - W = OPL(chief ray) − OPL(ray), in waves: positive where the wave has
 //!   run ahead of the reference sphere (a sensor behind the focus gives
 //!   positive defocus at the pupil's rim).
@@ -93,40 +95,42 @@ impl LensSystem {
                 ))
             })?;
 
-        let pupil_radius_mm = 0.5 * paraxial.entrance_pupil_diameter_mm;
-        let step_mm = 2.0 * pupil_radius_mm / grid as f64;
-        let offset = |i: usize| (i as f64 - 0.5 * (grid as f64 - 1.0)) * step_mm;
+        let pupil = self
+            .real_pupil(&launch, chief_y_mm)
+            .unwrap_or_else(|| PupilEllipse::paraxial(&paraxial, chief_y_mm));
+        let unit = |i: usize| (i as f64 - 0.5 * (grid as f64 - 1.0)) * 2.0 / grid as f64;
         let mut opd_waves = vec![f64::NAN; grid * grid];
-        // Least squares of the rays' direction cosines against their pupil offsets.
-        let (mut sxx, mut sxa, mut syy, mut syb) = (0.0, 0.0, 0.0, 0.0);
+        let mut fit = [SlopeFit::default(), SlopeFit::default()];
         for j in 0..grid {
             for i in 0..grid {
-                let (x, y) = (offset(i), offset(j));
-                if x * x + y * y > pupil_radius_mm * pupil_radius_mm {
+                let (u, v) = (unit(i), unit(j));
+                if u * u + v * v > 1.0 {
                     continue;
                 }
-                let Some((out, path_mm)) = self.trace_optical_path(&launch.ray(x, chief_y_mm + y), Direction::ToSensor)
-                else {
+                let (x, y) = (u * pupil.half_x_mm, pupil.centre_y_mm + v * pupil.half_y_mm);
+                let Some((out, path_mm)) = self.trace_optical_path(&launch.ray(x, y), Direction::ToSensor) else {
                     continue;
                 };
-                let Some(total_mm) = to_sphere(&out, path_mm + launch.start_path_mm(x, chief_y_mm + y)) else {
+                let Some(total_mm) = to_sphere(&out, path_mm + launch.start_path_mm(x, y)) else {
                     continue;
                 };
                 opd_waves[j * grid + i] = (chief_total_mm - total_mm) / wavelength_mm;
-                (sxx, sxa) = (sxx + x * x, sxa + x * (out.direction.x - chief_out.direction.x));
-                (syy, syb) = (syy + y * y, syb + y * (out.direction.y - chief_out.direction.y));
+                fit[0].add(u, out.direction.x);
+                fit[1].add(v, out.direction.y);
             }
         }
-        if sxx == 0.0 || syy == 0.0 {
+        let (Some(slope_x), Some(slope_y)) = (fit[0].slope(), fit[1].slope()) else {
             return Err(Error::InvalidArgument(format!(
                 "{}: no ray passes the pupil at {field_deg}°",
                 self.prescription.name
             )));
-        }
+        };
+        // Slopes are per unit of the normalised pupil; a grid step is 2/grid of it.
+        let per_step = 2.0 / grid as f64;
         Ok(Wavefront {
             grid,
             opd_waves,
-            direction_cosine_steps: [sxa / sxx * step_mm, syb / syy * step_mm],
+            direction_cosine_steps: [slope_x * per_step, slope_y * per_step],
             image_index,
             wavelength_nm: self.wavelength_nm(),
             image_point_mm,
@@ -153,6 +157,91 @@ impl LensSystem {
             f1 = stop_height(y1)?;
         }
         (f1.abs() < 1e-6).then_some(y1)
+    }
+}
+
+/// The entrance pupil on the pupil's plane: an ellipse with its axes along x and y.
+struct PupilEllipse {
+    centre_y_mm: f64,
+    half_x_mm: f64,
+    half_y_mm: f64,
+}
+
+impl PupilEllipse {
+    /// The paraxial entrance pupil's circle about the chief ray.
+    fn paraxial(paraxial: &super::ParaxialData, chief_y_mm: f64) -> PupilEllipse {
+        let radius_mm = 0.5 * paraxial.entrance_pupil_diameter_mm;
+        PupilEllipse {
+            centre_y_mm: chief_y_mm,
+            half_x_mm: radius_mm,
+            half_y_mm: radius_mm,
+        }
+    }
+}
+
+/// A least-squares line's slope through (u, b) points.
+#[derive(Default)]
+struct SlopeFit {
+    count: f64,
+    sum_u: f64,
+    sum_b: f64,
+    sum_uu: f64,
+    sum_ub: f64,
+}
+
+impl SlopeFit {
+    fn add(&mut self, u: f64, b: f64) {
+        self.count += 1.0;
+        self.sum_u += u;
+        self.sum_b += b;
+        self.sum_uu += u * u;
+        self.sum_ub += u * b;
+    }
+
+    fn slope(&self) -> Option<f64> {
+        let spread = self.count * self.sum_uu - self.sum_u * self.sum_u;
+        (self.count >= 2.0 && spread > 0.0).then(|| (self.count * self.sum_ub - self.sum_u * self.sum_b) / spread)
+    }
+}
+
+impl LensSystem {
+    /// The real entrance pupil at `launch`'s field (see the module's
+    /// conventions); None where a rim ray cannot be aimed (the caller then
+    /// takes the paraxial pupil).
+    fn real_pupil(&self, launch: &Launch, chief_y_mm: f64) -> Option<PupilEllipse> {
+        let mut unclipped = self.clone();
+        unclipped
+            .surfaces
+            .iter_mut()
+            .for_each(|s| s.aperture_radius = f64::INFINITY);
+        let stop_radius_mm = self.stop_radius_mm();
+        let guess_mm = 0.5 * self.paraxial().ok()?.entrance_pupil_diameter_mm;
+        // How far from the chief ray, along (dx, dy) in the pupil's plane, a ray meets the stop's rim.
+        let rim = |dx: f64, dy: f64| {
+            let miss = |s: f64| {
+                unclipped
+                    .trace_via_stop(&launch.ray(s * dx, chief_y_mm + s * dy), Direction::ToSensor)
+                    .map(|(_, at_stop)| at_stop.x.hypot(at_stop.y) - stop_radius_mm)
+            };
+            let (mut s0, mut s1) = (0.0, guess_mm);
+            let (mut f0, mut f1) = (miss(s0)?, miss(s1)?);
+            for _ in 0..40 {
+                if f1.abs() < 1e-10 * stop_radius_mm || f1 == f0 {
+                    break;
+                }
+                let s2 = s1 - f1 * (s1 - s0) / (f1 - f0);
+                (s0, f0) = (s1, f1);
+                s1 = s2;
+                f1 = miss(s1)?;
+            }
+            (f1.abs() < 1e-6 * stop_radius_mm.max(1.0) && s1 > 0.0).then_some(s1)
+        };
+        let (above, below, beside) = (rim(0.0, 1.0)?, rim(0.0, -1.0)?, rim(1.0, 0.0)?);
+        Some(PupilEllipse {
+            centre_y_mm: chief_y_mm + 0.5 * (above - below),
+            half_x_mm: beside,
+            half_y_mm: 0.5 * (above + below),
+        })
     }
 }
 
