@@ -432,6 +432,20 @@ def test_an_error_shows_on_the_page_and_the_viewer_goes_on(chromium, viewer: Vie
     assert viewer.state()["settings"]["lens"] == "tele250"
 
 
+def test_the_mtf_panel_follows_the_lens_as_it_renders(chromium, viewer: Viewer) -> None:
+    # Wide open, then at f/16: the plot is the lens's at the view's f-stop and sensor, three fields.
+    svg = viewer.get("api/mtf.svg").decode()
+    assert svg.startswith("<svg") and svg.count("<polyline") == 7, "the limit, T and S at three fields"
+    status, _ = viewer.post("api/settings", {"f_number": 16})
+    assert status == 200
+    assert "f/16.00 working" in viewer.get("api/mtf.svg").decode()
+    page = open_page(chromium, viewer, max_spp=4)
+    page.locator("#mtf-details summary").click()
+    page.wait_for_function("() => document.getElementById('mtf').naturalWidth > 0", timeout=60_000)
+    assert page.errors == []
+    page.close()
+
+
 def test_other_hosts_are_refused(viewer: Viewer) -> None:
     request = urllib.request.Request(viewer.url + "api/state", headers={"Host": "example.com"})
     with pytest.raises(urllib.error.HTTPError, match="403"):

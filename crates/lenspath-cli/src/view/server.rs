@@ -10,6 +10,7 @@
 //! | `POST /api/autofocus` | `{"patch": [x, y, w, h], "metric", "strategy"}` |
 //! | `POST /api/lens?name=FILE` | a dropped lens table (its text) |
 //! | `GET /api/layout.svg` | the lens layout, the sensor where it is |
+//! | `GET /api/mtf.svg` | the lens's MTF at the sensor, at the F, d and C lines, at three fields |
 //! | `GET /api/image.png`, `/api/image.exr`, `/api/scene.toml` | the last complete image, and the scene file that renders it again |
 //! | `GET /ws` | frames (binary, JPEG) and messages (text, JSON) |
 
@@ -27,6 +28,8 @@ use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
 use axum::{Json, Router};
 use lenspath::io::image::{encode_image, ImageFormat, ImageHeader};
+use lenspath::lens::wave_analysis::{WaveAnalysis, WaveAnalysisSettings, WeightedWavelength, SHOWN_FIELD_FRACTIONS};
+use lenspath::lens::wave_plot::mtf_svg;
 use lenspath::render::{render_depth, RenderSettings};
 use lenspath::setup::{CameraSettings, RenderSetup};
 use lenspath::Error;
@@ -54,6 +57,7 @@ pub async fn serve(listener: std::net::TcpListener, session: Arc<Session>) -> st
         .route("/api/autofocus", post(autofocus))
         .route("/api/lens", post(drop_lens))
         .route("/api/layout.svg", get(layout))
+        .route("/api/mtf.svg", get(mtf))
         .route("/api/image.png", get(|s| download(s, Download::Png)))
         .route("/api/image.exr", get(|s| download(s, Download::Exr)))
         .route("/api/scene.toml", get(|s| download(s, Download::SceneFile)))
@@ -111,6 +115,53 @@ async fn same_origin(State(address): State<Arc<SocketAddr>>, request: Request, n
 
 async fn state(State(session): State<Arc<Session>>) -> Response {
     Json(session.describe()).into_response()
+}
+
+/// The MTF of the view's lens, stopped and focused as it renders, at
+/// [`SHOWN_FIELD_FRACTIONS`] of its half-diagonal field, over the visible
+/// lines: what `lenspath lens --mtf --mtf-plot` draws.
+async fn mtf(State(session): State<Arc<Session>>) -> Response {
+    let (system, sensor_depth_mm, half_field_deg) = {
+        let session = session.lock();
+        let view = &session.view;
+        (
+            view.camera.system().clone(),
+            view.sensor_depth_mm,
+            view.half_diagonal_field_deg,
+        )
+    };
+    let result = blocking(move || {
+        let settings = WaveAnalysisSettings {
+            spectrum: WeightedWavelength::visible_lines(),
+            sensor_depth_mm: Some(sensor_depth_mm),
+            ..WaveAnalysisSettings::default()
+        };
+        let analyses = SHOWN_FIELD_FRACTIONS
+            .iter()
+            .map(|fraction| {
+                WaveAnalysis::new(
+                    &system,
+                    &WaveAnalysisSettings {
+                        field_deg: fraction * half_field_deg,
+                        ..settings.clone()
+                    },
+                )
+            })
+            .collect::<lenspath::Result<Vec<_>>>()?;
+        Ok(mtf_svg(system.prescription().name(), &analyses))
+    })
+    .await;
+    match result {
+        Ok(svg) => (
+            [
+                (header::CONTENT_TYPE, "image/svg+xml"),
+                (header::CACHE_CONTROL, "no-store"),
+            ],
+            svg,
+        )
+            .into_response(),
+        Err(e) => bad_request(e),
+    }
 }
 
 /// Runs `work` (which builds cameras or parses tables) off the async threads.

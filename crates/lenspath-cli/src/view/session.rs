@@ -138,6 +138,8 @@ pub struct View {
     pub longitudinal_color_mm: f64,
     /// The lens layout with the sensor where it is, as SVG.
     pub layout_svg: String,
+    /// Half the diagonal field of view, degrees (the MTF's fields are fractions of it).
+    pub half_diagonal_field_deg: f64,
     /// The image sensor, resolved (`None`: the image is the film's radiance).
     pub sensor: Option<SensorSettings>,
 }
@@ -678,6 +680,7 @@ impl Config {
             wide_open_f_number: wide_open.f_number,
             longitudinal_color_mm: report.longitudinal_color_mm,
             layout_svg: lenspath::lens::plot::layout_to_svg(&layout),
+            half_diagonal_field_deg: 0.5 * analysis.diagonal_fov_deg,
             settings,
             lens_settings,
             lens_reference,

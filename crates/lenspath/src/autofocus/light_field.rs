@@ -287,7 +287,7 @@ fn corners_of(lo: Vec2, hi: Vec2) -> [Vec2; 4] {
 /// Row `py` of `region`'s samples, in pixel then sample order. Compiled for
 /// x86-64-v3 too with that feature, like [`crate::render`]'s tiles (the path tracer inlines).
 #[cfg_attr(
-    feature = "x86-64-v3",
+    all(feature = "x86-64-v3", not(test)),
     multiversion::multiversion(targets("x86_64+avx+avx2+fma+bmi1+bmi2+lzcnt+movbe+f16c"))
 )]
 fn record_row(

@@ -20,6 +20,7 @@ use super::system::LensSystem;
 use super::wavefront::Wavefront;
 use super::AnalysisSettings;
 use crate::error::{Error, Result};
+use crate::glass::{C_LINE_NM, D_LINE_NM, F_LINE_NM};
 
 /// One wavelength of a spectrum and its weight.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -29,6 +30,23 @@ pub struct WeightedWavelength {
     /// Relative weight (any positive scale).
     pub weight: f64,
 }
+
+impl WeightedWavelength {
+    /// The d, F and C lines, equal weights, the d line first (the primary):
+    /// the visible spectrum a photographic lens is corrected and analysed over.
+    pub fn visible_lines() -> Vec<WeightedWavelength> {
+        [D_LINE_NM, F_LINE_NM, C_LINE_NM]
+            .map(|wavelength_nm| WeightedWavelength {
+                wavelength_nm,
+                weight: 1.0,
+            })
+            .to_vec()
+    }
+}
+
+/// The fields a lens's MTF is shown at when none are asked (the viewer's
+/// lens panel): the axis, half and 0.85 of the half-diagonal field of view.
+pub const SHOWN_FIELD_FRACTIONS: [f64; 3] = [0.0, 0.5, 0.85];
 
 /// What a [`WaveAnalysis`] is asked.
 #[derive(Clone, Debug, PartialEq)]

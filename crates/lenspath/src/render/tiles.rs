@@ -140,8 +140,10 @@ fn accumulation(tiles: &[Tile], region: PixelRect) -> Accumulation {
 // x86-64-v3 (AVX2, FMA: Haswell, Zen and later), and run in the copy the CPU
 // can: the path tracer is inlined into both, the v3 copy the faster. No
 // fused multiply-adds are written or contracted, so both give bit-identical images.
+// Not in the library's own unit-test build: its x86-64-v3 test has a copy of its
+// own (`integrator`), and the integration tests and the wheel run this one.
 #[cfg_attr(
-    feature = "x86-64-v3",
+    all(feature = "x86-64-v3", not(test)),
     multiversion::multiversion(targets("x86_64+avx+avx2+fma+bmi1+bmi2+lzcnt+movbe+f16c"))
 )]
 fn render_tile(shot: &Shot<'_>, tile: &mut Tile, pass_end: u32) -> (u64, u64) {

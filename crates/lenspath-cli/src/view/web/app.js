@@ -4,6 +4,10 @@
 // comes back as a message shown on the page.
 
 const $ = (id) => document.getElementById(id);
+
+/** The generation the page shows: the MTF is fetched for it when its panel is open. */
+let shownGeneration = 0;
+
 const canvas = $("frame");
 const context = canvas.getContext("2d");
 
@@ -150,8 +154,19 @@ function showState(s) {
   fillSelect($("integrator"), s.integrators, settings.integrator);
   showSensor(s);
   $("layout").src = `/api/layout.svg?generation=${s.generation}`;
+  shownGeneration = s.generation;
+  showMtf();
   $("layout-caption").textContent = `sensor ${s.sensor_depth_mm.toFixed(3)} mm behind the stop`;
 }
+
+/** The MTF plot, computed on the server (about a second) only while its panel is open. */
+function showMtf() {
+  if ($("mtf-details").open) {
+    $("mtf").src = `/api/mtf.svg?generation=${shownGeneration}`;
+  }
+}
+
+$("mtf-details").addEventListener("toggle", showMtf);
 
 const SENSOR_CONTROLS = ["sensor-model", "sensor-auto", "sensor-iso", "sensor-exposure", "sensor-wb"];
 
