@@ -414,6 +414,7 @@ class Camera:
         scene_unit_m: float | None = None,
         dispersion: bool | None = None,
         desqueeze: bool | None = None,
+        diffraction: bool | None = None,
     ) -> Camera:
         """A real lens (default: the scene file's, else dgauss50) focused at ``focus_distance``
         (scene units from the sensor) or with the sensor ``sensor_depth_mm`` behind the stop
@@ -422,7 +423,9 @@ class Camera:
         ``aperture`` shape, ``scene_unit_m`` metres per unit; ``dispersion=False`` gives every
         glass its d-line index (no colour, a little less colour noise; default: the scene file's,
         else glasses disperse); ``desqueeze=True`` stretches an anamorphic lens's image by its
-        squeeze (the sensor's height grows by it; default: the scene file's, else squeezed)."""
+        squeeze (the sensor's height grows by it; default: the scene file's, else squeezed);
+        ``diffraction=True`` spreads each film point by the aperture's Fraunhofer pattern at the
+        ray's wavelength and the lens's working f-number (default: the scene file's, else off)."""
 
 @overload
 def render(

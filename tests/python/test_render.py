@@ -51,9 +51,14 @@ def test_the_mesh_scene_takes_a_triangle_count() -> None:
             ["--camera", "thin-lens", "--aperture-radius", "0.05", "--focus-distance", "3"],
         ),
         (lenspath.Camera.realistic("wide22", f_number=4.0), None, ["--lens", "wide22", "--fstop", "4"]),
+        (
+            lenspath.Camera.realistic("wide22", f_number=16.0, diffraction=True),
+            None,
+            ["--lens", "wide22", "--fstop", "16", "--diffraction", "on"],
+        ),
         (lenspath.Camera.pinhole(), "independent", ["--camera", "pinhole", "--sampler", "independent"]),
     ],
-    ids=["default", "pinhole", "thin-lens", "realistic", "independent-sampler"],
+    ids=["default", "pinhole", "thin-lens", "realistic", "diffraction", "independent-sampler"],
 )
 def test_same_settings_give_the_clis_image_bit_for_bit(cli, tmp_path, camera, sampler, flags) -> None:
     out = tmp_path / "cli.exr"

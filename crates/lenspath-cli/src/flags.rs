@@ -352,6 +352,11 @@ pub struct LensFlags {
     /// little less colour noise, no tracing back per wavelength; default: glasses disperse).
     #[arg(long)]
     pub no_dispersion: bool,
+    /// Realistic camera: whether the pupil diffracts, each film point spread by the aperture's
+    /// Fraunhofer pattern at the ray's wavelength and the lens's working f-number (the Airy disc
+    /// of a circle, the starburst of blades; default: the scene file's, else off).
+    #[arg(long, value_name = "on|off", value_parser = clap::builder::BoolishValueParser::new())]
+    pub diffraction: Option<bool>,
     /// Realistic camera with an anamorphic lens: stretch the image's width by the lens's
     /// squeeze, as projected (default: as the sensor records it, squeezed).
     #[arg(long)]
@@ -369,6 +374,7 @@ impl LensFlags {
             scene_unit_m: self.scene_unit,
             radiometry: self.radiometry,
             dispersion: self.no_dispersion.then_some(false),
+            diffraction: self.diffraction,
             desqueeze: self.desqueeze.then_some(true),
             ..RealisticDescription::default()
         })

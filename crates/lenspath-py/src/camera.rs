@@ -172,6 +172,7 @@ impl Camera {
                     set("aperture", r.aperture.as_ref().map(aperture_repr)),
                     set("scene_unit_m", r.scene_unit_m),
                     set("dispersion", r.dispersion.map(python_bool)),
+                    set("diffraction", r.diffraction.map(python_bool)),
                     set("desqueeze", r.desqueeze.map(python_bool)),
                 ],
             ),
@@ -227,8 +228,9 @@ impl Camera {
                 r.scene_unit_m,
                 r.dispersion,
                 r.desqueeze,
+                r.diffraction,
             ),
-            _ => (None, None, None, None, None, None),
+            _ => (None, None, None, None, None, None, None),
         };
         Ok((
             py.get_type::<Camera>().getattr("_from_state")?,
@@ -256,11 +258,12 @@ impl Camera {
             Option<f64>,
             Option<bool>,
             Option<bool>,
+            Option<bool>,
         ),
     ) -> PyResult<Camera> {
         let (kind, fov_deg, aperture_radius, focus_distance, aperture, lens) = state;
         let (aperture, lens) = (aperture.filter(|a| !a.is_none()), lens.filter(|l| !l.is_none()));
-        let (sensor_depth_mm, sensor_width_mm, f_number, scene_unit_m, dispersion, desqueeze) = realistic;
+        let (sensor_depth_mm, sensor_width_mm, f_number, scene_unit_m, dispersion, desqueeze, diffraction) = realistic;
         match kind.as_str() {
             "pinhole" => Ok(Camera::pinhole(fov_deg)),
             "thin_lens" => Camera::thin_lens(
@@ -281,6 +284,7 @@ impl Camera {
                 scene_unit_m,
                 dispersion,
                 desqueeze,
+                diffraction,
             ),
         }
     }
@@ -322,11 +326,13 @@ impl Camera {
     /// `sensor_mm`), stopped down to `f_number`, with a `sensor_width_mm` wide
     /// sensor and an `aperture` shape; `dispersion=False` gives every glass
     /// its d-line index (default: the scene file's, else glasses disperse);
-    /// `desqueeze=True` stretches an anamorphic lens's image by its squeeze.
+    /// `desqueeze=True` stretches an anamorphic lens's image by its squeeze;
+    /// `diffraction=True` spreads each film point by the aperture's
+    /// Fraunhofer pattern (default: the scene file's, else off).
     #[staticmethod]
     #[pyo3(signature = (lens = None, *, focus_distance = None, sensor_depth_mm = None, sensor_mm = None,
                         f_number = None, sensor_width_mm = None, aperture = None, scene_unit_m = None,
-                        dispersion = None, desqueeze = None))]
+                        dispersion = None, desqueeze = None, diffraction = None))]
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn realistic(
         py: Python<'_>,
@@ -340,6 +346,7 @@ impl Camera {
         scene_unit_m: Option<f64>,
         dispersion: Option<bool>,
         desqueeze: Option<bool>,
+        diffraction: Option<bool>,
     ) -> PyResult<Camera> {
         let sensor_depth_mm = renamed(
             py,
@@ -364,6 +371,7 @@ impl Camera {
             scene_unit_m,
             radiometry: None,
             dispersion,
+            diffraction,
             desqueeze,
         })))
     }

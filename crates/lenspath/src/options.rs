@@ -50,6 +50,8 @@ pub struct LensOptions {
     pub aperture: Option<ApertureShape>,
     /// Whether the lens's glasses disperse (`None`: they do).
     pub dispersion: Option<bool>,
+    /// Whether the pupil diffracts (`None`: the library's default).
+    pub diffraction: Option<bool>,
     /// Whether an anamorphic lens's image is desqueezed (`None`: it is not).
     pub desqueeze: Option<bool>,
 }

@@ -63,6 +63,8 @@ pub struct ViewSettings {
     pub aperture: String,
     /// Whether the lens's glasses disperse (off: every glass at its d-line index).
     pub dispersion: bool,
+    /// Whether the pupil diffracts (the Airy disc, the starburst).
+    pub diffraction: bool,
     /// Camera position, scene units.
     pub eye: [f32; 3],
     /// The point it looks at (what orbiting turns about).
@@ -414,6 +416,7 @@ impl Session {
             sensor_depth_mm: view.sensor_depth_mm,
             aperture: view.lens_settings.aperture.clone(),
             dispersion: view.lens_settings.dispersion,
+            diffraction: view.lens_settings.diffraction,
             resolution: self.config.resolution,
             spp: frame.image.spp_min,
             max_depth: s.max_depth,
@@ -629,8 +632,8 @@ impl Config {
         // The same optics (a move, or render settings): the camera moves, nothing is built again.
         if let Some(p) = previous.filter(|p| {
             let (a, b) = (&p.settings, &settings);
-            (&a.lens, a.f_number, a.focus, &a.aperture, a.dispersion)
-                == (&b.lens, b.f_number, b.focus, &b.aperture, b.dispersion)
+            (&a.lens, a.f_number, a.focus, &a.aperture, a.dispersion, a.diffraction)
+                == (&b.lens, b.f_number, b.focus, &b.aperture, b.dispersion, b.diffraction)
                 && p.lens_settings.lens == lens
         }) {
             return Ok(View {
@@ -648,6 +651,7 @@ impl Config {
             aperture: Some(aperture),
             focus: Some(focus),
             dispersion: Some(settings.dispersion),
+            diffraction: Some(settings.diffraction),
             ..RealisticDescription::default()
         };
         let mut lens_settings = realistic_settings(&self.options, &self.view, &description, width, height)?;
@@ -731,6 +735,7 @@ fn initial_settings(options: &SceneOptions, view: &SceneView, resolution: (u32, 
         focus,
         aperture: camera.aperture.spelling().unwrap_or_else(|| "circle".into()),
         dispersion: camera.dispersion,
+        diffraction: camera.diffraction,
         eye: eye.to_array(),
         target: target.to_array(),
         up: Vec3::from(m.y_axis).to_array(),

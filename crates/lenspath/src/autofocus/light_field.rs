@@ -21,7 +21,7 @@
 use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
-use crate::camera::pixel_sample;
+use crate::camera::{pixel_sample, Camera};
 use crate::camera::{CameraPose, RealisticCamera, RealisticCameraSettings};
 use crate::error::{Error, Result};
 use crate::film::Filter;
@@ -308,7 +308,8 @@ fn record_row(
     let mut rays = 0u64;
     for px in region.x0..region.x0 + region.width as i32 {
         for index in 0..spp {
-            let (mut sampler, camera_sample) = pixel_sample(SamplerKind::Sobol, px, py, index, seed, Filter::Box);
+            let (mut sampler, camera_sample) =
+                pixel_sample(SamplerKind::Sobol, px, py, index, seed, Filter::Box, camera.diffracts());
             let film = camera_sample.film;
             let sample = camera.generate_lens_sample(camera_sample);
             let l = sample.ray.map_or(Vec3::ZERO, |cr| {

@@ -16,12 +16,14 @@ use crate::sampling::{concentric_disk, Sampler, SamplerKind};
 use crate::spectrum::SampledWavelengths;
 
 mod aperture;
+mod diffraction;
 mod realistic;
 pub use crate::film::FilmRadiometry;
 pub use aperture::{Aperture, ApertureMask, ApertureShape};
+pub use diffraction::{DiffractionPattern, PupilDiffraction};
 pub use realistic::{
     sensor_for_image, LensFocus, LensSample, Radiometry, RealisticCamera, RealisticCameraSettings, DEFAULT_DESQUEEZE,
-    DEFAULT_DISPERSION, DEFAULT_LENS, DEFAULT_SCENE_UNIT_M, DEFAULT_SENSOR_WIDTH_MM,
+    DEFAULT_DIFFRACTION, DEFAULT_DISPERSION, DEFAULT_LENS, DEFAULT_SCENE_UNIT_M, DEFAULT_SENSOR_WIDTH_MM,
 };
 
 /// Where on the film and where on the lens a camera ray starts.
@@ -38,6 +40,9 @@ pub struct CameraSample {
     pub pixel_centre: Vec2,
     /// The filter `film` was drawn from around `pixel_centre`.
     pub filter: Filter,
+    /// The sample in [0, 1)² a diffracting camera draws the film point's
+    /// displacement with (`None`: not displaced, for questions of geometry).
+    pub diffraction: Option<Vec2>,
 }
 
 impl CameraSample {
@@ -52,6 +57,7 @@ impl CameraSample {
             wavelengths: SampledWavelengths::single(crate::spectrum::D_LINE_NM),
             pixel_centre: film.floor() + Vec2::splat(0.5),
             filter: Filter::Box,
+            diffraction: None,
         }
     }
 
@@ -95,6 +101,11 @@ pub trait Camera: Send + Sync {
     /// scene's radiance with no optics behind it.
     fn film_radiometry(&self) -> Option<FilmRadiometry> {
         None
+    }
+
+    /// Whether its samples need [`CameraSample::diffraction`] (the pupil diffracts).
+    fn diffracts(&self) -> bool {
+        false
     }
 }
 
@@ -270,13 +281,17 @@ impl Camera for PerspectiveCamera {
     }
 }
 
+/// Mixed into the seed of the sampler that draws diffraction's displacements.
+const DIFFRACTION_STREAM: u32 = 0x9e37_79b9;
+
 /// Sample `index` of pixel `(px, py)` of the `kind` sequence under `seed`: its camera sample (the
 /// film position, the pixel centre moved by `filter`'s offset, the lens
 /// position and the wavelengths: the sampler's first five dimensions) and the sampler, which the
 /// path goes on with. Every render and light field draws its samples here,
 /// so the same seed gives the same samples. Pixels past the image's left or
 /// top edge (a light field's margin) get samplers of their own, seeded with
-/// their wrapped coordinates.
+/// their wrapped coordinates. `diffracts`: also the draw for the film
+/// point's displacement ([`CameraSample::diffraction`]).
 // Inlined into the tile and light-field loops (see `render_tile`): the
 // sampler then stays in registers instead of coming back through memory.
 #[inline(always)]
@@ -287,12 +302,17 @@ pub fn pixel_sample(
     index: u32,
     seed: u32,
     filter: Filter,
+    diffracts: bool,
 ) -> (Sampler, CameraSample) {
     let mut sampler = Sampler::new(kind, px as u32, py as u32, index, seed);
     let centre = Vec2::new(px as f32 + 0.5, py as f32 + 0.5);
     let film = centre + filter.sample_offset(sampler.get_2d());
     let lens = sampler.get_2d();
     let wavelengths = SampledWavelengths::sample_visible(sampler.get_1d());
+    // From a stream of its own, so that the path's dimensions are the same
+    // whether the camera diffracts or not.
+    let diffraction =
+        diffracts.then(|| Sampler::new(kind, px as u32, py as u32, index, seed ^ DIFFRACTION_STREAM).get_2d());
     (
         sampler,
         CameraSample {
@@ -301,6 +321,7 @@ pub fn pixel_sample(
             wavelengths,
             pixel_centre: centre,
             filter,
+            diffraction,
         },
     )
 }

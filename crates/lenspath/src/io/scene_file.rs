@@ -127,6 +127,9 @@ struct CameraSpec {
     /// Whether the lens's glasses disperse (default: they do).
     #[serde(skip_serializing_if = "Option::is_none")]
     dispersion: Option<bool>,
+    /// Whether the pupil diffracts (default: `camera::DEFAULT_DIFFRACTION`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    diffraction: Option<bool>,
     /// Whether an anamorphic lens's image is desqueezed (default: it is not).
     #[serde(skip_serializing_if = "Option::is_none")]
     desqueeze: Option<bool>,
@@ -662,6 +665,7 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
             || sensor_depth_mm.is_some()
             || aperture.is_some()
             || cam.dispersion.is_some()
+            || cam.diffraction.is_some()
             || cam.desqueeze.is_some()
         {
             options.lens = Some(LensOptions {
@@ -672,6 +676,7 @@ pub fn parse_scene_file(text: &str, path: &Path, load: &dyn Fn(&Path) -> Result<
                 sensor_depth_mm,
                 aperture,
                 dispersion: cam.dispersion,
+                diffraction: cam.diffraction,
                 desqueeze: cam.desqueeze,
             });
         }
@@ -738,6 +743,8 @@ pub struct SceneSettingsFile {
     pub aperture: ApertureShape,
     /// Whether the lens's glasses disperse (written only when they do not).
     pub dispersion: bool,
+    /// Whether the pupil diffracts (written only when it differs from the default).
+    pub diffraction: bool,
     /// Image width and height in pixels.
     pub resolution: (u32, u32),
     /// The integrator.
@@ -791,6 +798,7 @@ impl SceneSettingsFile {
                 ]),
                 aperture: Some(aperture),
                 dispersion: (!self.dispersion).then_some(false),
+                diffraction: (self.diffraction != crate::camera::DEFAULT_DIFFRACTION).then_some(self.diffraction),
                 desqueeze: None,
             }),
             film: Some(FilmSpec {

@@ -176,7 +176,7 @@ impl PointSpread {
 }
 
 /// The array with its zero frequency moved from the corner to (size/2, size/2).
-pub(super) fn centred(values: &[f64], size: usize) -> Vec<f64> {
+pub(crate) fn centred(values: &[f64], size: usize) -> Vec<f64> {
     let half = size / 2;
     (0..size * size)
         .map(|k| values[((k / size + half) % size) * size + (k % size + half) % size])
@@ -184,7 +184,7 @@ pub(super) fn centred(values: &[f64], size: usize) -> Vec<f64> {
 }
 
 /// An in-place 2-D forward FFT of a `size` × `size` row-major array: rows, then columns.
-pub(super) fn fft2(data: &mut [Complex64], size: usize) {
+pub(crate) fn fft2(data: &mut [Complex64], size: usize) {
     let fft = FftPlanner::new().plan_fft_forward(size);
     fft.process(data);
     let mut transposed = transpose(data, size);

@@ -182,6 +182,7 @@ fn render_tile(shot: &Shot<'_>, tile: &mut Tile, pass_end: u32) -> (u64, u64) {
                         index,
                         settings.seed,
                         settings.filter,
+                        camera.diffracts(),
                     );
                     sample.wavelengths = settings.film.wavelengths(sample.wavelengths);
                     (sampler, sample)

@@ -109,8 +109,15 @@ fn train_row(
     let mut rays = 0u64;
     for px in 0..settings.width {
         for index in 0..spp {
-            let (mut sampler, mut sample) =
-                pixel_sample(settings.sampler, px as i32, py as i32, index, seed, settings.filter);
+            let (mut sampler, mut sample) = pixel_sample(
+                settings.sampler,
+                px as i32,
+                py as i32,
+                index,
+                seed,
+                settings.filter,
+                camera.diffracts(),
+            );
             sample.wavelengths = settings.film.wavelengths(sample.wavelengths);
             rays += 1;
             if let Some(cr) = camera.generate_ray(sample) {

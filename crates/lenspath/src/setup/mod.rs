@@ -151,6 +151,9 @@ pub struct RealisticDescription {
     /// Whether the lens's glasses disperse (default: the scene file's, else
     /// [`defaults::LENS_DISPERSION`]).
     pub dispersion: Option<bool>,
+    /// Whether the pupil diffracts (default: the scene file's, else
+    /// [`defaults::LENS_DIFFRACTION`]).
+    pub diffraction: Option<bool>,
     /// Whether an anamorphic lens's image is desqueezed (default: the scene
     /// file's, else [`defaults::LENS_DESQUEEZE`]): the sensor keeps its
     /// width, and its height grows by the lens's squeeze, so each pixel
@@ -439,6 +442,10 @@ pub fn realistic_settings(
         radiometry: description.radiometry.unwrap_or(library.radiometry),
         aperture: description.aperture.clone().unwrap_or_else(|| file_aperture(options)),
         dispersion: description.dispersion.or(file.dispersion).unwrap_or(library.dispersion),
+        diffraction: description
+            .diffraction
+            .or(file.diffraction)
+            .unwrap_or(library.diffraction),
         ..library
     })
 }

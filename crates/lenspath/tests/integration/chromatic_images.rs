@@ -36,7 +36,7 @@ const PIXELS: u32 = 128;
 /// lens, and its focus is the infinity focus within 0.01 mm. A disc's image
 /// moves neither the centroid nor the best focus of the lens's blur (it adds
 /// a constant to the second moment); a larger one is hit by more camera rays.
-fn distant_disc(x: f32, radius: f32) -> CompiledScene {
+pub(crate) fn distant_disc(x: f32, radius: f32) -> CompiledScene {
     Scene {
         spheres: vec![Sphere {
             center: Vec3::new(x, 0.0, 1000.0),

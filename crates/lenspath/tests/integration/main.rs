@@ -9,6 +9,7 @@ mod checkpoint;
 mod chromatic_images;
 mod depth_blur;
 mod develop;
+mod diffraction;
 mod guiding;
 mod lens_files;
 mod light_field;

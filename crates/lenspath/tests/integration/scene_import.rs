@@ -391,6 +391,7 @@ fn settings_file_reads_back_exactly() {
         sensor_depth_mm: 51.234_567_890_123_45,
         aperture: ApertureShape::parse("blades:7:12.345678901:0.3").unwrap(),
         dispersion: false,
+        diffraction: true,
         resolution: (123, 45),
         spp: 37,
         max_depth: 9,
@@ -448,6 +449,7 @@ fn settings_file_reads_back_exactly() {
         assert_eq!(camera.aperture, written.aperture);
         assert_eq!(camera.lens.name(), "wide22");
         assert!(!camera.dispersion);
+        assert!(camera.diffraction);
         assert_eq!(o.sensor, written.sensor);
     }
     // A mask cannot be spelt; a file with both bases, or both focus keys, is an error.

@@ -130,6 +130,7 @@ function showState(s) {
       : "; no glass data: no colour");
   $("dispersion").checked = settings.dispersion;
   $("dispersion").disabled = !s.lens_disperses;
+  $("diffraction").checked = settings.diffraction;
 
   const fstop = $("fstop");
   const steps = Math.max(0, Math.floor(2 * F_STOP_STEPS_PER_STOP * Math.log2(F_STOP_MAX / s.wide_open_f_number)));
@@ -479,6 +480,7 @@ function sendAperture() {
 }
 $("aperture-kind").addEventListener("change", sendAperture);
 $("dispersion").addEventListener("change", (e) => change({ dispersion: e.target.checked }));
+$("diffraction").addEventListener("change", (e) => change({ diffraction: e.target.checked }));
 $("aperture-count").addEventListener("change", sendAperture);
 
 $("sensor-depth").addEventListener("input", (e) => {

@@ -31,6 +31,13 @@
 //! ([`SampledWavelengths::weight_lanes`]). A dispersive interface further
 //! along keeps only the hero and restores its own density, which is the
 //! hero-alone estimate, as pbrt's, of every path that meets one.
+//!
+//! Through a diffracting pupil (`camera/diffraction.rs`) the film point x the
+//! sample drew is displaced to x + δ before the ray is traced, δ drawn from
+//! the point-spread function S_h at the hero's wavelength. Lane i's
+//! measurement and density then carry S_i(x_i − x) where they carried W(x_i)
+//! (W(x) is every lane's and cancels); through a lens that does not disperse,
+//! x_i is the same point for every lane and w_i = S_i(δ) / ((1/n) Σ_k S_k(δ)).
 
 use glam::{DVec2, DVec3, Vec2, Vec4};
 
@@ -71,14 +78,42 @@ impl RealisticCamera {
     ) -> SampledWavelengths {
         let mut wavelengths = sample.wavelengths;
         let live = wavelengths.live_count();
-        if self.spectral.is_none() || live < 2 {
+        let diffraction = self.diffraction.as_ref().filter(|_| sample.diffraction.is_some());
+        if live < 2 {
+            return wavelengths;
+        }
+        // The film point the sample drew, before diffraction displaced it.
+        let drawn_film = self.film_point(sample.film);
+        if self.spectral.is_none() {
+            // One ray for every wavelength: they differ only in how far diffraction spreads them.
+            if let Some(diffraction) = diffraction {
+                let displacement = (start.origin - drawn_film).truncate();
+                let spread = [0, 1, 2, 3].map(|lane| {
+                    if wavelengths.pdf[lane] > 0.0 {
+                        diffraction.density_per_mm2(displacement, wavelengths.lambda_nm[lane])
+                    } else {
+                        0.0
+                    }
+                });
+                let mean = spread.iter().sum::<f64>() / f64::from(live);
+                if mean > 0.0 && spread[0] > 0.0 {
+                    wavelengths.weight_lanes(Vec4::from_array(spread.map(|s| (s / mean) as f32)));
+                }
+            }
             return wavelengths;
         }
         let mut weight = [0.0f64; WAVELENGTHS_PER_SAMPLE];
         let mut density = [0.0f64; WAVELENGTHS_PER_SAMPLE];
         for (lane, side) in self.film_sides(sample, start, out).into_iter().enumerate() {
             if let Some(side) = side.filter(|_| wavelengths.pdf[lane] > 0.0) {
-                let film_density = f64::from(sample.film_density(side.raster));
+                // The film's measurement: the pixel filter at the film point, or, through a
+                // diffracting pupil, the spread from the drawn point (the filter there is every lane's).
+                let film_density = match diffraction {
+                    Some(diffraction) => {
+                        diffraction.density_per_mm2((side.film - drawn_film).truncate(), wavelengths.lambda_nm[lane])
+                    }
+                    None => f64::from(sample.film_density(side.raster)),
+                };
                 weight[lane] = film_density * side.transmission;
                 density[lane] = film_density * self.pupil_density(&side, lane == 0) / side.cos_theta.powi(4);
             }
@@ -302,7 +337,7 @@ mod tests {
         let (mut weighted, mut alone) = ([DVec3::ZERO; 2], [DVec3::ZERO; 2]);
         let mut reweighted_lanes = 0;
         for index in 0..n {
-            let (_, sample) = pixel_sample(SamplerKind::Sobol, 33, 31, index, 7, Filter::GAUSSIAN);
+            let (_, sample) = pixel_sample(SamplerKind::Sobol, 33, 31, index, 7, Filter::GAUSSIAN, false);
             let Some(ray) = camera.generate_ray(sample) else {
                 continue;
             };

@@ -33,14 +33,16 @@ mod settings;
 pub use light_field::LensSample;
 use pupil::*;
 pub use settings::{
-    sensor_for_image, LensFocus, Radiometry, RealisticCameraSettings, DEFAULT_DESQUEEZE, DEFAULT_DISPERSION,
-    DEFAULT_LENS, DEFAULT_SCENE_UNIT_M, DEFAULT_SENSOR_WIDTH_MM,
+    sensor_for_image, LensFocus, Radiometry, RealisticCameraSettings, DEFAULT_DESQUEEZE, DEFAULT_DIFFRACTION,
+    DEFAULT_DISPERSION, DEFAULT_LENS, DEFAULT_SCENE_UNIT_M, DEFAULT_SENSOR_WIDTH_MM,
 };
 
 use glam::{DVec2, DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
-use super::{Aperture, Camera, CameraPose, CameraRay, CameraSample, FilmRadiometry};
+use super::{
+    Aperture, Camera, CameraPose, CameraRay, CameraSample, DiffractionPattern, FilmRadiometry, PupilDiffraction,
+};
 use crate::error::{Error, Result};
 use crate::film::PixelRect;
 use crate::lens::{Direction, LensRay, LensSystem};
@@ -141,6 +143,8 @@ pub struct RealisticCamera {
     shaped: Option<(Arc<Aperture>, Vec<Option<StopMap>>)>,
     /// Whether its pupil grids cover the whole sensor (not [`RealisticCamera::for_region`]'s).
     whole_sensor: bool,
+    /// The pupil's diffraction, when it diffracts.
+    diffraction: Option<PupilDiffraction>,
 }
 
 /// A sample's ray from the film and, unless the lens blocks it, the ray
@@ -152,7 +156,7 @@ impl RealisticCamera {
     /// blocked, the ray out of the lens; `None` when the film point has no
     /// open pupil.
     pub(super) fn traced_sample(&self, sample: CameraSample) -> Option<TracedSample> {
-        let p_film = self.film_point(sample.film);
+        let p_film = self.sample_film_point(&sample);
         let system = self.system_at(sample.wavelengths.hero_nm());
         if let Some((aperture, maps)) = &self.shaped {
             return self.shaped_ray(system, aperture, maps, p_film, sample.lens);
@@ -293,6 +297,7 @@ impl RealisticCamera {
             )));
         }
         let aperture = Aperture::new(&settings.aperture)?;
+        let diffraction_pattern = settings.diffraction.then(|| DiffractionPattern::shared(&aperture));
         let shaped = (!aperture.is_circle()).then(|| {
             let maps = pupils
                 .par_iter()
@@ -319,6 +324,7 @@ impl RealisticCamera {
             weight_scale: 1.0,
             shaped: None,
             whole_sensor: region.is_none(),
+            diffraction: None,
         };
         // Normalise by the centre's irradiance from a uniform unit radiance:
         // with this lens as set, or wide open for physical exposure.
@@ -339,6 +345,8 @@ impl RealisticCamera {
             _ => camera.centre_irradiance(),
         };
         camera.weight_scale = 1.0 / centre_irradiance;
+        camera.diffraction =
+            diffraction_pattern.map(|pattern| PupilDiffraction::new(pattern, camera.working_f_number()));
         camera.shaped = shaped;
         Ok(camera)
     }
@@ -398,6 +406,54 @@ impl RealisticCamera {
         let x = (f64::from(film.x) / w - 0.5) * sw;
         let y = (0.5 - f64::from(film.y) / h) * sh;
         DVec3::new(-x, -y, self.sensor_depth_mm)
+    }
+
+    /// The film point (lens coordinates) a sample's ray leaves from: its
+    /// film position, displaced by the pupil's diffraction when the camera
+    /// diffracts and the sample carries a draw for it.
+    #[inline(always)]
+    fn sample_film_point(&self, sample: &CameraSample) -> DVec3 {
+        let p = self.film_point(sample.film);
+        match (&self.diffraction, sample.diffraction) {
+            (Some(diffraction), Some(u)) => {
+                p + diffraction.displacement_mm(u, sample.wavelengths.hero_nm()).extend(0.0)
+            }
+            _ => p,
+        }
+    }
+
+    /// The working f-number on the axis, 1 / (2 sin θ′) for the widest
+    /// cone of rays from the sensor's centre that the lens passes (the
+    /// mean of its half-angles in x and y, which differ for an anamorphic
+    /// lens): what scales the pupil's diffraction pattern.
+    pub fn working_f_number(&self) -> f64 {
+        let centre = DVec3::new(0.0, 0.0, self.sensor_depth_mm);
+        let d = self.sensor_depth_mm - self.rear_z_mm;
+        let rear_radius_mm = self.system.rear_aperture_radius_mm();
+        let sine = |axis: DVec2| {
+            let passes = |r: f64| {
+                let target = axis * r;
+                let ray = LensRay::between(centre, DVec3::new(target.x, target.y, self.rear_z_mm));
+                self.system.trace(&ray, Direction::ToScene).is_some()
+            };
+            // The cone from the centre is a disc on the rear plane: bisect its edge.
+            let (mut inside, mut outside) = (0.0, rear_radius_mm);
+            for _ in 0..48 {
+                let r = 0.5 * (inside + outside);
+                if passes(r) {
+                    inside = r;
+                } else {
+                    outside = r;
+                }
+            }
+            inside / inside.hypot(d)
+        };
+        1.0 / (sine(DVec2::X) + sine(DVec2::Y))
+    }
+
+    /// The camera's diffraction, when it diffracts.
+    pub fn diffraction(&self) -> Option<&PupilDiffraction> {
+        self.diffraction.as_ref()
     }
 
     /// The sensor patch of a film point (lens coordinates), the point in
@@ -549,7 +605,7 @@ impl Camera for RealisticCamera {
         if self.shaped.is_some() {
             return samples.map(|s| self.generate_ray(s));
         }
-        let starts = samples.map(|s| self.lens_ray(self.film_point(s.film), s.lens));
+        let starts = samples.map(|s| self.lens_ray(self.sample_film_point(&s), s.lens));
         // Each through the lens at its hero wavelength (the same lens when nothing disperses).
         let systems = samples.map(|s| self.system_at(s.wavelengths.hero_nm()));
         let outs = match starts {
@@ -562,6 +618,10 @@ impl Camera for RealisticCamera {
             let wavelengths = self.weighted_wavelengths(&samples[i], &start, &out);
             Some(self.scene_ray(&out, weight, wavelengths))
         })
+    }
+
+    fn diffracts(&self) -> bool {
+        self.diffraction.is_some()
     }
 
     fn view_axis(&self) -> (Vec3, Vec3) {

@@ -15,6 +15,11 @@ pub const DEFAULT_SCENE_UNIT_M: f64 = 1.0;
 /// Whether a lens's glasses disperse (each ray traced at its own
 /// wavelength) unless the caller or the scene file says not.
 pub const DEFAULT_DISPERSION: bool = true;
+/// Whether the realistic camera renders diffraction at its pupil
+/// (`camera/diffraction.rs`) unless the caller or the scene file says.
+/// Off until the render is held to the wave-optics analysis off the axis
+/// too (the edge MTF at a field point, the starburst's spikes).
+pub const DEFAULT_DIFFRACTION: bool = false;
 /// Whether an anamorphic lens's image is desqueezed (its width stretched by
 /// the lens's squeeze) rather than shown as the sensor records it.
 pub const DEFAULT_DESQUEEZE: bool = false;
@@ -71,6 +76,11 @@ pub struct RealisticCameraSettings {
     /// a camera ray weighs the same (a little less colour noise, no tracing
     /// back).
     pub dispersion: bool,
+    /// Whether the pupil diffracts: each film point is displaced by a draw
+    /// from the aperture's Fraunhofer pattern at the ray's wavelength and
+    /// the lens's working f-number, so the image is the geometric one
+    /// convolved with the diffraction pattern (`camera/diffraction.rs`).
+    pub diffraction: bool,
 }
 
 impl RealisticCameraSettings {
@@ -86,6 +96,7 @@ impl RealisticCameraSettings {
             radiometry: Radiometry::default(),
             aperture: ApertureShape::Circle,
             dispersion: DEFAULT_DISPERSION,
+            diffraction: DEFAULT_DIFFRACTION,
         }
     }
 }
