@@ -442,6 +442,16 @@ def test_the_mtf_panel_follows_the_lens_as_it_renders(chromium, viewer: Viewer) 
     page = open_page(chromium, viewer, max_spp=4)
     page.locator("#mtf-details summary").click()
     page.wait_for_function("() => document.getElementById('mtf').naturalWidth > 0", timeout=60_000)
+    # A render setting is a new generation but the same optics: the plot is not fetched again; a new f-stop is.
+    shown = page.locator("#mtf").get_attribute("src")
+    g = generation(page)
+    set_number(page, "#max-spp", 8)
+    wait_for_spp(page, 1, after_generation=g)
+    assert page.locator("#mtf").get_attribute("src") == shown
+    g = generation(page)
+    page.locator("#fstop").fill("3")
+    wait_for_spp(page, 1, after_generation=g)
+    assert page.locator("#mtf").get_attribute("src") != shown
     assert page.errors == []
     page.close()
 

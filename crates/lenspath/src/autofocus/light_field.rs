@@ -21,8 +21,7 @@
 use glam::{DVec3, Vec2, Vec3};
 use rayon::prelude::*;
 
-use crate::camera::{pixel_sample, Camera};
-use crate::camera::{CameraPose, RealisticCamera, RealisticCameraSettings};
+use crate::camera::{pixel_sample, Camera, CameraPose, RealisticCamera, RealisticCameraSettings};
 use crate::error::{Error, Result};
 use crate::film::Filter;
 use crate::film::PixelRect;

@@ -10,7 +10,7 @@
 //! where its geometric blur is wide, and between the two the convolution,
 //! not the full wave PSF (`lens::psf`), whose aberrated wavefront interferes
 //! with itself. The pattern depends only on the aperture's shape, so it is
-//! tabulated once per camera, in units of ν, for every wavelength and f-number.
+//! tabulated once per shape, in units of ν, for every wavelength and f-number.
 
 use std::sync::{Arc, Mutex};
 
@@ -103,17 +103,23 @@ impl DiffractionPattern {
     pub fn sample(&self, u: Vec2) -> DVec2 {
         let (row, _, v) = self.rows.sample(u.y);
         let (column, _, w) = self.columns[row].sample(u.x);
-        let origin = self.size as f64 / 2.0 + 0.5;
+        let origin = self.lower_edge_cells();
         DVec2::new(
             (column as f64 + f64::from(w) - origin) * self.step,
             (row as f64 + f64::from(v) - origin) * self.step,
         )
     }
 
+    /// How many cells the table's lower edge lies below ν = 0, which is
+    /// the centre of cell `size / 2` (the FFT's zero frequency, centred).
+    fn lower_edge_cells(&self) -> f64 {
+        self.size as f64 / 2.0 + 0.5
+    }
+
     /// The density of [`DiffractionPattern::sample`] at `nu` (cycles per
     /// pupil radius), per (cycle per radius)²; 0 outside the table.
     pub fn density(&self, nu: DVec2) -> f64 {
-        let origin = self.size as f64 / 2.0 + 0.5;
+        let origin = self.lower_edge_cells();
         let (column, row) = ((nu.x / self.step + origin).floor(), (nu.y / self.step + origin).floor());
         let inside = |k: f64| k >= 0.0 && k < self.size as f64;
         if inside(column) && inside(row) {
@@ -162,7 +168,6 @@ impl PupilDiffraction {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::camera::ApertureShape;
     use crate::sampling::Rng;
 
     fn pattern(shape: &str) -> DiffractionPattern {

@@ -149,10 +149,8 @@ fn a_point_through_a_diffraction_limited_lens_images_to_the_airy_disc() {
     let darkest = (first_zero_um as usize - 3..=first_zero_um as usize + 3)
         .min_by(|&a, &b| profile[a].total_cmp(&profile[b]))
         .unwrap();
-    let rings: Vec<(f64, f64)> = (darkest - 1..=darkest + 1)
-        .map(|k| (k as f64 + 0.5, profile[k]))
-        .collect();
-    let zero_um = parabola_minimum(&rings);
+    let [before, at, after] = [darkest - 1, darkest, darkest + 1].map(|k| profile[k]);
+    let zero_um = darkest as f64 + 0.5 + 0.5 * (before - after) / (before - 2.0 * at + after);
     eprintln!(
         "encircled energy {measured:.4} (Airy {expected:.4}); first zero {zero_um:.3} µm (Airy {first_zero_um:.3})"
     );
@@ -187,38 +185,6 @@ fn a_point_through_a_diffraction_limited_lens_images_to_the_airy_disc() {
         sharp / all
     );
     assert!((ratio - 1.0).abs() < 0.03, "energy ratio {ratio}");
-}
-
-/// The abscissa of the minimum of the least-squares parabola through `points`.
-fn parabola_minimum(points: &[(f64, f64)]) -> f64 {
-    let x0 = points.iter().map(|p| p.0).sum::<f64>() / points.len() as f64;
-    // Normal equations of y = a + b t + c t², t = x − x0.
-    let mut m = [[0.0f64; 3]; 3];
-    let mut r = [0.0f64; 3];
-    for &(x, y) in points {
-        let t = x - x0;
-        let powers = [1.0, t, t * t];
-        for i in 0..3 {
-            for j in 0..3 {
-                m[i][j] += powers[i] * powers[j];
-            }
-            r[i] += powers[i] * y;
-        }
-    }
-    let det = |m: [[f64; 3]; 3]| {
-        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
-    };
-    let replaced = |column: usize| {
-        let mut a = m;
-        for (row, value) in a.iter_mut().zip(r) {
-            row[column] = value;
-        }
-        det(a)
-    };
-    let d = det(m);
-    let (b, c) = (replaced(1) / d, replaced(2) / d);
-    x0 - b / (2.0 * c)
 }
 
 /// Under a uniform sky the image is uniform whatever spreads it: with the

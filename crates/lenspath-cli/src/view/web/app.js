@@ -5,8 +5,8 @@
 
 const $ = (id) => document.getElementById(id);
 
-/** The generation the page shows: the MTF is fetched for it when its panel is open. */
-let shownGeneration = 0;
+/** What the MTF depends on, as last shown: it is fetched again only when the optics change, not on a move. */
+let shownOptics = "";
 
 const canvas = $("frame");
 const context = canvas.getContext("2d");
@@ -155,7 +155,9 @@ function showState(s) {
   fillSelect($("integrator"), s.integrators, settings.integrator);
   showSensor(s);
   $("layout").src = `/api/layout.svg?generation=${s.generation}`;
-  shownGeneration = s.generation;
+  shownOptics = JSON.stringify([
+    settings.lens, settings.f_number, settings.dispersion, s.sensor_depth_mm, s.focal_length_mm, s.sensor_mm,
+  ]);
   showMtf();
   $("layout-caption").textContent = `sensor ${s.sensor_depth_mm.toFixed(3)} mm behind the stop`;
 }
@@ -163,7 +165,10 @@ function showState(s) {
 /** The MTF plot, computed on the server (about a second) only while its panel is open. */
 function showMtf() {
   if ($("mtf-details").open) {
-    $("mtf").src = `/api/mtf.svg?generation=${shownGeneration}`;
+    const src = `/api/mtf.svg?optics=${encodeURIComponent(shownOptics)}`;
+    if ($("mtf").getAttribute("src") !== src) {
+      $("mtf").src = src;
+    }
   }
 }
 

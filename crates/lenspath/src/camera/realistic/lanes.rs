@@ -78,15 +78,16 @@ impl RealisticCamera {
     ) -> SampledWavelengths {
         let mut wavelengths = sample.wavelengths;
         let live = wavelengths.live_count();
-        let diffraction = self.diffraction.as_ref().filter(|_| sample.diffraction.is_some());
         if live < 2 {
             return wavelengths;
         }
-        // The film point the sample drew, before diffraction displaced it.
-        let drawn_film = self.film_point(sample.film);
+        // The diffraction, and the film point the sample drew before it was displaced.
+        let diffraction = (self.diffraction.as_ref())
+            .filter(|_| sample.diffraction.is_some())
+            .map(|diffraction| (diffraction, self.film_point(sample.film)));
         if self.spectral.is_none() {
             // One ray for every wavelength: they differ only in how far diffraction spreads them.
-            if let Some(diffraction) = diffraction {
+            if let Some((diffraction, drawn_film)) = diffraction {
                 let displacement = (start.origin - drawn_film).truncate();
                 let spread = [0, 1, 2, 3].map(|lane| {
                     if wavelengths.pdf[lane] > 0.0 {
@@ -109,7 +110,7 @@ impl RealisticCamera {
                 // The film's measurement: the pixel filter at the film point, or, through a
                 // diffracting pupil, the spread from the drawn point (the filter there is every lane's).
                 let film_density = match diffraction {
-                    Some(diffraction) => {
+                    Some((diffraction, drawn_film)) => {
                         diffraction.density_per_mm2((side.film - drawn_film).truncate(), wavelengths.lambda_nm[lane])
                     }
                     None => f64::from(sample.film_density(side.raster)),
