@@ -41,4 +41,6 @@ fi
 
 cargo test --workspace
 
-"$venv/bin/python" -m pytest -q tests/python
+# Two worker processes: a render fills both cores, but much of the suite waits (on a browser,
+# a subprocess, Python between renders), and a second worker fills those gaps.
+"$venv/bin/python" -m pytest -q --numprocesses 2 tests/python
