@@ -95,6 +95,6 @@ def test_the_wheel_is_stripped_and_publishable() -> None:
         module = z.read(native)
     assert "lenspath/__main__.py" in names
     assert any(n.endswith("dist-info/entry_points.txt") for n in names)
-    # Stripped: no DWARF sections (the release profile keeps line tables, 25 MB before).
+    # Stripped: no DWARF sections (the dev profile it is built with here keeps line tables).
     assert not [name for name in elf_sections(module) if name.startswith(".debug")]
     assert wheel.stat().st_size < 8e6, wheel.stat().st_size

@@ -15,7 +15,7 @@
 use std::sync::{Arc, Mutex};
 
 use glam::{DVec2, Vec2};
-use rustfft::num_complex::Complex64;
+use rustfft::num_complex::Complex32;
 
 use super::{Aperture, ApertureShape};
 use crate::lens::psf::{centred, fft2};
@@ -55,13 +55,13 @@ impl DiffractionPattern {
     pub fn new(aperture: &Aperture) -> DiffractionPattern {
         let size = PUPIL_SAMPLES * PADDING;
         let pupil = aperture.rasterize(PUPIL_SAMPLES, PUPIL_SAMPLES, 1.0);
-        let mut field = vec![Complex64::new(0.0, 0.0); size * size];
+        let mut field = vec![Complex32::new(0.0, 0.0); size * size];
         for (k, value) in pupil.iter().enumerate() {
-            field[(k / PUPIL_SAMPLES) * size + k % PUPIL_SAMPLES] = Complex64::new(f64::from(*value), 0.0);
+            field[(k / PUPIL_SAMPLES) * size + k % PUPIL_SAMPLES] = Complex32::new(*value, 0.0);
         }
         fft2(&mut field, size);
         // |F(ν)|² = |F(−ν)|² for a real pupil: which way the raster's rows run does not matter.
-        let intensity = centred(&field.iter().map(|c| c.norm_sqr()).collect::<Vec<_>>(), size);
+        let intensity = centred(&field.iter().map(|c| f64::from(c.norm_sqr())).collect::<Vec<_>>(), size);
         let total: f64 = intensity.iter().sum();
         // Pupil spacing 2/PUPIL_SAMPLES radii: the FFT's frequency step is its inverse over `size`.
         let step = PUPIL_SAMPLES as f64 / (2.0 * size as f64);

@@ -4,7 +4,7 @@
 //! with the tangential (y) and sagittal (x) sections a lens report draws, and
 //! the diffraction limit beside them.
 
-use rustfft::num_complex::Complex64;
+use rustfft::num_complex::Complex32;
 
 use super::psf::{centred, fft2, PointSpread};
 
@@ -22,10 +22,14 @@ impl PointSpread {
     /// The MTF of this PSF.
     pub fn mtf(&self) -> Mtf {
         let size = self.size();
-        let mut spectrum: Vec<Complex64> = self.intensity().iter().map(|&v| Complex64::new(v, 0.0)).collect();
+        let mut spectrum: Vec<Complex32> = self
+            .intensity()
+            .iter()
+            .map(|&v| Complex32::new(v as f32, 0.0))
+            .collect();
         fft2(&mut spectrum, size);
-        let dc = spectrum[0].norm();
-        let modulus: Vec<f64> = spectrum.iter().map(|c| c.norm() / dc).collect();
+        let dc = f64::from(spectrum[0].norm());
+        let modulus: Vec<f64> = spectrum.iter().map(|c| f64::from(c.norm()) / dc).collect();
         Mtf {
             size,
             spacing_per_mm: self.spacing_mm().map(|d| 1.0 / (size as f64 * d)),
